@@ -1,0 +1,339 @@
+// Batch evaluation of fractal noise over one tile (or a sub-box of it).
+//
+// Why it is fast:
+//  - Sample positions i*P/N are split exactly in integers into (lattice cell, fraction), once per
+//    axis and octave. Lattice indices needed by the region are listed once per axis ("lattice
+//    lists"), so a sample's neighbouring lattice points are consecutive list entries and large
+//    periods cost nothing extra.
+//  - Perlin: the trilinear blend is linear in the corner values, and each corner value is linear in
+//    the offset. So for one row (fixed y, z) the noise within an x-cell is
+//        lerp(u, A[a]*fx + B[a], A[a+1]*(fx-1) + B[a+1])
+//    with per-lattice-point coefficients A, B that fold in the y/z gradients and weights. Those are
+//    built per slice (z) and per row (y) from hashed gradient planes cached across slices; the
+//    per-sample loop is then 4 loads and 6 flops, which the compiler vectorises.
+//  - Worley: per row, for each x lattice point and each of the 9 (y, z) neighbour cells, the
+//    feature point's x offset and its partial squared distance in y and z are precomputed; the
+//    per-sample loop is 27 x (load, sub, mul, add, min). A sample whose 3x3x3 F1 is further than
+//    the nearest cell outside the 3x3x3 block (rare) falls back to the exact point search.
+// Each sample's value depends only on its own position, so any threading or sub-box gives the
+// same bytes.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "detail.h"
+#include "fractal_detail.h"
+#include "noise3d/noise3d.h"
+
+namespace noise3d {
+
+std::array<uint32_t, 3> GridRegion::resolved_extent() const {
+  std::array<uint32_t, 3> e{};
+  for (int a = 0; a < 3; ++a) e[a] = extent[a] ? extent[a] : (size[a] > origin[a] ? size[a] - origin[a] : 0);
+  return e;
+}
+size_t GridRegion::count() const {
+  auto e = resolved_extent();
+  return size_t(e[0]) * e[1] * e[2];
+}
+
+namespace {
+
+using namespace detail;
+
+/// One axis of one octave: per sample its cell's index in the lattice list and its fraction.
+template <class T>
+struct Axis {
+  std::vector<uint32_t> m;    ///< index of the sample's cell in `lat`
+  std::vector<T> f;           ///< fraction in [0, 1)
+  std::vector<T> u;           ///< fade(f)
+  std::vector<int64_t> cell;  ///< unwrapped cell (for the exact Worley fallback)
+  std::vector<uint32_t> lat;  ///< wrapped lattice index of each list entry
+};
+
+/// lo/hi: how many lattice neighbours below/above the cell each sample needs (Perlin 0/1, Worley 1/1).
+template <class T>
+Axis<T> make_axis(uint32_t size, uint32_t origin, uint32_t extent, uint32_t period, int lo, int hi) {
+  Axis<T> ax;
+  ax.m.resize(extent), ax.f.resize(extent), ax.u.resize(extent), ax.cell.resize(extent);
+  std::vector<int64_t> list;
+  int64_t last = std::numeric_limits<int64_t>::min();
+  for (uint32_t s = 0; s < extent; ++s) {
+    const uint64_t num = uint64_t(origin + s) * period;  // < 2^32 * 2^30: no overflow
+    const int64_t c = int64_t(num / size);
+    ax.f[s] = T(num % size) / T(size);
+    ax.u[s] = fade(ax.f[s]);
+    ax.cell[s] = c;
+    for (int64_t v = c - lo; v <= c + hi; ++v)
+      if (v > last) list.push_back(last = v);
+    ax.m[s] = uint32_t(list.size() - 1 - hi);  // cells are non-decreasing, so c+hi is the last entry
+  }
+  ax.lat.resize(list.size());
+  for (size_t e = 0; e < list.size(); ++e) ax.lat[e] = wrap(list[e], period);
+  return ax;
+}
+
+template <class T>
+struct OctaveSetup {
+  Octave oc;
+  uint32_t key;
+  Axis<T> x, y, z;
+};
+
+template <class T>
+std::vector<OctaveSetup<T>> setup(const FractalParams& p, Kind which, const GridRegion& r) {
+  const auto e = r.resolved_extent();
+  const int lo = which == Kind::Worley ? 1 : 0;
+  std::vector<OctaveSetup<T>> out;
+  for (const Octave& oc : octaves(p, which)) {
+    OctaveSetup<T> s;
+    s.oc = oc;
+    s.key = seed_key(oc.seed, which == Kind::Worley ? 0x3a71u : 0x9e11u);
+    s.x = make_axis<T>(r.size[0], r.origin[0], e[0], oc.period.x, lo, 1);
+    s.y = make_axis<T>(r.size[1], r.origin[1], e[1], oc.period.y, lo, 1);
+    s.z = make_axis<T>(r.size[2], r.origin[2], e[2], oc.period.z, lo, 1);
+    out.push_back(std::move(s));
+  }
+  return out;
+}
+
+/// A few hashed lattice planes (one z lattice entry each), reused by consecutive slices.
+/// FIFO eviction is safe for the <= 3 planes a slice holds at once because slices are visited in
+/// increasing z, so the planes a slice needs are always the most recently inserted ones.
+template <class Cell>
+struct PlaneCache {
+  static constexpr int kSlots = 4;
+  uint32_t key[kSlots] = {~0u, ~0u, ~0u, ~0u};
+  std::vector<Cell> plane[kSlots];
+  int next = 0;
+  template <class Fill>
+  const Cell* get(uint32_t zentry, Fill&& fill) {
+    for (int s = 0; s < kSlots; ++s)
+      if (key[s] == zentry) return plane[s].data();
+    int s = next;
+    next = (next + 1) % kSlots;
+    key[s] = zentry;
+    fill(plane[s]);
+    return plane[s].data();
+  }
+};
+
+// ---------------------------------------------------------------------------------------------
+// Perlin
+
+template <class T>
+struct PerlinScratch {
+  PlaneCache<uint8_t> planes;
+  std::vector<T> gx, gy, cz, A, B;
+};
+
+template <class T>
+void perlin_slice(const OctaveSetup<T>& s, uint32_t k, T* acc, PerlinScratch<T>& sc) {
+  const Axis<T>&X = s.x, &Y = s.y, &Z = s.z;
+  const size_t nx = X.lat.size(), ny = Y.lat.size();
+  auto plane = [&](uint32_t ze) {
+    return sc.planes.get(ze, [&](std::vector<uint8_t>& g) {
+      g.resize(nx * ny);
+      for (size_t b = 0; b < ny; ++b) {
+        const uint32_t row = hash_row(Y.lat[b], Z.lat[ze], s.key);
+        uint8_t* dst = &g[b * nx];
+        for (size_t a = 0; a < nx; ++a) dst[a] = uint8_t(grad_index(hash_x(row, X.lat[a])));
+      }
+    });
+  };
+  const uint32_t mz = Z.m[k];
+  const uint8_t* g0 = plane(mz);
+  const uint8_t* g1 = plane(mz + 1);
+  const T fz = Z.f[k], w = Z.u[k], w0 = T(1) - w, fz1 = fz - T(1);
+  sc.gx.resize(nx * ny), sc.gy.resize(nx * ny), sc.cz.resize(nx * ny);
+  for (size_t e = 0; e < nx * ny; ++e) {
+    const uint8_t a = g0[e], b = g1[e];
+    sc.gx[e] = w0 * T(kGradX[a]) + w * T(kGradX[b]);
+    sc.gy[e] = w0 * T(kGradY[a]) + w * T(kGradY[b]);
+    sc.cz[e] = w0 * (T(kGradZ[a]) * fz) + w * (T(kGradZ[b]) * fz1);
+  }
+  sc.A.resize(nx), sc.B.resize(nx);
+  const size_t ex = X.m.size(), ey = Y.m.size();
+  const T wt = T(s.oc.weight);
+  for (size_t j = 0; j < ey; ++j) {
+    const size_t r0 = size_t(Y.m[j]) * nx, r1 = r0 + nx;
+    const T fy = Y.f[j], v = Y.u[j], v0 = T(1) - v, fy1 = fy - T(1);
+    T* __restrict A = sc.A.data();
+    T* __restrict B = sc.B.data();
+    const T *gx = sc.gx.data(), *gy = sc.gy.data(), *cz = sc.cz.data();
+    for (size_t a = 0; a < nx; ++a) {
+      A[a] = v0 * gx[r0 + a] + v * gx[r1 + a];
+      B[a] = v0 * (gy[r0 + a] * fy + cz[r0 + a]) + v * (gy[r1 + a] * fy1 + cz[r1 + a]);
+    }
+    T* __restrict out = acc + j * ex;
+    const uint32_t* __restrict m = X.m.data();
+    const T* __restrict f = X.f.data();
+    const T* __restrict u = X.u.data();
+    for (size_t i = 0; i < ex; ++i) {
+      const uint32_t a = m[i];
+      const T n0 = A[a] * f[i] + B[a];
+      const T n1 = A[a + 1] * (f[i] - T(1)) + B[a + 1];
+      out[i] += wt * (n0 + u[i] * (n1 - n0));
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Worley
+
+template <class T>
+struct Jitter {
+  T x, y, z;
+};
+
+template <class T>
+struct WorleyScratch {
+  PlaneCache<Jitter<T>> planes;
+  std::vector<T> jx, r2;  // [9][nx]
+  std::vector<T> best;    // [ex]
+};
+
+template <class T>
+void worley_slice(const OctaveSetup<T>& s, uint32_t k, T* acc, WorleyScratch<T>& sc) {
+  const Axis<T>&X = s.x, &Y = s.y, &Z = s.z;
+  const size_t nx = X.lat.size(), ny = Y.lat.size();
+  auto plane = [&](uint32_t ze) {
+    return sc.planes.get(ze, [&](std::vector<Jitter<T>>& g) {
+      g.resize(nx * ny);
+      for (size_t b = 0; b < ny; ++b) {
+        const uint32_t row = hash_row(Y.lat[b], Z.lat[ze], s.key);
+        Jitter<T>* dst = &g[b * nx];
+        for (size_t a = 0; a < nx; ++a) {
+          const uint32_t h = hash_x(row, X.lat[a]);
+          dst[a] = {jitter01<T>(jitter_hash(h, 0)), jitter01<T>(jitter_hash(h, 1)),
+                    jitter01<T>(jitter_hash(h, 2))};
+        }
+      }
+    });
+  };
+  const uint32_t mz = Z.m[k];
+  const Jitter<T>* pl[3] = {plane(mz - 1), plane(mz), plane(mz + 1)};
+  const T fz = Z.f[k];
+  const size_t ex = X.m.size(), ey = Y.m.size();
+  sc.jx.resize(9 * nx), sc.r2.resize(9 * nx), sc.best.resize(ex);
+  const T wt = T(s.oc.weight), inv_sqrt3 = T(1.0 / kSqrt3);
+  const T fzm = std::min(fz, T(1) - fz);
+  for (size_t j = 0; j < ey; ++j) {
+    const T fy = Y.f[j];
+    // Partial distances in y and z of the 9 (y, z) neighbour cells, for every x lattice entry.
+    for (int n = 0; n < 9; ++n) {
+      const int by = n % 3, bz = n / 3;
+      const Jitter<T>* src = pl[bz] + size_t(Y.m[j] + by - 1) * nx;
+      const T oy = T(by - 1) - fy, oz = T(bz - 1) - fz;
+      T* jx = &sc.jx[n * nx];
+      T* r2 = &sc.r2[n * nx];
+      for (size_t a = 0; a < nx; ++a) {
+        const T dy = oy + src[a].y, dz = oz + src[a].z;
+        jx[a] = src[a].x;
+        r2[a] = dy * dy + dz * dz;
+      }
+    }
+    T* __restrict best = sc.best.data();
+    const uint32_t* __restrict m = X.m.data();
+    const T* __restrict f = X.f.data();
+    for (size_t i = 0; i < ex; ++i) best[i] = std::numeric_limits<T>::infinity();
+    for (int n = 0; n < 9; ++n) {
+      const T* __restrict jx = &sc.jx[n * nx];
+      const T* __restrict r2 = &sc.r2[n * nx];
+      for (int dx = 0; dx < 3; ++dx) {
+        const T off = T(dx - 1);
+        for (size_t i = 0; i < ex; ++i) {
+          const uint32_t a = m[i] + dx - 1;
+          const T d = off + jx[a] - f[i];
+          const T d2 = d * d + r2[a];
+          best[i] = d2 < best[i] ? d2 : best[i];
+        }
+      }
+    }
+    const T fym = std::min(fy, T(1) - fy);
+    T* out = acc + j * ex;
+    for (size_t i = 0; i < ex; ++i) {
+      T d2 = best[i];
+      // Nearest possible point outside the 3x3x3 block is 1 + min over axes of the distance to
+      // the cell's nearer face; beyond it the 3x3x3 answer might be wrong, so search exactly.
+      const T shell = T(1) + std::min({std::min(f[i], T(1) - f[i]), fym, fzm});
+      T f1;
+      if (d2 > shell * shell) {
+        const double sx = double(X.cell[i]) + double(f[i]), sy = double(Y.cell[j]) + double(fy),
+                     sz = double(Z.cell[k]) + double(fz);
+        f1 = T(worley(sx, sy, sz, s.oc.period, s.oc.seed).f1);
+      } else {
+        f1 = std::sqrt(d2);
+      }
+      out[i] += wt * (T(1) - f1 * inv_sqrt3);
+    }
+  }
+}
+
+template <class T>
+MinMax run(const FractalParams& p, const GridRegion& r, T* out, const BatchOptions& opt) {
+  validate(p);
+  for (int a = 0; a < 3; ++a) {
+    const char* ax[3] = {"x", "y", "z"};
+    if (r.size[a] < 1)
+      throw InvalidParameter(std::string("size.") + ax[a], "must be at least 1");
+    const auto e = r.resolved_extent();
+    if (uint64_t(r.origin[a]) + e[a] > r.size[a])
+      throw InvalidParameter(std::string("region.") + ax[a],
+                             "origin + extent must not exceed size " + std::to_string(r.size[a]));
+  }
+  const auto e = r.resolved_extent();
+  if (r.count() == 0) return {0, 0};
+  const bool want_p = p.kind != Kind::Worley, want_w = p.kind != Kind::Perlin;
+  std::vector<OctaveSetup<T>> po, wo;
+  if (want_p) po = setup<T>(p, Kind::Perlin, r);
+  if (want_w) wo = setup<T>(p, Kind::Worley, r);
+  const size_t slice = size_t(e[0]) * e[1];
+
+  auto body = [&](const tbb::blocked_range<uint32_t>& range) {
+    std::vector<PerlinScratch<T>> ps(po.size());
+    std::vector<WorleyScratch<T>> ws(wo.size());
+    std::vector<T> wacc(want_p && want_w ? slice : 0);
+    for (uint32_t k = range.begin(); k != range.end(); ++k) {
+      T* dst = out + k * slice;
+      std::fill(dst, dst + slice, T(0));
+      T* wdst = want_p && want_w ? wacc.data() : dst;
+      if (want_p && want_w) std::fill(wacc.begin(), wacc.end(), T(0));
+      for (size_t o = 0; o < po.size(); ++o) perlin_slice(po[o], k, dst, ps[o]);
+      for (size_t o = 0; o < wo.size(); ++o) worley_slice(wo[o], k, wdst, ws[o]);
+      if (want_p && want_w)
+        for (size_t q = 0; q < slice; ++q) dst[q] = T(combine_perlin_worley(dst[q], wacc[q]));
+    }
+  };
+  // Grain of a few slices keeps the plane caches warm; values never depend on the split.
+  auto go = [&] { tbb::parallel_for(tbb::blocked_range<uint32_t>(0, e[2], 4), body); };
+  if (opt.threads > 0) {
+    tbb::task_arena arena(opt.threads);
+    arena.execute(go);
+  } else {
+    go();
+  }
+  MinMax mm{std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+  const size_t n = r.count();
+  for (size_t q = 0; q < n; ++q) {
+    mm.min = std::min(mm.min, double(out[q]));
+    mm.max = std::max(mm.max, double(out[q]));
+  }
+  return mm;
+}
+
+}  // namespace
+
+MinMax evaluate_grid(const FractalParams& p, const GridRegion& r, float* out, const BatchOptions& o) {
+  return run<float>(p, r, out, o);
+}
+MinMax evaluate_grid(const FractalParams& p, const GridRegion& r, double* out, const BatchOptions& o) {
+  return run<double>(p, r, out, o);
+}
+
+}  // namespace noise3d
