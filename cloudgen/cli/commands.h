@@ -1,0 +1,18 @@
+// cloudgen subcommands, registered on the CLI11 app by main.cpp.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <functional>
+
+namespace cloudgen::cli {
+
+/// Set by SIGINT/SIGTERM; long work checks it and stops, leaving no partial output.
+extern std::atomic<bool> g_cancel;
+
+/// A progress bar on stderr, drawn only when stderr is a terminal and not --quiet.
+std::function<void(double)> progress_bar(const std::string& label, bool quiet);
+
+void add_noise_command(CLI::App& app, std::function<void()>& run);
+
+}  // namespace cloudgen::cli

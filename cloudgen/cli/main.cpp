@@ -1,0 +1,269 @@
+// cloudgen: parse, run, report. All logic lives in cloudgen_lib; this file maps errors to exit codes
+// (0 ok, 1 bad input, 2 I/O failure, 3 internal error, 130 interrupted).
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <mutex>
+#include <sstream>
+
+#include "cloudgen/generate.h"
+#include "cloudgen/io.h"
+#include "cloudgen/preset.h"
+#include "commands.h"
+
+namespace fs = std::filesystem;
+
+namespace cloudgen::cli {
+
+std::atomic<bool> g_cancel{false};
+
+std::function<void(double)> progress_bar(const std::string& label, bool quiet) {
+  if (quiet || !::isatty(STDERR_FILENO)) return {};
+  auto mtx = std::make_shared<std::mutex>();
+  auto last = std::make_shared<int>(-1);
+  auto t0 = std::chrono::steady_clock::now();
+  return [=](double f) {
+    std::lock_guard<std::mutex> lock(*mtx);
+    int pct = int(f * 100);
+    if (pct == *last) return;
+    *last = pct;
+    const int w = 30, fill = int(f * w);
+    double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::fprintf(stderr, "\r%-10s [%s%s] %3d%%  %.1fs", label.c_str(), std::string(fill, '#').c_str(),
+                 std::string(w - fill, '.').c_str(), pct, el);
+    if (f >= 1) std::fprintf(stderr, "\n");
+  };
+}
+
+namespace {
+
+void on_signal(int) { g_cancel = true; }
+
+std::string preset_dir() {
+  if (const char* e = std::getenv("CLOUDGEN_PRESET_DIR")) return e;
+  return std::string(CLOUD_SOURCE_DIR) + "/presets";
+}
+
+/// "cumulus" -> presets/cumulus.json when no such file exists in the working folder.
+std::string resolve_preset(const std::string& p) {
+  if (fs::exists(p)) return p;
+  fs::path shipped = fs::path(preset_dir()) / (p + (fs::path(p).extension().empty() ? ".json" : ""));
+  if (fs::exists(shipped)) return shipped.string();
+  return p;  // load_preset reports the missing file
+}
+
+uint64_t parse_bytes(const std::string& s) {
+  size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(s, &used);
+  } catch (const std::exception&) {
+    throw InputError("--max-memory: \"" + s + "\" is not a size like 2G, 512M or 1000000");
+  }
+  std::string suf = s.substr(used);
+  double m = suf.empty() || suf == "B" ? 1 : suf == "K" ? 1024.0 : suf == "M" ? 1048576.0 : suf == "G" ? 1073741824.0 : -1;
+  if (m < 0 || v <= 0) throw InputError("--max-memory: \"" + s + "\" is not a size like 2G, 512M or 1000000");
+  return uint64_t(v * m);
+}
+
+std::string human(uint64_t b) {
+  std::ostringstream o;
+  o.precision(3);
+  if (b >= (1ull << 30)) o << b / double(1ull << 30) << " GiB";
+  else o << b / double(1ull << 20) << " MiB";
+  return o.str();
+}
+
+struct GenerateArgs {
+  std::string preset, format, region, max_memory = "16G";
+  std::vector<std::string> outputs, sets;
+  int64_t seed = -1;
+  uint32_t resolution = 0;
+  int threads = 0;
+  bool quiet = false, no_skip = false, stats = false;
+};
+
+void run_generate(const GenerateArgs& a) {
+  std::vector<std::string> sets = a.sets;
+  if (a.seed >= 0) sets.push_back("seed=" + std::to_string(a.seed));
+  const std::string path = resolve_preset(a.preset);
+  Preset p = load_preset(path, sets);
+  if (a.resolution) rescale(p, a.resolution);
+  if (a.outputs.empty()) throw InputError("-o/--output: give at least one output file (.vdb, .raw, .ktx2, .png, .exr)");
+  ExportOptions eo;
+  eo.vdb_half = p.vdb_half;
+  eo.vdb_compression = p.vdb_compression;
+  eo.vdb_detail = p.vdb_detail;
+  eo.texel = p.raw_format;
+  std::vector<Format> formats;
+  bool detail = false;
+  for (const auto& o : a.outputs) {
+    Format f = a.format.empty() ? format_from_path(o) : parse_format(a.format);
+    formats.push_back(f);
+    detail |= needs_detail(f, eo);
+  }
+  const uint64_t need = memory_estimate(p, detail), limit = parse_bytes(a.max_memory);
+  if (need > limit)
+    throw InputError(path + ": resolution " + std::to_string(p.resolution[0]) + "x" + std::to_string(p.resolution[1]) + "x" +
+                     std::to_string(p.resolution[2]) + " needs about " + human(need) + ", more than --max-memory " +
+                     a.max_memory + " (lower /resolution or use --resolution N)");
+  GenerateOptions go;
+  go.threads = a.threads;
+  go.detail = detail;
+  go.skip_empty = !a.no_skip;
+  go.cancel = &g_cancel;
+  go.progress = progress_bar("generate", a.quiet);
+  if (!a.region.empty()) {
+    unsigned o[3], e[3];
+    if (std::sscanf(a.region.c_str(), "%u,%u,%u:%u,%u,%u", &o[0], &o[1], &o[2], &e[0], &e[1], &e[2]) != 6)
+      throw InputError("--region: \"" + a.region + "\" should be X,Y,Z:W,H,D (origin and extent in voxels)");
+    for (int i = 0; i < 3; ++i) go.region_origin[i] = o[i], go.region_extent[i] = e[i];
+  }
+  GenerateStats st;
+  Volume v = generate(p, go, &st);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (size_t i = 0; i < a.outputs.size(); ++i) {
+    if (g_cancel) throw Cancelled();
+    write_volume(v, a.outputs[i], formats[i], eo);
+    if (!a.quiet) std::fprintf(stderr, "wrote %s (%s)\n", a.outputs[i].c_str(), format_name(formats[i]));
+  }
+  const double write_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!a.quiet || a.stats) {
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    std::fprintf(stderr,
+                 "%s: %ux%ux%u voxels, %zu active (%.2f%%), bricks %zu (%zu skipped, %zu with detail), "
+                 "generate %.3f s, write %.3f s, peak memory %s\n",
+                 p.name.c_str(), v.dims[0], v.dims[1], v.dims[2], st.active_voxels,
+                 100.0 * st.active_voxels / std::max<size_t>(1, v.voxel_count()), st.bricks, st.bricks_skipped,
+                 st.detail_bricks, st.seconds, write_s, human(uint64_t(ru.ru_maxrss) * 1024).c_str());
+  }
+}
+
+}  // namespace
+}  // namespace cloudgen::cli
+
+int main(int argc, char** argv) {
+  using namespace cloudgen;
+  using namespace cloudgen::cli;
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+
+  CLI::App app{"cloudgen: bake procedural cloud volumes from tileable noise.\n"
+               "Presets (JSON) go through noise -> height profile -> towers -> coverage -> threshold -> channels\n"
+               "-> occupancy, and export as OpenVDB (Blender, VFX) or RGBA 3D textures (game engines)."};
+  app.require_subcommand(1);
+  app.footer("Run `cloudgen COMMAND --help` for each command. Examples:\n"
+             "  cloudgen generate presets/cumulus.json -o out/cumulus.vdb -o out/cumulus.ktx2\n"
+             "  cloudgen generate thesis -o out/thesis.vdb --set threshold=0.4 --seed 7\n"
+             "  cloudgen validate presets/stratus.json\n"
+             "  cloudgen info out/cumulus.vdb");
+  std::function<void()> run;
+
+  auto ga = std::make_shared<GenerateArgs>();
+  CLI::App* gen = app.add_subcommand("generate", "Generate a cloud volume from a preset and export it.");
+  gen->add_option("preset", ga->preset, "Preset file, or the name of a shipped preset (see `cloudgen presets`)")->required();
+  gen->add_option("-o,--output", ga->outputs, "Output file; repeat for several formats from one generation")->required();
+  gen->add_option("--format", ga->format, "vdb | raw | ktx2 | atlas-png | atlas-exr (default: from each extension)");
+  gen->add_option("--seed", ga->seed, "Override the preset's seed");
+  gen->add_option("--resolution", ga->resolution, "Rescale so the longest axis has N voxels (world size kept)");
+  gen->add_option("--threads", ga->threads, "Worker threads (0 = all cores); output bytes are identical for any count");
+  gen->add_option("--set", ga->sets, "Override a preset key with the same validation, e.g. --set threshold=0.4 "
+                                     "--set channels.r.octaves=6 --set resolution=[256,64,256]");
+  gen->add_option("--region", ga->region, "Generate only X,Y,Z:W,H,D voxels (values equal the full run's)");
+  gen->add_option("--max-memory", ga->max_memory, "Refuse presets whose memory estimate exceeds this (default 16G)");
+  gen->add_flag("--no-skip", ga->no_skip, "Evaluate noise in empty bricks too (for benchmarks; same output)");
+  gen->add_flag("--stats", ga->stats, "Print timing and memory even with --quiet");
+  gen->add_flag("-q,--quiet", ga->quiet, "No progress bar or summary");
+  std::string keys;
+  for (const auto& pi : params()) {
+    std::string k = pi.pointer.substr(1);
+    std::replace(k.begin(), k.end(), '/', '.');
+    keys += "  " + k + " (" + pi.range + ", default " + pi.default_value + ")\n";
+  }
+  gen->footer("Preset keys (docs/presets.md explains each):\n" + keys);
+  gen->callback([ga, &run] { run = [ga] { run_generate(*ga); }; });
+
+  auto vpath = std::make_shared<std::vector<std::string>>();
+  auto vsets = std::make_shared<std::vector<std::string>>();
+  CLI::App* val = app.add_subcommand("validate", "Check presets; print every problem (exit 1) or nothing (exit 0).");
+  val->add_option("preset", *vpath, "Preset file(s) or shipped preset names")->required();
+  val->add_option("--set", *vsets, "Overrides, as for generate");
+  val->callback([vpath, vsets, &run] {
+    run = [vpath, vsets] {
+      size_t bad = 0;
+      for (const auto& p : *vpath) {
+        auto problems = check_preset(resolve_preset(p), *vsets);
+        for (const auto& m : problems) std::fprintf(stderr, "%s\n", m.c_str());
+        bad += !problems.empty();
+        if (problems.empty()) std::printf("%s: ok\n", resolve_preset(p).c_str());
+      }
+      if (bad) throw InputError(std::to_string(bad) + " preset(s) have problems");
+    };
+  });
+
+  auto ipath = std::make_shared<std::vector<std::string>>();
+  CLI::App* info = app.add_subcommand("info", "Describe a .vdb, .raw (+ .json) or .ktx2 file: grids, sizes, ranges.");
+  info->add_option("file", *ipath, "File(s) written by cloudgen")->required();
+  info->callback([ipath, &run] {
+    run = [ipath] {
+      for (const auto& f : *ipath) std::printf("%s", describe_file(f).c_str());
+    };
+  });
+
+  CLI::App* pre = app.add_subcommand("presets", "List the shipped presets.");
+  pre->callback([&run] {
+    run = [] {
+      std::vector<fs::path> files;
+      for (auto& e : fs::directory_iterator(preset_dir()))
+        if (e.path().extension() == ".json") files.push_back(e.path());
+      std::sort(files.begin(), files.end());
+      for (auto& f : files) {
+        try {
+          Preset p = load_preset(f.string());
+          std::printf("%-18s %4ux%ux%u  %s\n", f.stem().c_str(), p.resolution[0], p.resolution[1], p.resolution[2],
+                      p.description.c_str());
+        } catch (const Error& e) {
+          std::printf("%-18s INVALID: %s\n", f.stem().c_str(), e.what());
+        }
+      }
+    };
+  });
+
+  add_noise_command(app, run);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    if (run) run();
+  } catch (const Cancelled&) {
+    std::fprintf(stderr, "\ninterrupted: no output was written or replaced\n");
+    return 130;
+  } catch (const noise3d::InvalidParameter& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  } catch (const IoError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "internal error: %s\n", e.what());
+    return 3;
+  }
+  if (g_cancel) {
+    std::fprintf(stderr, "interrupted\n");
+    return 130;
+  }
+  return 0;
+}

@@ -1,0 +1,47 @@
+// Occupancy structure (thesis 2.4.2): a coarse grid that encloses every non-zero voxel, dilated by
+// `padding` coarse cells so a large step just under one cell cannot cut a corner and miss cloud.
+#include <algorithm>
+#include <vector>
+
+#include "cloudgen/volume.h"
+
+namespace cloudgen {
+
+void build_occupancy(Volume& v) {
+  const uint32_t c = std::max<uint32_t>(1, v.occupancy_cell);
+  std::array<uint32_t, 3> od;
+  for (int a = 0; a < 3; ++a) od[a] = (v.dims[a] + c - 1) / c;
+  std::vector<uint8_t> raw(size_t(od[0]) * od[1] * od[2], 0);
+  for (uint32_t z = 0; z < v.dims[2]; ++z)
+    for (uint32_t y = 0; y < v.dims[1]; ++y) {
+      const float* row = &v.density[v.index(0, y, z)];
+      uint8_t* orow = &raw[(size_t(z / c) * od[1] + y / c) * od[0]];
+      for (uint32_t x = 0; x < v.dims[0]; ++x)
+        if (row[x] > 0) orow[x / c] = 1;
+    }
+  // Separable dilation by `padding` cells per axis (a box dilation: the union over the
+  // (2p+1)^3 neighbourhood), wrapping in x and z for tiling volumes.
+  const int pad = int(v.occupancy_padding);
+  std::vector<uint8_t> tmp(raw.size());
+  for (int a = 0; a < 3; ++a) {
+    const bool wrap = v.tiles_xz && a != 1;
+    const int n = int(od[a]);
+    const size_t stride = a == 0 ? 1 : a == 1 ? od[0] : size_t(od[0]) * od[1];
+    for (size_t i = 0; i < raw.size(); ++i) {
+      const int coord = int(i / stride % od[a]);
+      uint8_t on = 0;
+      for (int d = -pad; d <= pad && !on; ++d) {
+        int q = coord + d;
+        if (wrap) q = ((q % n) + n) % n;
+        else if (q < 0 || q >= n) continue;
+        on = raw[i + (int64_t(q) - coord) * int64_t(stride)];
+      }
+      tmp[i] = on;
+    }
+    raw.swap(tmp);
+  }
+  v.occupancy_dims = od;
+  v.occupancy = std::move(raw);
+}
+
+}  // namespace cloudgen

@@ -1,0 +1,488 @@
+// The preset parameter table and the JSON reader it drives.
+#include "cloudgen/preset.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+namespace cloudgen {
+namespace {
+
+using json = nlohmann::json;
+using Index = std::vector<size_t>;
+
+struct Spec {
+  ParamInfo info;
+  double lo = -1e300, hi = 1e300;
+  std::vector<std::string> choices;
+  std::function<void(Preset&, const json&, const Index&)> set;
+};
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+const char* kChannelNames[4] = {"r", "g", "b", "a"};
+
+std::vector<Spec> build_table() {
+  std::vector<Spec> t;
+  auto add = [&](std::string ptr, std::string type, std::string def, double lo, double hi, std::string doc,
+                 std::function<void(Preset&, const json&, const Index&)> set, std::vector<std::string> choices = {}) {
+    Spec s;
+    s.info.pointer = std::move(ptr);
+    s.info.type = type;
+    s.info.default_value = std::move(def);
+    s.info.doc = std::move(doc);
+    s.lo = lo, s.hi = hi;
+    s.choices = std::move(choices);
+    if (!s.choices.empty()) {
+      std::string r;
+      for (auto& c : s.choices) r += (r.empty() ? "" : " | ") + c;
+      s.info.range = r;
+    } else if (type == "bool" || type == "string" || type == "array") {
+      s.info.range = type == "bool" ? "true | false" : type == "array" ? "list" : "any text";
+    } else {
+      s.info.range = std::string(type == "integer" || type == "ivec3" || type == "period" ? "integer" : "number") +
+                     " in [" + fmt(lo) + ", " + fmt(hi) + "]";
+    }
+    s.set = std::move(set);
+    t.push_back(std::move(s));
+  };
+  auto v3 = [](const json& j) { return std::array<double, 3>{j[0].get<double>(), j[1].get<double>(), j[2].get<double>()}; };
+  const double big = 1e9;
+
+  add("/name", "string", "\"untitled\"", 0, 0, "Preset name, stored in the VDB metadata.",
+      [](Preset& p, const json& j, const Index&) { p.name = j.get<std::string>(); });
+  add("/description", "string", "\"\"", 0, 0, "One line shown by `cloudgen presets`.",
+      [](Preset& p, const json& j, const Index&) { p.description = j.get<std::string>(); });
+  add("/seed", "integer", "1", 0, 9.007199254740992e15, "Master seed; every noise channel derives its own.",
+      [](Preset& p, const json& j, const Index&) { p.seed = j.get<uint64_t>(); });
+  add("/resolution", "ivec3", "[128, 128, 128]", 1, 4096, "Voxels along x, y (up), z.",
+      [](Preset& p, const json& j, const Index&) {
+        for (int a = 0; a < 3; ++a) p.resolution[a] = j[a].get<uint32_t>();
+      });
+  add("/voxel_size", "number", "10.0", 1e-6, big, "Edge of one voxel in metres.",
+      [](Preset& p, const json& j, const Index&) { p.voxel_size = j.get<double>(); });
+  add("/origin", "vec3", "[0, 0, 0]", -big, big, "World position (metres) of the volume's min corner.",
+      [=](Preset& p, const json& j, const Index&) { p.origin = v3(j); });
+  add("/tiling", "bool", "true", 0, 0,
+      "The volume wraps seamlessly in x and z (noise periods fit the volume; towers stay off the edges).",
+      [](Preset& p, const json& j, const Index&) { p.tiling = j.get<bool>(); });
+
+  for (int c = 0; c < 4; ++c) {
+    const std::string base = std::string("/channels/") + kChannelNames[c];
+    const bool r = c == 0;
+    const std::string what = r ? "base shape (R)" : std::string("detail channel ") + char(toupper(kChannelNames[c][0]));
+    add(base + "/enabled", "bool", r ? "true" : "false", 0, 0, "Generate the " + what + ".",
+        [c](Preset& p, const json& j, const Index&) { p.channels[c].enabled = j.get<bool>(); });
+    add(base + "/kind", "string", r ? "\"perlin-worley\"" : "\"worley\"", 0, 0, "Noise of the " + what + ".",
+        [c](Preset& p, const json& j, const Index&) { p.channels[c].kind = noise3d::parse_kind(j.get<std::string>()); },
+        {"perlin", "worley", "perlin-worley"});
+    add(base + "/period", "period", r ? "4" : std::to_string(4 << c), 1, 65536,
+        "Base-octave period in lattice cells across the volume's x extent: one integer (y and z follow "
+        "the aspect ratio) or [x, y, z].",
+        [c](Preset& p, const json& j, const Index&) {
+          if (j.is_array())
+            for (int a = 0; a < 3; ++a) p.channels[c].period[a] = j[a].get<uint32_t>();
+          else
+            p.channels[c].period = {j.get<uint32_t>(), 0, 0};
+        });
+    add(base + "/octaves", "integer", r ? "4" : "3", 1, noise3d::kMaxOctaves, "fBm octaves.",
+        [c](Preset& p, const json& j, const Index&) { p.channels[c].octaves = j.get<int>(); });
+    add(base + "/gain", "number", "0.5", 1e-6, 1, "Amplitude ratio between octaves.",
+        [c](Preset& p, const json& j, const Index&) { p.channels[c].gain = j.get<double>(); });
+    add(base + "/lacunarity", "integer", "2", 2, noise3d::kMaxLacunarity,
+        "Frequency ratio between octaves (an integer, so every octave still tiles).",
+        [c](Preset& p, const json& j, const Index&) { p.channels[c].lacunarity = j.get<int>(); });
+    add(base + "/worley_octaves", "integer", "0", 0, noise3d::kMaxOctaves,
+        "Perlin-Worley: octaves of the Worley part (0 = same as octaves).",
+        [c](Preset& p, const json& j, const Index&) { p.channels[c].worley_octaves = j.get<int>(); });
+    add(base + "/invert", "bool", "false", 0, 0, "Store 1 - noise.",
+        [c](Preset& p, const json& j, const Index&) { p.channels[c].invert = j.get<bool>(); });
+    add(base + "/seed_offset", "integer", std::to_string(c), 0, 9.007199254740992e15,
+        "Added to the master seed for this channel.",
+        [c](Preset& p, const json& j, const Index&) { p.channels[c].seed_offset = j.get<uint64_t>(); });
+  }
+
+  add("/height/profile", "string", "\"exponential\"", 0, 0,
+      "Vertical profile: the thesis's HD(h) = (1 - exp(-a h)) exp(-b h), or a cloud-type gradient.",
+      [](Preset& p, const json& j, const Index&) { p.height_profile = j.get<std::string>(); },
+      {"exponential", "stratus", "cumulus", "cumulonimbus"});
+  add("/height/a", "number", "50", 0.01, 1000, "HD sharpness of the flat bottom.",
+      [](Preset& p, const json& j, const Index&) { p.height_a = j.get<double>(); });
+  add("/height/b", "number", "4", 0, 1000, "HD falloff towards the top.",
+      [](Preset& p, const json& j, const Index&) { p.height_b = j.get<double>(); });
+  add("/height/normalize", "bool", "true", 0, 0, "Scale the profile so its peak is 1.",
+      [](Preset& p, const json& j, const Index&) { p.height_normalize = j.get<bool>(); });
+
+  add("/towers/list", "array", "[]", 0, 0, "Explicit Gaussian towers (multivariate-normal peaks added to the profile).",
+      [](Preset& p, const json& j, const Index&) { p.towers.resize(j.size()); });
+  add("/towers/list/*/center", "vec3", "[0.5, 0.2, 0.5]", 0, 1, "Tower centre in normalised volume coordinates.",
+      [=](Preset& p, const json& j, const Index& i) { p.towers[i[0]].center = v3(j); });
+  add("/towers/list/*/sigma", "vec3", "[0.1, 0.3, 0.1]", 1e-3, 10, "Standard deviations (normalised).",
+      [=](Preset& p, const json& j, const Index& i) { p.towers[i[0]].sigma = v3(j); });
+  add("/towers/list/*/amplitude", "number", "0.5", -10, 10, "Peak added to the height profile.",
+      [](Preset& p, const json& j, const Index& i) { p.towers[i[0]].amplitude = j.get<double>(); });
+  add("/towers/count", "integer", "0", 0, 256, "Extra towers at random positions (from towers.seed).",
+      [](Preset& p, const json& j, const Index&) { p.tower_count = j.get<int>(); });
+  add("/towers/seed", "integer", "7", 0, 9.007199254740992e15, "Seed of the random towers.",
+      [](Preset& p, const json& j, const Index&) { p.tower_seed = j.get<uint64_t>(); });
+  add("/towers/amplitude", "number", "0.6", -10, 10, "Peak of each random tower.",
+      [](Preset& p, const json& j, const Index&) { p.tower_amplitude = j.get<double>(); });
+  add("/towers/sigma", "vec3", "[0.08, 0.35, 0.08]", 1e-3, 10, "Sigmas of the random towers.",
+      [=](Preset& p, const json& j, const Index&) { p.tower_sigma = v3(j); });
+
+  add("/coverage/enabled", "bool", "false", 0, 0, "Multiply by a 2D coverage map over x, z (weather map).",
+      [](Preset& p, const json& j, const Index&) { p.coverage_enabled = j.get<bool>(); });
+  add("/coverage/kind", "string", "\"perlin\"", 0, 0, "Noise of the coverage map.",
+      [](Preset& p, const json& j, const Index&) { p.coverage_kind = noise3d::parse_kind(j.get<std::string>()); },
+      {"perlin", "worley", "perlin-worley"});
+  add("/coverage/period", "integer", "2", 1, 65536, "Coverage noise period across the x extent.",
+      [](Preset& p, const json& j, const Index&) { p.coverage_period = j.get<uint32_t>(); });
+  add("/coverage/octaves", "integer", "3", 1, noise3d::kMaxOctaves, "Coverage fBm octaves.",
+      [](Preset& p, const json& j, const Index&) { p.coverage_octaves = j.get<int>(); });
+  add("/coverage/low", "number", "0.35", 0, 1, "Coverage noise value (in [0,1]) below which there is no cloud.",
+      [](Preset& p, const json& j, const Index&) { p.coverage_low = j.get<double>(); });
+  add("/coverage/high", "number", "0.65", 0, 1, "Coverage noise value above which coverage is full.",
+      [](Preset& p, const json& j, const Index&) { p.coverage_high = j.get<double>(); });
+
+  add("/threshold", "number", "0.3", 0, 0.999, "Cut-off remap clamp((d - t) / (1 - t), 0, 1).",
+      [](Preset& p, const json& j, const Index&) { p.threshold = j.get<double>(); });
+  add("/density_scale", "number", "1.0", 0, 1000, "Multiplier after the threshold (result clamped to [0, 1]).",
+      [](Preset& p, const json& j, const Index&) { p.density_scale = j.get<double>(); });
+
+  add("/occupancy/cell", "integer", "8", 1, 256, "Coarse occupancy cell edge in voxels.",
+      [](Preset& p, const json& j, const Index&) { p.occupancy_cell = j.get<uint32_t>(); });
+  add("/occupancy/padding", "integer", "2", 0, 16,
+      "Dilation in coarse cells (2 = the thesis's double padding, so a large step can't cut a corner).",
+      [](Preset& p, const json& j, const Index&) { p.occupancy_padding = j.get<uint32_t>(); });
+
+  add("/export/vdb/half", "bool", "false", 0, 0, "Store VDB grids as half floats.",
+      [](Preset& p, const json& j, const Index&) { p.vdb_half = j.get<bool>(); });
+  add("/export/vdb/compression", "string", "\"blosc\"", 0, 0, "VDB compression.",
+      [](Preset& p, const json& j, const Index&) { p.vdb_compression = j.get<std::string>(); },
+      {"blosc", "zip", "none"});
+  add("/export/vdb/detail", "bool", "true", 0, 0, "Write the enabled detail channels as extra grids.",
+      [](Preset& p, const json& j, const Index&) { p.vdb_detail = j.get<bool>(); });
+  add("/export/raw/format", "string", "\"rgba8\"", 0, 0, "Texel format of raw/KTX2 textures.",
+      [](Preset& p, const json& j, const Index&) { p.raw_format = j.get<std::string>(); },
+      {"rgba8", "rgba16f", "rgba32f"});
+  return t;
+}
+
+const std::vector<Spec>& table() {
+  static const std::vector<Spec> t = build_table();
+  return t;
+}
+
+size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<size_t> d(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) d[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t prev = d[0];
+    d[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      size_t cur = d[j];
+      d[j] = std::min({d[j] + 1, d[j - 1] + 1, prev + (a[i - 1] != b[j - 1])});
+      prev = cur;
+    }
+  }
+  return d[b.size()];
+}
+
+std::string dump(const json& j) {
+  std::string s = j.dump();
+  return s.size() > 60 ? s.substr(0, 57) + "..." : s;
+}
+
+class Reader {
+ public:
+  Reader(std::string source) : source_(std::move(source)) {
+    for (const Spec& s : table()) {
+      specs_[s.info.pointer] = &s;
+      // Every proper prefix of a parameter pointer is a container object (or list element).
+      std::string ptr = s.info.pointer;
+      for (size_t k = ptr.find('/', 1); k != std::string::npos; k = ptr.find('/', k + 1))
+        containers_.insert(ptr.substr(0, k));
+    }
+  }
+
+  void walk(Preset& p, const json& j, const std::string& ptr, const std::string& pattern, const Index& idx) {
+    auto it = specs_.find(pattern);
+    if (it != specs_.end()) {
+      apply(p, *it->second, j, ptr, idx);
+      return;
+    }
+    if (!j.is_object()) {
+      problem(ptr.empty() ? "/" : ptr, "expected an object, got " + dump(j));
+      return;
+    }
+    for (auto& [key, value] : j.items()) {
+      const std::string cptr = ptr + "/" + key, cpat = pattern + "/" + key;
+      if (specs_.count(cpat) || containers_.count(cpat)) {
+        walk(p, value, cptr, cpat, idx);
+      } else {
+        problem(cptr, "unknown key" + suggest(pattern, key));
+      }
+    }
+  }
+
+  void problem(const std::string& ptr, const std::string& what) { problems_.push_back(source_ + ": " + ptr + ": " + what); }
+  const std::vector<std::string>& problems() const { return problems_; }
+
+ private:
+  std::string suggest(const std::string& parent, const std::string& key) const {
+    std::string best;
+    size_t bd = 3;
+    std::set<std::string> siblings;
+    for (const auto& [ptr, s] : specs_)
+      if (ptr.rfind(parent + "/", 0) == 0) {
+        std::string rest = ptr.substr(parent.size() + 1);
+        siblings.insert(rest.substr(0, rest.find('/')));
+      }
+    for (const auto& s : siblings) {
+      size_t d = edit_distance(key, s);
+      if (d < bd) bd = d, best = s;
+    }
+    std::string allowed;
+    for (const auto& s : siblings) allowed += (allowed.empty() ? "" : ", ") + s;
+    return (best.empty() ? "" : " (did you mean \"" + best + "\"?)") + std::string("; allowed here: ") + allowed;
+  }
+
+  bool number_ok(const Spec& s, const json& v, bool integer, const std::string& ptr) {
+    if (!v.is_number() || (integer && !(v.is_number_integer() || std::floor(v.get<double>()) == v.get<double>()))) {
+      problem(ptr, dump(v) + " has the wrong type; expected " + (integer ? "an integer" : "a number") + " in [" +
+                       fmt(s.lo) + ", " + fmt(s.hi) + "]");
+      return false;
+    }
+    double d = v.get<double>();
+    if (!(d >= s.lo && d <= s.hi)) {
+      problem(ptr, dump(v) + " is out of range; allowed: " + s.info.range);
+      return false;
+    }
+    return true;
+  }
+
+  void apply(Preset& p, const Spec& s, const json& v, const std::string& ptr, const Index& idx) {
+    const std::string& t = s.info.type;
+    bool ok = true;
+    if (t == "number" || t == "integer") {
+      ok = number_ok(s, v, t == "integer", ptr);
+    } else if (t == "bool") {
+      if (!v.is_boolean()) ok = false, problem(ptr, dump(v) + " has the wrong type; expected true or false");
+    } else if (t == "string") {
+      if (!v.is_string()) {
+        ok = false, problem(ptr, dump(v) + " has the wrong type; expected a string" +
+                                     (s.choices.empty() ? "" : ": " + s.info.range));
+      } else if (!s.choices.empty() &&
+                 std::find(s.choices.begin(), s.choices.end(), v.get<std::string>()) == s.choices.end()) {
+        ok = false, problem(ptr, dump(v) + " is not allowed; expected one of: " + s.info.range);
+      }
+    } else if (t == "vec3" || t == "ivec3" || (t == "period" && v.is_array())) {
+      if (!v.is_array() || v.size() != 3) {
+        ok = false, problem(ptr, dump(v) + " has the wrong type; expected an array of 3 " +
+                                     (t == "vec3" ? "numbers" : "integers") + ", each " + s.info.range);
+      } else {
+        for (int a = 0; a < 3 && ok; ++a) ok = number_ok(s, v[a], t != "vec3", ptr + "/" + std::to_string(a));
+      }
+    } else if (t == "period") {
+      ok = number_ok(s, v, true, ptr);
+    } else if (t == "array") {
+      if (!v.is_array()) ok = false, problem(ptr, dump(v) + " has the wrong type; expected a list");
+    }
+    if (!ok) return;
+    s.set(p, v, idx);
+    if (t == "array")
+      for (size_t i = 0; i < v.size(); ++i) {
+        Index sub = idx;
+        sub.push_back(i);
+        if (!v[i].is_object()) {
+          problem(ptr + "/" + std::to_string(i), "expected an object");
+          continue;
+        }
+        // List elements start from the element defaults of the table.
+        for (const Spec& es : table())
+          if (es.info.pointer.rfind(s.info.pointer + "/*/", 0) == 0) es.set(p, json::parse(es.info.default_value), sub);
+        walk(p, v[i], ptr + "/" + std::to_string(i), s.info.pointer + "/*", sub);
+      }
+  }
+
+  std::string source_;
+  std::map<std::string, const Spec*> specs_;
+  std::set<std::string> containers_;
+  std::vector<std::string> problems_;
+};
+
+// "a.b.c=value" -> sets /a/b/c in the document (value parsed as JSON, else a string).
+void apply_override(json& doc, const std::string& ov, Reader& r) {
+  auto eq = ov.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    r.problem("--set " + ov, "expected key.path=value");
+    return;
+  }
+  std::string key = ov.substr(0, eq), val = ov.substr(eq + 1);
+  std::string ptr;
+  for (size_t s = 0, e; s <= key.size(); s = e + 1) {
+    e = key.find('.', s);
+    if (e == std::string::npos) e = key.size();
+    ptr += "/" + key.substr(s, e - s);
+  }
+  json v = json::parse(val, nullptr, false);
+  if (v.is_discarded()) v = val;
+  try {
+    doc[json::json_pointer(ptr)] = v;
+  } catch (const json::exception& e) {
+    r.problem("--set " + ov, e.what());
+  }
+}
+
+std::string line_col(const std::string& text, size_t byte) {
+  size_t line = 1, col = 1;
+  for (size_t i = 0; i < byte && i < text.size(); ++i) {
+    if (text[i] == '\n') ++line, col = 1;
+    else ++col;
+  }
+  return "line " + std::to_string(line) + ", column " + std::to_string(col);
+}
+
+void cross_checks(const Preset& p, Reader& r) {
+  if (p.coverage_low >= p.coverage_high)
+    r.problem("/coverage/high", fmt(p.coverage_high) + " must be greater than /coverage/low (" + fmt(p.coverage_low) + ")");
+  if (!p.channels[0].enabled) r.problem("/channels/r/enabled", "the base shape channel R must be enabled");
+  for (int c = 0; c < 4; ++c) {
+    if (!p.channels[c].enabled) continue;
+    try {
+      noise3d::validate(channel_params(p, c));
+    } catch (const noise3d::InvalidParameter& e) {
+      r.problem(std::string("/channels/") + kChannelNames[c], e.what());
+    }
+  }
+  if (p.tiling)
+    for (size_t i = 0; i < p.towers.size(); ++i) {
+      const Tower& t = p.towers[i];
+      for (int a : {0, 2})
+        if (t.center[a] - 3 * t.sigma[a] < 0 || t.center[a] + 3 * t.sigma[a] > 1)
+          r.problem("/towers/list/" + std::to_string(i),
+                    std::string("centre ") + (a ? "z" : "x") + " +- 3 sigma = [" + fmt(t.center[a] - 3 * t.sigma[a]) +
+                        ", " + fmt(t.center[a] + 3 * t.sigma[a]) +
+                        "] must lie inside [0, 1] so the tower is zero at the tile edges and the volume still wraps");
+    }
+  if (p.tower_count > 0 && p.tiling)
+    for (int a : {0, 2})
+      if (6 * p.tower_sigma[a] >= 1)
+        r.problem("/towers/sigma", "6 * sigma must be below 1 on x and z so random towers fit inside the tile");
+}
+
+}  // namespace
+
+const std::vector<ParamInfo>& params() {
+  static const std::vector<ParamInfo> infos = [] {
+    std::vector<ParamInfo> v;
+    for (const Spec& s : table()) v.push_back(s.info);
+    return v;
+  }();
+  return infos;
+}
+
+std::string params_markdown() {
+  std::ostringstream o;
+  o << "| key | type | default | allowed | meaning |\n|---|---|---|---|---|\n";
+  for (const ParamInfo& i : params()) {
+    std::string key = i.pointer.substr(1);
+    std::replace(key.begin(), key.end(), '/', '.');
+    o << "| `" << key << "` | " << i.type << " | `" << i.default_value << "` | " << i.range << " | " << i.doc << " |\n";
+  }
+  return o.str();
+}
+
+noise3d::FractalParams channel_params(const Preset& p, int c) {
+  const Channel& ch = p.channels[c];
+  noise3d::FractalParams f;
+  f.kind = ch.kind;
+  auto derive = [&](int axis) -> uint32_t {
+    if (ch.period[axis]) return ch.period[axis];
+    double v = double(ch.period[0]) * p.resolution[axis] / p.resolution[0];
+    return std::max<uint32_t>(1, uint32_t(std::lround(v)));
+  };
+  f.period = {ch.period[0], derive(1), derive(2)};
+  f.seed = p.seed + ch.seed_offset * 0x9E3779B97F4A7C15ull;
+  f.octaves = ch.octaves;
+  f.gain = ch.gain;
+  f.lacunarity = ch.lacunarity;
+  f.worley_octaves = ch.worley_octaves;
+  return f;
+}
+
+Preset parse_preset(const std::string& text, const std::string& source, const std::vector<std::string>& overrides) {
+  Reader r(source);
+  json doc;
+  try {
+    doc = json::parse(text);
+  } catch (const json::parse_error& e) {
+    std::string msg = e.what();
+    auto pos = msg.find("syntax error");
+    throw InputError(source + ": JSON syntax error at " + line_col(text, e.byte ? e.byte - 1 : 0) + ": " +
+                     (pos == std::string::npos ? msg : msg.substr(pos)));
+  }
+  if (!doc.is_object()) throw InputError(source + ": the preset must be a JSON object");
+  for (const std::string& ov : overrides) apply_override(doc, ov, r);
+  Preset p;
+  for (const Spec& s : table())
+    if (s.info.pointer.find('*') == std::string::npos) s.set(p, json::parse(s.info.default_value), {});
+  p.source_path = source;
+  r.walk(p, doc, "", "", {});
+  if (r.problems().empty()) cross_checks(p, r);
+  if (!r.problems().empty()) {
+    std::string all;
+    for (const auto& m : r.problems()) all += (all.empty() ? "" : "\n") + m;
+    throw InputError(all);
+  }
+  return p;
+}
+
+Preset load_preset(const std::string& path, const std::vector<std::string>& overrides) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open preset file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_preset(ss.str(), path, overrides);
+}
+
+std::vector<std::string> check_preset(const std::string& path, const std::vector<std::string>& overrides) {
+  try {
+    load_preset(path, overrides);
+    return {};
+  } catch (const InputError& e) {
+    std::vector<std::string> out;
+    std::stringstream ss(e.what());
+    for (std::string line; std::getline(ss, line);) out.push_back(line);
+    return out;
+  }
+}
+
+void rescale(Preset& p, uint32_t n) {
+  if (n < 1) throw InputError("--resolution: must be at least 1");
+  const uint32_t longest = *std::max_element(p.resolution.begin(), p.resolution.end());
+  const double f = double(n) / longest;
+  for (auto& r : p.resolution) r = std::max<uint32_t>(1, uint32_t(std::lround(r * f)));
+  p.voxel_size /= f;
+}
+
+uint64_t memory_estimate(const Preset& p, bool need_detail) {
+  const uint64_t voxels = uint64_t(p.resolution[0]) * p.resolution[1] * p.resolution[2];
+  int channels = 1;
+  if (need_detail)
+    for (int c = 1; c < 4; ++c) channels += p.channels[c].enabled;
+  // Dense float channels + one float scratch of the Perlin-Worley accumulator per brick (small),
+  // plus the OpenVDB tree when exporting (about the size of the active voxels again).
+  return voxels * 4 * (channels + 1);
+}
+
+}  // namespace cloudgen
