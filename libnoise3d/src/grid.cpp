@@ -54,6 +54,12 @@ struct Axis {
   std::vector<T> u;           ///< fade(f)
   std::vector<int64_t> cell;  ///< unwrapped cell (for the exact Worley fallback)
   std::vector<uint32_t> lat;  ///< wrapped lattice index of each list entry
+  /// Runs of consecutive samples in the same cell: samples [run[r], run[r+1]) share cell m[run[r]].
+  /// The kernels loop over runs with the cell's constants broadcast, which vectorises without gathers.
+  std::vector<uint32_t> run;
+  /// Signed copies of m for the gather path (high octaves, where runs are 1-2 samples long).
+  std::vector<int32_t> mi;
+  bool short_runs() const { return run.size() > 1 && m.size() < 6 * (run.size() - 1); }
 };
 
 /// lo/hi: how many lattice neighbours below/above the cell each sample needs (Perlin 0/1, Worley 1/1).
@@ -75,6 +81,10 @@ Axis<T> make_axis(uint32_t size, uint32_t origin, uint32_t extent, uint32_t peri
   }
   ax.lat.resize(list.size());
   for (size_t e = 0; e < list.size(); ++e) ax.lat[e] = wrap(list[e], period);
+  for (uint32_t s = 0; s < extent; ++s)
+    if (s == 0 || ax.m[s] != ax.m[s - 1]) ax.run.push_back(s);
+  ax.run.push_back(extent);
+  ax.mi.assign(ax.m.begin(), ax.m.end());
   return ax;
 }
 
@@ -171,14 +181,26 @@ void perlin_slice(const OctaveSetup<T>& s, uint32_t k, T* acc, PerlinScratch<T>&
       B[a] = v0 * (gy[r0 + a] * fy + cz[r0 + a]) + v * (gy[r1 + a] * fy1 + cz[r1 + a]);
     }
     T* __restrict out = acc + j * ex;
-    const uint32_t* __restrict m = X.m.data();
     const T* __restrict f = X.f.data();
     const T* __restrict u = X.u.data();
-    for (size_t i = 0; i < ex; ++i) {
-      const uint32_t a = m[i];
-      const T n0 = A[a] * f[i] + B[a];
-      const T n1 = A[a + 1] * (f[i] - T(1)) + B[a + 1];
-      out[i] += wt * (n0 + u[i] * (n1 - n0));
+    if (X.short_runs()) {
+      const int32_t* __restrict mi = X.mi.data();
+      for (size_t i = 0; i < ex; ++i) {
+        const int32_t a = mi[i];
+        const T n0 = A[a] * f[i] + B[a];
+        const T n1 = A[a + 1] * (f[i] - T(1)) + B[a + 1];
+        out[i] += wt * (n0 + u[i] * (n1 - n0));
+      }
+      continue;
+    }
+    for (size_t r = 0; r + 1 < X.run.size(); ++r) {
+      const uint32_t s0 = X.run[r], s1 = X.run[r + 1], a = X.m[s0];
+      const T A0 = A[a], B0 = B[a], A1 = A[a + 1], B1 = B[a + 1];
+      for (uint32_t i = s0; i < s1; ++i) {
+        const T n0 = A0 * f[i] + B0;
+        const T n1 = A1 * (f[i] - T(1)) + B1;
+        out[i] += wt * (n0 + u[i] * (n1 - n0));
+      }
     }
   }
 }
@@ -239,18 +261,42 @@ void worley_slice(const OctaveSetup<T>& s, uint32_t k, T* acc, WorleyScratch<T>&
       }
     }
     T* __restrict best = sc.best.data();
-    const uint32_t* __restrict m = X.m.data();
     const T* __restrict f = X.f.data();
-    for (size_t i = 0; i < ex; ++i) best[i] = std::numeric_limits<T>::infinity();
-    for (int n = 0; n < 9; ++n) {
-      const T* __restrict jx = &sc.jx[n * nx];
-      const T* __restrict r2 = &sc.r2[n * nx];
-      for (int dx = 0; dx < 3; ++dx) {
-        const T off = T(dx - 1);
-        for (size_t i = 0; i < ex; ++i) {
-          const uint32_t a = m[i] + dx - 1;
-          const T d = off + jx[a] - f[i];
-          const T d2 = d * d + r2[a];
+    if (X.short_runs()) {
+      // About one sample per cell: gather the neighbours' constants per sample instead.
+      const int32_t* __restrict mi = X.mi.data();
+      for (size_t i = 0; i < ex; ++i) best[i] = std::numeric_limits<T>::infinity();
+      for (int n = 0; n < 9; ++n) {
+        const T* __restrict jx = sc.jx.data() + n * nx;
+        const T* __restrict r2 = sc.r2.data() + n * nx;
+        for (int dx = 0; dx < 3; ++dx) {
+          const T off = T(dx - 1);
+          for (size_t i = 0; i < ex; ++i) {
+            const int32_t a = mi[i] + dx - 1;
+            const T d = jx[a] + off - f[i];
+            const T d2 = d * d + r2[a];
+            best[i] = d2 < best[i] ? d2 : best[i];
+          }
+        }
+      }
+    }
+    for (size_t r = 0; r + 1 < X.run.size() && !X.short_runs(); ++r) {
+      const uint32_t s0 = X.run[r], s1 = X.run[r + 1], a = X.m[s0];
+      // The 27 neighbour feature points of this cell: x offset and y/z partial squared distance.
+      T cx[27], rr[27];
+      for (int q = 0; q < 27; ++q) {
+        const int n = q / 3, dx = q % 3;
+        cx[q] = sc.jx[n * nx + a + dx - 1] + T(dx - 1);
+        rr[q] = sc.r2[n * nx + a + dx - 1];
+      }
+      // Samples innermost: an elementwise min the compiler vectorises (a min-reduction over q
+      // would be one serial dependency chain, and is not vectorised without fast-math).
+      for (uint32_t i = s0; i < s1; ++i) best[i] = std::numeric_limits<T>::infinity();
+      for (int q = 0; q < 27; ++q) {
+        const T c = cx[q], r2 = rr[q];
+        for (uint32_t i = s0; i < s1; ++i) {
+          const T d = c - f[i];
+          const T d2 = d * d + r2;
           best[i] = d2 < best[i] ? d2 : best[i];
         }
       }
