@@ -218,8 +218,14 @@ int main(int argc, char** argv) {
   });
 
   CLI::App* pre = app.add_subcommand("presets", "List the shipped presets.");
-  pre->callback([&run] {
-    run = [] {
+  auto markdown = std::make_shared<bool>(false);
+  pre->add_flag("--markdown", *markdown, "Print the reference of every preset key (docs/presets.md) instead");
+  pre->callback([&run, markdown] {
+    run = [markdown] {
+      if (*markdown) {
+        std::printf("%s", params_markdown().c_str());
+        return;
+      }
       std::vector<fs::path> files;
       for (auto& e : fs::directory_iterator(preset_dir()))
         if (e.path().extension() == ".json") files.push_back(e.path());

@@ -397,7 +397,11 @@ std::string params_markdown() {
   for (const ParamInfo& i : params()) {
     std::string key = i.pointer.substr(1);
     std::replace(key.begin(), key.end(), '/', '.');
-    o << "| `" << key << "` | " << i.type << " | `" << i.default_value << "` | " << i.range << " | " << i.doc << " |\n";
+    auto cell = [](std::string t) {  // a '|' inside a cell would end it
+      for (size_t k = 0; (k = t.find('|', k)) != std::string::npos; k += 2) t.replace(k, 1, "\\|");
+      return t;
+    };
+    o << "| `" << key << "` | " << i.type << " | `" << i.default_value << "` | " << cell(i.range) << " | " << cell(i.doc) << " |\n";
   }
   return o.str();
 }

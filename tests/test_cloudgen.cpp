@@ -1,0 +1,480 @@
+// cloudgen: presets (parsing, errors), the pipeline's invariants (exact skipping, regions,
+// threads, tiling, occupancy), exporters' round trips, atomic output and the CLI's behaviour.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "cloudgen/generate.h"
+#include "cloudgen/io.h"
+#include "cloudgen/preset.h"
+
+using namespace cloudgen;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kPresets = std::string(CLOUD_SOURCE_DIR) + "/presets/";
+const std::string kCli = std::string(CLOUD_BINARY_DIR) + "/bin/cloudgen";
+
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    char tmpl[] = "/tmp/cloudgen-test-XXXXXX";
+    path = ::mkdtemp(tmpl);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+  std::string operator/(const std::string& f) const { return (path / f).string(); }
+};
+
+Preset preset(const std::string& name, std::vector<std::string> sets = {}) {
+  return load_preset(kPresets + name + ".json", sets);
+}
+
+std::string error_of(const std::string& json, std::vector<std::string> sets = {}) {
+  try {
+    parse_preset(json, "bad.json", sets);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+bool same_bytes(const std::vector<float>& a, const std::vector<float>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+int run_cli(const std::string& args, std::string* out = nullptr) {
+  std::string cmd = kCli + " " + args + " 2>&1";
+  FILE* p = ::popen(cmd.c_str(), "r");
+  std::string s;
+  char buf[4096];
+  while (size_t n = std::fread(buf, 1, sizeof buf, p)) s.append(buf, n);
+  int st = ::pclose(p);
+  if (out) *out = s;
+  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+TEST(Presets, EveryShippedPresetValidatesAndGenerates) {
+  int n = 0;
+  for (auto& e : fs::directory_iterator(kPresets)) {
+    if (e.path().extension() != ".json") continue;
+    ++n;
+    SCOPED_TRACE(e.path().string());
+    Preset p = load_preset(e.path().string());
+    rescale(p, 40);  // same shapes, small enough for a unit test
+    GenerateStats st;
+    Volume v = generate(p, {}, &st);
+    EXPECT_GT(st.active_voxels, 0u) << "preset generates an empty volume";
+    EXPECT_LT(st.active_voxels, v.voxel_count()) << "preset fills the whole box";
+    for (float d : v.density) ASSERT_TRUE(d >= 0.0f && d <= 1.0f);
+  }
+  for (const char* required : {"thesis", "cumulus", "cumulonimbus", "stratus", "cumulus-field", "tiny"})
+    EXPECT_TRUE(fs::exists(kPresets + required + ".json")) << required;
+  EXPECT_GE(n, 6);
+  Preset field = preset("cumulus-field");
+  EXPECT_EQ(field.resolution, (std::array<uint32_t, 3>{512, 128, 512}));
+  Preset thesis = preset("thesis");
+  EXPECT_EQ(thesis.resolution, (std::array<uint32_t, 3>{128, 128, 128}));
+  EXPECT_EQ(thesis.channels[0].kind, noise3d::Kind::Worley);
+  EXPECT_EQ(thesis.channels[0].octaves, 5);
+  EXPECT_EQ(thesis.height_a, 50);
+  EXPECT_EQ(thesis.height_b, 4);
+}
+
+TEST(Presets, BadPresetsGiveTheirSpecificError) {
+  struct Case {
+    std::string json, expect;
+  };
+  const std::vector<Case> cases = {
+      {R"({"threshold": "high"})", "/threshold: \"high\" has the wrong type; expected a number"},
+      {R"({"threshold": 1.5})", "/threshold: 1.5 is out of range; allowed: number in [0, 0.999]"},
+      {R"({"channels": {"r": {"octaves": 40}}})", "/channels/r/octaves: 40 is out of range"},
+      {R"({"channels": {"r": {"octaves": 2.5}}})", "/channels/r/octaves: 2.5 has the wrong type; expected an integer"},
+      {R"({"treshold": 0.3})", "/treshold: unknown key (did you mean \"threshold\"?)"},
+      {R"({"channels": {"q": {}}})", "/channels/q: unknown key"},
+      {R"({"channels": {"r": {"kind": "simplex"}}})", "expected one of: perlin | worley | perlin-worley"},
+      {R"({"resolution": [64, 64]})", "/resolution: [64,64] has the wrong type; expected an array of 3 integers"},
+      {R"({"resolution": [64, 0, 64]})", "/resolution/1: 0 is out of range"},
+      {R"({"towers": {"list": [{"center": [0.02, 0.2, 0.5]}]}})", "/towers/list/0: centre x +- 3 sigma"},
+      {R"({"towers": {"list": [{"centre": [0.5, 0.2, 0.5]}]}})", "/towers/list/0/centre: unknown key (did you mean \"center\"?)"},
+      {R"({"coverage": {"low": 0.7, "high": 0.6}})", "/coverage/high: 0.6 must be greater than /coverage/low"},
+      {R"({"channels": {"r": {"period": 65536, "octaves": 16}}})", "/channels/r: octaves: period * lacunarity^(octaves-1)"},
+      {"{\n  \"seed\": 1,\n  \"threshold\": 0.3,,\n}", "JSON syntax error at line 3, column 20"},
+      {R"([1, 2])", "the preset must be a JSON object"},
+  };
+  for (const Case& c : cases) {
+    std::string e = error_of(c.json);
+    EXPECT_NE(e.find("bad.json"), std::string::npos) << "error must name the file: " << e;
+    EXPECT_NE(e.find(c.expect), std::string::npos) << "for " << c.json << "\n got: " << e << "\n want: " << c.expect;
+  }
+  // Every problem is listed, not only the first.
+  std::string e = error_of(R"({"threshold": 7, "sed": 1, "voxel_size": -1})");
+  EXPECT_NE(e.find("/threshold"), std::string::npos);
+  EXPECT_NE(e.find("/sed"), std::string::npos);
+  EXPECT_NE(e.find("/voxel_size"), std::string::npos);
+}
+
+TEST(Presets, SetOverridesGoThroughTheSameValidation) {
+  Preset p = parse_preset("{}", "x.json", {"seed=7", "channels.r.octaves=6", "resolution=[16,8,16]", "height.profile=stratus"});
+  EXPECT_EQ(p.seed, 7u);
+  EXPECT_EQ(p.channels[0].octaves, 6);
+  EXPECT_EQ(p.resolution, (std::array<uint32_t, 3>{16, 8, 16}));
+  EXPECT_EQ(p.height_profile, "stratus");
+  EXPECT_NE(error_of("{}", {"threshold=2"}).find("/threshold: 2 is out of range"), std::string::npos);
+  EXPECT_NE(error_of("{}", {"channels.r.octavs=2"}).find("did you mean \"octaves\""), std::string::npos);
+  EXPECT_NE(error_of("{}", {"noequals"}).find("expected key.path=value"), std::string::npos);
+}
+
+TEST(Presets, RescaleKeepsProportionsAndWorldSize) {
+  Preset p = preset("cumulus-field");
+  const auto world = std::array<double, 3>{p.resolution[0] * p.voxel_size, p.resolution[1] * p.voxel_size,
+                                           p.resolution[2] * p.voxel_size};
+  rescale(p, 128);
+  EXPECT_EQ(p.resolution, (std::array<uint32_t, 3>{128, 32, 128}));
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(p.resolution[a] * p.voxel_size, world[a], 1e-9);
+}
+
+TEST(Presets, DocsAreGeneratedFromTheTable) {
+  std::string md = params_markdown();
+  for (const auto& pi : params()) {
+    std::string key = pi.pointer.substr(1);
+    std::replace(key.begin(), key.end(), '/', '.');
+    EXPECT_NE(md.find("`" + key + "`"), std::string::npos) << key;
+  }
+  // docs/presets.md must be the table's current text (regenerate with scripts/gen_docs.sh).
+  std::ifstream in(std::string(CLOUD_SOURCE_DIR) + "/docs/presets.md");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  EXPECT_NE(ss.str().find(md), std::string::npos) << "docs/presets.md is out of date with the parameter table";
+}
+
+// ---------------------------------------------------------------------------------------------
+TEST(Pipeline, SkippingDoesNotChangeASingleValue) {
+  for (const char* name : {"tiny", "thesis", "cumulus-field", "cumulus"}) {
+    SCOPED_TRACE(name);
+    Preset p = preset(name);
+    rescale(p, 96);
+    GenerateOptions on, off;
+    off.skip_empty = false;
+    GenerateStats s_on, s_off;
+    Volume a = generate(p, on, &s_on), b = generate(p, off, &s_off);
+    EXPECT_TRUE(same_bytes(a.density, b.density));
+    for (int c = 0; c < 3; ++c) EXPECT_TRUE(same_bytes(a.detail[c], b.detail[c]));
+    EXPECT_EQ(s_off.bricks_skipped, 0u);
+    if (std::string(name) == "cumulus-field") {
+      EXPECT_GT(s_on.bricks_skipped, s_on.bricks / 2);
+    }
+  }
+}
+
+TEST(Pipeline, IdenticalAcrossThreadCountsAndRegions) {
+  Preset p = preset("thesis");
+  rescale(p, 64);
+  GenerateOptions one, two;
+  one.threads = 1, two.threads = 2;
+  Volume a = generate(p, one), b = generate(p, two);
+  EXPECT_TRUE(same_bytes(a.density, b.density));
+  EXPECT_TRUE(same_bytes(a.detail[0], b.detail[0]));
+  // A region that is not brick-aligned gives the full run's values at the same voxels.
+  GenerateOptions r;
+  r.region_origin = {5, 13, 21};
+  r.region_extent = {37, 29, 19};
+  Volume part = generate(p, r);
+  EXPECT_EQ(part.dims, (std::array<uint32_t, 3>{37, 29, 19}));
+  EXPECT_DOUBLE_EQ(part.origin[0], p.origin[0] + 5 * p.voxel_size);
+  for (uint32_t z = 0; z < 19; ++z)
+    for (uint32_t y = 0; y < 29; ++y)
+      for (uint32_t x = 0; x < 37; ++x)
+        ASSERT_EQ(part.density[part.index(x, y, z)], a.density[a.index(x + 5, y + 13, z + 21)]);
+  // Detail channels are defined near cloud bricks of the whole volume; compare inside the region
+  // away from its faces, where the same bricks decide.
+  GenerateOptions bad;
+  bad.region_origin = {60, 0, 0};
+  bad.region_extent = {10, 0, 0};
+  EXPECT_THROW(generate(p, bad), InputError);
+}
+
+TEST(Pipeline, FinalVolumeTilesInXAndZ) {
+  // The seam between the last and first voxel must look like any other neighbour pair: the mean
+  // absolute difference across the seam stays within 1.6x of the interior mean (a volume that did
+  // not wrap shows several times the interior difference there).
+  Preset p = preset("cumulus");
+  Volume v = generate(p);
+  auto seam_ratio = [&](int axis) {
+    double seam = 0, inner = 0;
+    size_t ns = 0, ni = 0;
+    const uint32_t n = v.dims[axis];
+    for (uint32_t z = 0; z < v.dims[2]; ++z)
+      for (uint32_t y = 0; y < v.dims[1]; ++y)
+        for (uint32_t x = 0; x < v.dims[0]; ++x) {
+          uint32_t c[3] = {x, y, z};
+          uint32_t q[3] = {x, y, z};
+          q[axis] = (c[axis] + 1) % n;
+          double d = std::fabs(v.density[v.index(x, y, z)] - v.density[v.index(q[0], q[1], q[2])]);
+          if (c[axis] == n - 1) seam += d, ++ns;
+          else inner += d, ++ni;
+        }
+    return (seam / ns) / (inner / ni);
+  };
+  EXPECT_LT(seam_ratio(0), 1.6);
+  EXPECT_LT(seam_ratio(2), 1.6);
+  EXPECT_TRUE(v.tiles_xz);
+}
+
+TEST(Pipeline, TowersVanishAtTheTileEdges) {
+  Preset p = parse_preset(R"({"resolution": [48, 48, 48], "towers": {"count": 6, "seed": 3}})", "t.json");
+  for (const Tower& t : resolve_towers(p))
+    for (int a : {0, 2}) {
+      EXPECT_GE(t.center[a] - 3 * t.sigma[a], 0.0);
+      EXPECT_LE(t.center[a] + 3 * t.sigma[a], 1.0);
+    }
+}
+
+TEST(Pipeline, HeightDistributionIsTheThesisFunction) {
+  Preset p = preset("thesis");
+  p.height_normalize = false;
+  for (double h : {0.0, 0.01, 0.1, 0.5, 1.0})
+    EXPECT_NEAR(height_profile(p, h), (1 - std::exp(-50 * h)) * std::exp(-4 * h), 1e-12);
+  p.height_normalize = true;
+  const double hs = std::log(1 + 50.0 / 4) / 50;
+  EXPECT_NEAR(height_profile(p, hs), 1.0, 1e-12);
+  EXPECT_LT(height_profile(p, hs + 0.01), 1.0);
+  EXPECT_LT(height_profile(p, hs - 0.01), 1.0);
+}
+
+TEST(Pipeline, OccupancyIsConservative) {
+  for (const char* name : {"thesis", "cumulus-field"}) {
+    Preset p = preset(name);
+    rescale(p, std::string(name) == "thesis" ? 80 : 256);
+    Volume v = generate(p);
+    const uint32_t c = v.occupancy_cell;
+    const int pad = int(v.occupancy_padding);
+    auto occ = [&](int x, int y, int z) {
+      const auto& d = v.occupancy_dims;
+      if (v.tiles_xz) x = (x % int(d[0]) + int(d[0])) % int(d[0]), z = (z % int(d[2]) + int(d[2])) % int(d[2]);
+      if (x < 0 || y < 0 || z < 0 || x >= int(d[0]) || y >= int(d[1]) || z >= int(d[2])) return true;
+      return v.occupancy[(size_t(z) * d[1] + y) * d[0] + x] != 0;
+    };
+    size_t checked = 0, occupied = 0;
+    for (uint32_t z = 0; z < v.dims[2]; ++z)
+      for (uint32_t y = 0; y < v.dims[1]; ++y)
+        for (uint32_t x = 0; x < v.dims[0]; ++x) {
+          if (v.density[v.index(x, y, z)] <= 0) continue;
+          ++checked;
+          for (int dz = -pad; dz <= pad; ++dz)
+            for (int dy = -pad; dy <= pad; ++dy)
+              for (int dx = -pad; dx <= pad; ++dx)
+                ASSERT_TRUE(occ(int(x / c) + dx, int(y / c) + dy, int(z / c) + dz)) << name;
+        }
+    for (uint8_t o : v.occupancy) occupied += o;
+    EXPECT_GT(checked, 0u);
+    if (std::string(name) == "cumulus-field") {
+      // Double padding dilates by 2 cells (16 voxels) each way, so at 256 voxels wide most of this
+      // field's columns are reached; still a good share must be empty for skipping to pay.
+      std::printf("  %s: %zu of %zu occupancy cells occupied\n", name, occupied, v.occupancy.size());
+      EXPECT_LT(occupied, v.occupancy.size() * 8 / 10) << "a sparse field must leave cells empty to skip";
+    }
+  }
+}
+
+TEST(Pipeline, GoldenChecksumOfTheTinyPreset) {
+  // FNV-1a of the tiny preset's density bytes: any change to noise, pipeline or defaults shows up.
+  Volume v = generate(preset("tiny"));
+  uint64_t h = 1469598103934665603ull;
+  const auto* b = reinterpret_cast<const uint8_t*>(v.density.data());
+  for (size_t i = 0; i < v.density.size() * 4; ++i) h = (h ^ b[i]) * 1099511628211ull;
+  EXPECT_EQ(h, 0x2a69792f43c25e4eull) << std::hex << h;
+}
+
+// ---------------------------------------------------------------------------------------------
+TEST(Export, VdbRoundTripFloatAndHalf) {
+  TempDir dir;
+  Volume v = generate(preset("tiny"));
+  for (bool half : {false, true}) {
+    ExportOptions o;
+    o.vdb_half = half;
+    const std::string path = dir / (half ? "h.vdb" : "f.vdb");
+    write_vdb(v, path, o);
+    Volume r = read_vdb(path);
+    // The reader crops to the active bounding box; tiny's cloud touches every side but the top.
+    ASSERT_LE(r.dims[1], v.dims[1]);
+    const uint32_t oy = uint32_t(std::lround((r.origin[1] - v.origin[1]) / v.voxel_size));
+    EXPECT_DOUBLE_EQ(r.voxel_size, v.voxel_size);
+    double maxerr = 0;
+    for (uint32_t z = 0; z < r.dims[2]; ++z)
+      for (uint32_t y = 0; y < r.dims[1]; ++y)
+        for (uint32_t x = 0; x < r.dims[0]; ++x)
+          maxerr = std::max(maxerr, double(std::fabs(r.density[r.index(x, y, z)] - v.density[v.index(x, y + oy, z)])));
+    if (half) EXPECT_LE(maxerr, 1.0 / 2048) << "half keeps 11 significant bits";
+    else EXPECT_EQ(maxerr, 0.0);
+    std::string info = describe_vdb(path);
+    EXPECT_NE(info.find("grid \"density\": float, class fog volume"), std::string::npos) << info;
+    EXPECT_NE(info.find("grid \"detail_g\""), std::string::npos) << info;
+    EXPECT_EQ(info.find("Houdini"), std::string::npos);
+    EXPECT_NE(info.find("saved as " + std::string(half ? "half" : "float")), std::string::npos) << info;
+  }
+}
+
+TEST(Export, TextureRoundTrips) {
+  TempDir dir;
+  Volume v = generate(preset("tiny"));
+  for (const std::string texel : {"rgba8", "rgba16f", "rgba32f"}) {
+    ExportOptions o;
+    o.texel = texel;
+    const double tol = texel == "rgba8" ? 0.5 / 255 + 1e-7 : texel == "rgba16f" ? 1.0 / 2048 : 0.0;
+    for (const std::string ext : {".raw", ".ktx2"}) {
+      SCOPED_TRACE(texel + ext);
+      const std::string path = dir / (texel + ext);
+      write_volume(v, path, format_from_path(path), o);
+      Volume r = read_volume(path);
+      ASSERT_EQ(r.dims, v.dims);
+      double err = 0;
+      for (size_t i = 0; i < v.voxel_count(); ++i) {
+        err = std::max(err, double(std::fabs(r.density[i] - v.density[i])));
+        err = std::max(err, double(std::fabs(r.detail[0][i] - v.detail[0][i])));
+      }
+      EXPECT_LE(err, tol);
+      if (ext == ".raw") {
+        EXPECT_TRUE(fs::exists(dir / (texel + ".json")));
+        EXPECT_TRUE(fs::exists(dir / (texel + ".occupancy.raw")));
+        EXPECT_EQ(r.occupancy, v.occupancy);
+      }
+    }
+  }
+  // KTX2 header fields a loader checks.
+  std::ifstream k(dir / "rgba8.ktx2", std::ios::binary);
+  char hdr[48];
+  k.read(hdr, 48);
+  EXPECT_EQ(std::memcmp(hdr, "\xABKTX 20\xBB\r\n\x1A\n", 12), 0);
+  uint32_t vk, depth;
+  std::memcpy(&vk, hdr + 12, 4);
+  std::memcpy(&depth, hdr + 28, 4);
+  EXPECT_EQ(vk, 37u);  // VK_FORMAT_R8G8B8A8_UNORM
+  EXPECT_EQ(depth, v.dims[2]);
+}
+
+TEST(Export, AtlasHasOneTilePerHeightLevel) {
+  TempDir dir;
+  Volume v = generate(preset("tiny"));
+  write_atlas(v, dir / "a.png", Format::AtlasPng);
+  write_atlas(v, dir / "a.exr", Format::AtlasExr);
+  std::ifstream side(dir / "a.json");
+  std::stringstream ss;
+  ss << side.rdbuf();
+  EXPECT_NE(ss.str().find("\"tiles\": [\n      6,\n      6\n    ]"), std::string::npos) << ss.str();  // 32 slices -> 6x6
+  EXPECT_GT(fs::file_size(dir / "a.png"), 1000u);
+  EXPECT_GT(fs::file_size(dir / "a.exr"), 1000u);
+}
+
+TEST(Export, FailedWriteLeavesNoFile) {
+  TempDir dir;
+  const std::string path = dir / "x.vdb";
+  EXPECT_THROW(atomic_write(path, [](const std::string& tmp) {
+                 std::ofstream(tmp) << "half";
+                 throw IoError("simulated failure");
+               }),
+               IoError);
+  EXPECT_TRUE(fs::is_empty(dir.path)) << "neither the output nor its temporary may remain";
+}
+
+TEST(Export, ReadersRejectBadInputsClearly) {
+  TempDir dir;
+  std::ofstream(dir / "junk.vdb") << "not a vdb";
+  EXPECT_THROW(read_volume(dir / "junk.vdb"), InputError);
+  EXPECT_THROW(read_volume(dir / "missing.vdb"), InputError);
+  Volume v = generate(preset("tiny"));
+  write_raw(v, dir / "t.raw", {});
+  fs::resize_file(dir / "t.raw", 1000);
+  try {
+    read_volume(dir / "t.raw");
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("holds 1000 bytes"), std::string::npos) << e.what();
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+TEST(Cli, GenerateWritesEveryOutputAndInfoDescribesThem) {
+  TempDir dir;
+  std::string out;
+  ASSERT_EQ(run_cli("generate tiny -q -o " + (dir / "t.vdb") + " -o " + (dir / "t.raw") + " -o " + (dir / "t.ktx2"), &out), 0) << out;
+  for (const char* f : {"t.vdb", "t.raw", "t.json", "t.occupancy.raw", "t.ktx2"}) EXPECT_TRUE(fs::exists(dir / f)) << f;
+  ASSERT_EQ(run_cli("info " + (dir / "t.vdb"), &out), 0) << out;
+  EXPECT_NE(out.find("grid \"density\""), std::string::npos) << out;
+  EXPECT_NE(out.find("preset: tiny"), std::string::npos) << out;
+  ASSERT_EQ(run_cli("info " + (dir / "t.raw"), &out), 0) << out;
+  EXPECT_NE(out.find("size 32 x 32 x 32"), std::string::npos) << out;
+}
+
+TEST(Cli, ErrorsExitNonZeroWithTheirMessage) {
+  TempDir dir;
+  std::string out;
+  EXPECT_EQ(run_cli("generate tiny -o " + (dir / "t.xyz"), &out), 1);
+  EXPECT_NE(out.find("cannot tell the format"), std::string::npos) << out;
+  EXPECT_EQ(run_cli("generate cumulus-field --max-memory 10M -o " + (dir / "f.vdb"), &out), 1);
+  EXPECT_NE(out.find("more than --max-memory"), std::string::npos) << out;
+  EXPECT_EQ(run_cli("generate tiny --set threshold=3 -o " + (dir / "t.vdb"), &out), 1);
+  EXPECT_NE(out.find("/threshold: 3 is out of range"), std::string::npos) << out;
+  EXPECT_EQ(run_cli("validate " + kPresets + "tiny.json " + kPresets + "thesis.json", &out), 0) << out;
+  std::ofstream(dir / "bad.json") << "{\"seed\": -1}";
+  EXPECT_EQ(run_cli("validate " + (dir / "bad.json"), &out), 1);
+  EXPECT_NE(out.find("/seed: -1 is out of range"), std::string::npos) << out;
+  EXPECT_TRUE(fs::is_empty(dir.path) || !fs::exists(dir / "t.vdb"));
+}
+
+TEST(Cli, InterruptedRunLeavesNoPartialOutput) {
+  TempDir dir;
+  const std::string out = dir / "field.vdb";
+  pid_t pid = ::fork();
+  if (pid == 0) {
+    ::execl(kCli.c_str(), kCli.c_str(), "generate", "cumulus-field", "-q", "-o", out.c_str(), "-o",
+            (dir / "field.raw").c_str(), (char*)nullptr);
+    ::_exit(99);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(400));
+  ::kill(pid, SIGINT);
+  int st = 0;
+  ::waitpid(pid, &st, 0);
+  ASSERT_TRUE(WIFEXITED(st));
+  EXPECT_EQ(WEXITSTATUS(st), 130);
+  EXPECT_TRUE(fs::is_empty(dir.path)) << "an interrupted run must leave neither outputs nor temporaries";
+}
+
+TEST(Cli, NoiseCubeIsOneTileAndReferenceModeMatchesPerlin) {
+  TempDir dir;
+  std::string out;
+  ASSERT_EQ(run_cli("noise --kind worley --period 3 --octaves 2 --seed 5 --size 24 --threads 1 -o " + (dir / "a.raw"), &out), 0) << out;
+  ASSERT_EQ(run_cli("noise --kind worley --period 3 --octaves 2 --seed 5 --size 24 --threads 2 -o " + (dir / "b.raw"), &out), 0) << out;
+  std::ifstream a(dir / "a.raw", std::ios::binary), b(dir / "b.raw", std::ios::binary);
+  std::vector<float> va(24 * 24 * 24), vb(va.size());
+  a.read(reinterpret_cast<char*>(va.data()), va.size() * 4);
+  b.read(reinterpret_cast<char*>(vb.data()), vb.size() * 4);
+  EXPECT_TRUE(same_bytes(va, vb));
+  noise3d::FractalParams p;
+  p.kind = noise3d::Kind::Worley, p.period = noise3d::Period::cube(3), p.octaves = 2, p.seed = 5;
+  EXPECT_NEAR(va[(7 * 24 + 5) * 24 + 11], noise3d::evaluate(p, 11 * 3.0 / 24, 5 * 3.0 / 24, 7 * 3.0 / 24), 1e-6);
+  std::ifstream side(dir / "a.json");
+  std::stringstream ss;
+  ss << side.rdbuf();
+  EXPECT_NE(ss.str().find("\"kind\": \"worley\""), std::string::npos);
+  EXPECT_NE(ss.str().find("\"min\""), std::string::npos);
+  ASSERT_EQ(run_cli("noise --kind perlin --reference --at 3.14,42,7", &out), 0);
+  EXPECT_EQ(out, "0.13691995878400012\n");
+  EXPECT_EQ(run_cli("noise --kind perlin --lacunarity 2.5 --size 8 -o " + (dir / "c.raw"), &out), 1);
+  EXPECT_NE(out.find("lacunarity"), std::string::npos) << out;
+}
