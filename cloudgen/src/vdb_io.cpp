@@ -113,6 +113,9 @@ Volume read_vdb(const std::string& path) {
       openvdb::CoordBBox vb;
       it.getBoundingBox(vb);
       vb.intersect(bb);
+      // Detail grids reach beyond the density's bounding box; an empty intersection's iterator
+      // would still visit coordinates, so skip it.
+      if (vb.empty()) continue;
       for (auto c = vb.begin(); c; ++c) {
         const openvdb::Coord q = *c - lo;
         out[v.index(uint32_t(q.x()), uint32_t(q.y()), uint32_t(q.z()))] = *it;
