@@ -1,0 +1,94 @@
+// What a frame is made of: the volume (loaded or synthetic) prepared for marching, camera, sun,
+// the Mie table, and the parameter block both renderers consume. No OpenGL here.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "cloudgen/volume.h"
+#include "cloudviewer/params.h"
+#include "cloudviewer/settings.h"
+
+namespace cloudviewer {
+
+/// True when this build links the cloudgen library (reads .vdb/.raw/.ktx2, generates .json presets).
+bool has_cloudgen();
+
+/// Loads INPUT: `synthetic:sphere|slab|blob|noise` or a file cloudgen reads / generates from.
+/// Throws InputError (missing file, unknown kind, not a cloud volume) with the path in the message.
+cloudgen::Volume load_volume(const std::string& input);
+
+/// Synthetic volumes for development and tests (no cloudgen needed):
+///  sphere: 64^3 voxels of 10 m, a soft ball with hash-noise detail channels;
+///  slab:   32x8x32 voxels of 5 m, density 1 everywhere (160 x 40 x 160 m), no detail;
+///  blob:   96x48x96 voxels of 12 m, fBm-shaped cumulus with height profile and detail.
+cloudgen::Volume synthetic_volume(const std::string& kind);
+
+/// Volume in the form both renderers sample: interleaved RGBA floats and the occupancy grid.
+struct PreparedVolume {
+  std::array<int, 3> dims{{0, 0, 0}};
+  double voxel_size = 1;
+  glm::dvec3 origin{0.0};
+  bool tiles = false;
+  bool has_detail = false;
+  std::vector<float> rgba;  ///< x fastest, 4 channels
+  int occ_cell = 8;         ///< voxels per coarse cell
+  int occ_padding = 2;      ///< dilation in coarse cells
+  std::array<int, 3> occ_dims{{0, 0, 0}};
+  std::vector<uint8_t> occ;
+  double occupied_fraction = 0;
+  glm::dvec3 size() const { return glm::dvec3(dims[0], dims[1], dims[2]) * voxel_size; }
+  glm::dvec3 center() const { return origin + 0.5 * size(); }
+};
+
+/// Validates the volume (non-empty density, finite values) and builds the occupancy grid:
+/// a cell is occupied when a voxel within `padding` cells (26-neighbourhood, wrapped in x/z when
+/// tiling) has density > 0. Built here, not taken from the file, because its conservativeness is
+/// what makes skipping image-neutral (trilinear reads reach half a voxel into the next cell).
+PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_padding = 2);
+
+struct Camera {
+  glm::dvec3 eye{0.0, 0.0, -10.0};
+  glm::dvec3 target{0.0};
+  double fov_y_deg = 60;
+};
+/// Sun from azimuth (degrees clockwise from north = -z, east = +x) and elevation (degrees).
+struct Sun {
+  double azimuth_deg = 0, elevation_deg = 35;
+  glm::dvec3 direction() const;
+};
+
+/// Camera framing the whole volume from the side (-z), slightly above its middle.
+Camera default_camera(const PreparedVolume& vol, double fov_y_deg, double aspect);
+/// Sun behind the viewer (the camera's azimuth seen from the target), 35 degrees up.
+Sun default_sun(const Camera& cam);
+
+/// Mie phase function of cloud droplets (Lorenz-Mie, water n = 1.333, 550 nm, Deirmendjian's C.1
+/// modified-gamma size distribution), `n` samples over theta = 0..pi, normalised to 1 over the
+/// sphere. Computed once and cached.
+const std::vector<float>& mie_phase_table(int n = 1801);
+
+/// Projection used by both renderers (near 0.5 m, far 1e6 m, OpenGL clip conventions), and the
+/// camera-relative view (camera at the origin).
+glm::dmat4 view_projection(const Camera& cam, int width, int height);
+
+struct FrameSetup {
+  int width = 0, height = 0;
+  Camera camera;
+  Sun sun;
+  RenderSettings settings;
+  ref::CloudParams params;   ///< double values, already rounded to float (what the GPU sees)
+  glm::dmat4 view_proj;      ///< camera-relative
+  glm::dmat4 inv_view_proj;  ///< rounded to float, like the GPU's
+  double ground_half_extent = 0;
+};
+
+/// Fills the parameter block from the volume, settings, camera and sun.
+FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const Camera& cam,
+                      const Sun& sun, int width, int height);
+
+}  // namespace cloudviewer

@@ -1,0 +1,75 @@
+// Render settings: each parameter declared once (key, type, default, range, doc) in one table that
+// drives `--set render.key=value`, `--help-params`, docs/viewer.md and the window's key bindings.
+#pragma once
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace cloudviewer {
+
+enum class PhaseMode { None = 0, HenyeyGreenstein = 1, Mie = 2 };
+enum class ToneMap { Reinhard = 0, Aces = 1, Clamp = 2 };
+enum class OutputMode { Radiance = 0, Transmittance = 1, Iterations = 2 };
+
+struct RenderSettings {
+  // marching
+  int steps = 128;                 ///< small steps across the volume's largest extent
+  bool occupancy = true;           ///< occupancy skipping (thesis 2.4.2)
+  int occupancy_cell = 8;          ///< coarse cell edge in voxels
+  bool adaptive = false;           ///< step grows with distance
+  double adaptive_start = 0;       ///< m; 0 = auto (the volume's largest extent)
+  double adaptive_growth = 0;      ///< 1/m; 0 = auto (1 / largest extent)
+  bool jitter = true;              ///< jittered start against banding
+  bool exact_filter = false;       ///< trilinear by hand (texelFetch) instead of the texture unit
+  double max_distance = 1e7;       ///< m
+  // medium
+  double sigma_t = 0;              ///< extinction per metre at density 1; 0 = auto (16 / smallest extent)
+  double density = 1;              ///< density multiplier
+  double erosion = 0.35;           ///< detail erosion strength [0,1]
+  double albedo = 1;               ///< single-scattering albedo
+  // lighting
+  bool light_march = true;         ///< secondary march toward the sun
+  int light_samples = 6;
+  double light_step = 0;           ///< m; 0 = auto (largest extent / 48)
+  double light_growth = 1.5;
+  PhaseMode phase = PhaseMode::HenyeyGreenstein;
+  double g = 0.3;                  ///< HG asymmetry
+  double powder = 0.3;             ///< powder term strength [0,1]
+  double powder_c = 2;             ///< c in 1 - exp(-c d)
+  double sun_intensity = 30;       ///< sun radiance scale
+  double ambient = 0.8;            ///< ambient sky radiance scale
+  // background
+  bool ground = true;
+  double ground_height = 0;        ///< m (world y)
+  bool ground_height_auto = true;  ///< ground at min(0, volume bottom)
+  double ground_albedo = 0.18;
+  int shadow_samples = 16;
+  // HDR
+  double exposure = 1.5;
+  ToneMap tonemap = ToneMap::Reinhard;
+  double bloom = 0.05;             ///< bloom strength (0 disables)
+  double bloom_threshold = 1.0;
+  OutputMode output = OutputMode::Radiance;
+  int frame = 0;                   ///< frame index (jitter pattern)
+};
+
+struct ParamDef {
+  std::string key;    ///< after "render."
+  std::string type;   ///< bool, int, float, enum
+  std::string range;  ///< allowed values
+  std::string doc;
+  std::function<void(RenderSettings&, const std::string&)> set;  ///< throws InputError
+  std::function<std::string(const RenderSettings&)> get;
+};
+
+/// The parameter table, in documentation order.
+const std::vector<ParamDef>& render_params();
+
+/// Applies one `render.key=value` (the "render." prefix is optional). Throws InputError naming the
+/// key, the value and what is allowed.
+void apply_setting(RenderSettings& s, const std::string& assignment);
+
+/// One line per parameter: "render.key=value".
+std::string describe_settings(const RenderSettings& s);
+
+}  // namespace cloudviewer

@@ -1,0 +1,11 @@
+// cloudviewer: parse, run, exit code. All logic lives in cloudviewer_lib (src/app.cpp).
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "cloudviewer/app.h"
+
+int main(int argc, char** argv) {
+  std::vector<std::string> args(argv, argv + argc);
+  return cloudviewer::run_cli(args, std::cout, std::cerr);
+}

@@ -1,0 +1,13 @@
+#version 450 core
+// Ground pass: HDR radiance and the distance from the camera (the depth the cloud pass stops at).
+#include "prelude_glsl.glsl"
+#include "cloud_params.glsl"
+#include "bindings.glsl"
+#include "cloud_functions.glsl"
+in vec3 v_position;
+layout(location = 0) out vec4 o_color;
+layout(location = 1) out vec4 o_distance;
+void main() {
+  o_color = vec4(ground_radiance(v_position), 1.0);
+  o_distance = vec4(length(v_position), 0.0, 0.0, 0.0);
+}

@@ -1,0 +1,6 @@
+// GLSL spelling of the macros that let cloud_functions.glsl compile as C++ too
+// (Bruneton's model.cc prepends the same definitions; src/reference.cpp has the C++ ones).
+#define Number float
+#define IN(x) in x
+#define OUT(x) out x
+#define INOUT(x) inout x

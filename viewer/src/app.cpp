@@ -1,0 +1,190 @@
+#include "cloudviewer/app.h"
+
+#include <chrono>
+#include <cmath>
+#include <iostream>
+#include <sstream>
+
+#include <CLI/CLI.hpp>
+
+#include "cloudviewer/errors.h"
+#include "internal.h"
+
+namespace cloudviewer {
+namespace {
+
+std::vector<double> parse_numbers(const std::string& flag, const std::string& text, size_t count) {
+  std::vector<double> v;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    size_t used = 0;
+    double d = 0;
+    try {
+      d = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || !std::isfinite(d))
+      throw InputError(flag + " " + text + ": '" + item + "' is not a number");
+    v.push_back(d);
+  }
+  if (v.size() != count)
+    throw InputError(flag + " " + text + ": expected " + std::to_string(count) + " comma-separated numbers");
+  return v;
+}
+
+Camera parse_camera(const std::string& text, double fov) {
+  auto colon = text.find(':');
+  if (colon == std::string::npos) throw InputError("--camera " + text + ": expected EX,EY,EZ:TX,TY,TZ");
+  auto e = parse_numbers("--camera", text.substr(0, colon), 3);
+  auto t = parse_numbers("--camera", text.substr(colon + 1), 3);
+  Camera c;
+  c.eye = glm::dvec3(e[0], e[1], e[2]);
+  c.target = glm::dvec3(t[0], t[1], t[2]);
+  c.fov_y_deg = fov;
+  if (glm::length(c.target - c.eye) < 1e-6) throw InputError("--camera " + text + ": eye and target coincide");
+  return c;
+}
+
+void parse_size(const std::string& text, int& w, int& h) {
+  auto x = text.find('x');
+  bool ok = x != std::string::npos;
+  if (ok) {
+    try {
+      size_t u1 = 0, u2 = 0;
+      w = std::stoi(text.substr(0, x), &u1);
+      h = std::stoi(text.substr(x + 1), &u2);
+      ok = u1 == x && u2 == text.size() - x - 1;
+    } catch (const std::exception&) {
+      ok = false;
+    }
+  }
+  if (!ok || w < 1 || h < 1 || w > 16384 || h > 16384)
+    throw InputError("--size " + text + ": expected WIDTHxHEIGHT, each 1..16384");
+}
+
+std::string params_help() {
+  std::string s = "render parameters (--set render.KEY=VALUE):\n";
+  RenderSettings d;
+  for (const ParamDef& p : render_params())
+    s += "  " + p.key + " (" + p.type + ", " + p.range + ", default " + p.get(d) + "): " + p.doc + "\n";
+  return s;
+}
+
+int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  Options o;
+  std::string size_text, camera_text, sun_text;
+  bool help_params = false;
+  CLI::App app{"cloudviewer: real-time volumetric cloud ray marcher (OpenGL 4.5) with a CPU reference"};
+  app.add_option("input", o.input,
+                 "volume to view: .vdb, .raw/.json, .ktx2 (cloudgen), a preset .json, or synthetic:sphere|slab|blob|noise");
+  app.add_flag("--headless", o.headless, "render without a display through EGL and exit");
+  app.add_option("--size", size_text, "image size WIDTHxHEIGHT (default 320x180 headless, 1280x720 window)");
+  app.add_option("--camera", camera_text, "camera EX,EY,EZ:TX,TY,TZ in world metres (default: frames the volume)");
+  app.add_option("--fov", o.fov, "vertical field of view in degrees")->check(CLI::Range(1.0, 170.0));
+  app.add_option("--sun", sun_text, "sun AZIMUTH,ELEVATION in degrees (azimuth clockwise from -z; default behind the viewer)");
+  app.add_option("--set", o.sets, "render.KEY=VALUE (see --help-params)")->take_all();
+  app.add_option("--out", o.out, "headless output image (.png tone-mapped sRGB, .exr linear HDR)");
+  app.add_option("--backend", o.backend, "gl (OpenGL) or cpu (double-precision reference)")->check(CLI::IsMember({"gl", "cpu"}));
+  app.add_option("--shader-dir", o.shader_dir, "read shaders from this directory instead of the embedded copies (hot reload)");
+  app.add_option("--bench", o.bench, "benchmark camera track (JSON, see viewer/tracks/default.json)");
+  app.add_option("--csv", o.csv, "benchmark per-frame results as CSV");
+  app.add_option("--bench-reference", o.bench_reference, "also render each track frame with the CPU reference at this step count and report RMSE");
+  app.add_option("--bench-repeat", o.bench_repeat, "timed renders per frame and configuration")->check(CLI::Range(1, 100));
+  app.add_flag("--help-params", help_params, "list every render.KEY with type, range, default and meaning");
+  std::vector<std::string> argv_rest(args.begin() + (args.empty() ? 0 : 1), args.end());
+  std::reverse(argv_rest.begin(), argv_rest.end());
+  try {
+    app.parse(argv_rest);
+  } catch (const CLI::ParseError& e) {
+    int code = app.exit(e, out, err);
+    return code == 0 ? 0 : 1;
+  }
+  if (help_params) {
+    out << params_help();
+    return 0;
+  }
+  if (o.input.empty()) throw InputError("no INPUT given (try --help)");
+  for (const std::string& s : o.sets) apply_setting(o.settings, s);
+  if (!size_text.empty()) parse_size(size_text, o.width, o.height);
+  else if (o.headless) o.width = 320, o.height = 180;
+  else o.width = 1280, o.height = 720;
+  if (!camera_text.empty()) o.camera = parse_camera(camera_text, o.fov);
+  if (!sun_text.empty()) {
+    auto v = parse_numbers("--sun", sun_text, 2);
+    if (v[1] < -90 || v[1] > 90) throw InputError("--sun " + sun_text + ": elevation must be in [-90, 90]");
+    o.sun = Sun{v[0], v[1]};
+  }
+  if (!o.headless) return run_window(o, out, err);
+  if (o.out.empty() && o.bench.empty()) throw InputError("--headless needs --out FILE or --bench TRACK.json");
+  if (!o.out.empty()) {  // fail on a bad extension before rendering
+    std::string lower = o.out;
+    for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
+    if (!(lower.size() > 4 && (lower.substr(lower.size() - 4) == ".png" || lower.substr(lower.size() - 4) == ".exr")))
+      throw InputError("--out " + o.out + ": unknown image type (allowed: .png, .exr)");
+  }
+  auto t0 = std::chrono::steady_clock::now();
+  cloudgen::Volume volume = load_volume(o.input);
+  PreparedVolume vol = prepare_volume(volume, o.settings.occupancy_cell);
+  auto t1 = std::chrono::steady_clock::now();
+  out << "volume " << vol.dims[0] << "x" << vol.dims[1] << "x" << vol.dims[2] << " voxels of "
+      << vol.voxel_size << " m" << (vol.tiles ? " (tiles in x,z)" : "") << ", occupancy "
+      << vol.occ_dims[0] << "x" << vol.occ_dims[1] << "x" << vol.occ_dims[2] << " cells, "
+      << std::lround(vol.occupied_fraction * 100) << "% occupied, loaded in "
+      << std::chrono::duration<double>(t1 - t0).count() << " s\n";
+  if (!o.bench.empty()) return run_bench(o, vol, out, err);
+
+  Camera cam = resolve_camera(o, vol, o.width, o.height);
+  Sun sun = resolve_sun(o, cam);
+  FrameSetup frame = make_frame(vol, o.settings, cam, sun, o.width, o.height);
+  FrameImages img;
+  auto r0 = std::chrono::steady_clock::now();
+  if (o.backend == "cpu") {
+    img = render_cpu(vol, frame);
+    auto r1 = std::chrono::steady_clock::now();
+    out << "cpu reference: " << o.width << "x" << o.height << " in "
+        << std::chrono::duration<double>(r1 - r0).count() << " s\n";
+  } else {
+    HeadlessContext ctx;
+    GlRenderer renderer{ShaderSource(o.shader_dir)};
+    renderer.set_volume(vol);
+    GpuTimings t;
+    renderer.render(frame, &t);
+    img = renderer.read_back();
+    out << ctx.description() << "\n"
+        << "gpu: " << o.width << "x" << o.height << " total " << t.total_ms << " ms (ground " << t.ground_ms
+        << ", clouds " << t.cloud_ms << ", post " << t.post_ms << ")\n";
+  }
+  ImageStats st = image_stats(img.linear);
+  if (st.nonfinite) err << "warning: " << st.nonfinite << " non-finite values in the image\n";
+  write_image(o.out, img.display, img.linear);
+  out << "wrote " << o.out << "\n";
+  return 0;
+}
+
+}  // namespace
+
+Camera resolve_camera(const Options& o, const PreparedVolume& vol, int width, int height) {
+  if (o.camera) return *o.camera;
+  return default_camera(vol, o.fov, double(width) / height);
+}
+
+Sun resolve_sun(const Options& o, const Camera& cam) { return o.sun ? *o.sun : default_sun(cam); }
+
+int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  try {
+    return run(args, out, err);
+  } catch (const InputError& e) {
+    err << "cloudviewer: error: " << e.what() << "\n";
+    return 1;
+  } catch (const GlError& e) {
+    err << "cloudviewer: OpenGL error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    err << "cloudviewer: error: " << e.what() << "\n";
+    return 3;
+  }
+}
+
+}  // namespace cloudviewer

@@ -1,0 +1,170 @@
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+
+#include <ImfArray.h>
+#include <ImfRgbaFile.h>
+#include <png.h>
+
+#include "cloudviewer/errors.h"
+#include "cloudviewer/image.h"
+
+namespace cloudviewer {
+
+void write_png(const std::string& path, const Image& img) {
+  FILE* fp = std::fopen(path.c_str(), "wb");
+  if (!fp) throw InputError("cannot write '" + path + "'");
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png ? png_create_info_struct(png) : nullptr;
+  if (!png || !info || setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    std::fclose(fp);
+    throw Error("libpng failed writing '" + path + "'");
+  }
+  png_init_io(png, fp);
+  png_set_IHDR(png, info, png_uint_32(img.width), png_uint_32(img.height), 8, PNG_COLOR_TYPE_RGB,
+               PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+  png_write_info(png, info);
+  std::vector<png_byte> row(size_t(img.width) * 3);
+  for (int y = img.height - 1; y >= 0; --y) {  // bottom-up storage -> top-down file
+    for (int x = 0; x < img.width; ++x)
+      for (int c = 0; c < 3; ++c) {
+        float v = img.at(x, y)[c];
+        v = std::isfinite(v) ? std::clamp(v, 0.f, 1.f) : 0.f;
+        row[size_t(x) * 3 + c] = png_byte(std::lround(v * 255.f));
+      }
+    png_write_row(png, row.data());
+  }
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+  std::fclose(fp);
+}
+
+Image read_png(const std::string& path) {
+  png_image im;
+  std::memset(&im, 0, sizeof(im));
+  im.version = PNG_IMAGE_VERSION;
+  if (!png_image_begin_read_from_file(&im, path.c_str())) throw InputError("cannot read PNG '" + path + "'");
+  im.format = PNG_FORMAT_RGBA;
+  std::vector<png_byte> buf(PNG_IMAGE_SIZE(im));
+  if (!png_image_finish_read(&im, nullptr, buf.data(), 0, nullptr)) throw InputError("cannot decode PNG '" + path + "'");
+  Image img(int(im.width), int(im.height));
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x)
+      for (int c = 0; c < 4; ++c)
+        img.at(x, img.height - 1 - y)[c] = buf[(size_t(y) * im.width + x) * 4 + c] / 255.f;
+  return img;
+}
+
+void write_exr(const std::string& path, const Image& img) {
+  try {
+    std::vector<Imf::Rgba> px(size_t(img.width) * img.height);
+    for (int y = 0; y < img.height; ++y)
+      for (int x = 0; x < img.width; ++x) {
+        const float* s = img.at(x, img.height - 1 - y);
+        px[size_t(y) * img.width + x] = Imf::Rgba(s[0], s[1], s[2], s[3]);
+      }
+    Imf::RgbaOutputFile file(path.c_str(), img.width, img.height, Imf::WRITE_RGBA);
+    file.setFrameBuffer(px.data(), 1, size_t(img.width));
+    file.writePixels(img.height);
+  } catch (const std::exception& e) {
+    throw Error("cannot write EXR '" + path + "': " + e.what());
+  }
+}
+
+Image read_exr(const std::string& path) {
+  try {
+    Imf::RgbaInputFile file(path.c_str());
+    Imath::Box2i dw = file.dataWindow();
+    int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
+    std::vector<Imf::Rgba> px(size_t(w) * h);
+    file.setFrameBuffer(px.data() - dw.min.x - size_t(dw.min.y) * w, 1, size_t(w));
+    file.readPixels(dw.min.y, dw.max.y);
+    Image img(w, h);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const Imf::Rgba& p = px[size_t(y) * w + x];
+        float* d = img.at(x, h - 1 - y);
+        d[0] = p.r, d[1] = p.g, d[2] = p.b, d[3] = p.a;
+      }
+    return img;
+  } catch (const std::exception& e) {
+    throw InputError("cannot read EXR '" + path + "': " + e.what());
+  }
+}
+
+void write_image(const std::string& path, const Image& display, const Image& linear) {
+  std::string lower = path;
+  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  auto ends = [&](const std::string& s) { return lower.size() >= s.size() && lower.compare(lower.size() - s.size(), s.size(), s) == 0; };
+  if (ends(".png")) write_png(path, display);
+  else if (ends(".exr")) write_exr(path, linear);
+  else throw InputError("--out " + path + ": unknown image type (allowed: .png, .exr)");
+}
+
+ImageStats image_stats(const Image& img) {
+  ImageStats s;
+  double sum = 0, sum2 = 0;
+  size_t n = 0;
+  s.min = 1e300, s.max = -1e300;
+  for (size_t i = 0; i < img.rgba.size(); ++i) {
+    if (i % 4 == 3) continue;
+    double v = img.rgba[i];
+    if (!std::isfinite(v)) {
+      ++s.nonfinite;
+      continue;
+    }
+    s.min = std::min(s.min, v), s.max = std::max(s.max, v);
+    sum += v, sum2 += v * v, ++n;
+  }
+  if (n) {
+    s.mean = sum / n;
+    s.stddev = std::sqrt(std::max(0.0, sum2 / n - s.mean * s.mean));
+  } else {
+    s.min = s.max = 0;
+  }
+  return s;
+}
+
+static void check_same(const Image& a, const Image& b) {
+  if (a.width != b.width || a.height != b.height) throw Error("image sizes differ");
+}
+
+double rmse(const Image& a, const Image& b) {
+  check_same(a, b);
+  double sum = 0;
+  size_t n = 0;
+  for (size_t i = 0; i < a.rgba.size(); ++i) {
+    if (i % 4 == 3) continue;
+    double d = double(a.rgba[i]) - b.rgba[i];
+    sum += d * d, ++n;
+  }
+  return n ? std::sqrt(sum / n) : 0;
+}
+
+double psnr(const Image& a, const Image& b, double peak) {
+  double e = rmse(a, b);
+  if (e == 0) return 999;
+  return 20 * std::log10(peak / e);
+}
+
+double max_abs_diff(const Image& a, const Image& b) {
+  check_same(a, b);
+  double m = 0;
+  for (size_t i = 0; i < a.rgba.size(); ++i)
+    if (i % 4 != 3) m = std::max(m, std::abs(double(a.rgba[i]) - b.rgba[i]));
+  return m;
+}
+
+Image diff_image(const Image& a, const Image& b, double gain) {
+  check_same(a, b);
+  Image d(a.width, a.height);
+  for (size_t i = 0; i < a.rgba.size(); ++i)
+    d.rgba[i] = (i % 4 == 3) ? 1.f : float(std::abs(double(a.rgba[i]) - b.rgba[i]) * gain);
+  return d;
+}
+
+}  // namespace cloudviewer

@@ -1,0 +1,156 @@
+#include "cloudviewer/settings.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "cloudviewer/errors.h"
+
+namespace cloudviewer {
+namespace {
+
+std::string fmt(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+[[noreturn]] void bad(const std::string& key, const std::string& value, const std::string& allowed) {
+  throw InputError("--set render." + key + "=" + value + ": invalid value, allowed: " + allowed);
+}
+
+bool parse_bool(const std::string& key, const std::string& v) {
+  if (v == "true" || v == "1" || v == "on" || v == "yes") return true;
+  if (v == "false" || v == "0" || v == "off" || v == "no") return false;
+  bad(key, v, "true|false");
+}
+
+double parse_double(const std::string& key, const std::string& v, double lo, double hi) {
+  size_t used = 0;
+  double d = 0;
+  try {
+    d = std::stod(v, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != v.size() || v.empty() || !std::isfinite(d) || d < lo || d > hi)
+    bad(key, v, "a number in [" + fmt(lo) + ", " + fmt(hi) + "]");
+  return d;
+}
+
+int parse_int(const std::string& key, const std::string& v, int lo, int hi) {
+  double d = parse_double(key, v, lo, hi);
+  if (d != std::floor(d)) bad(key, v, "an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  return int(d);
+}
+
+ParamDef boolean(const std::string& key, bool RenderSettings::*m, const std::string& doc) {
+  return {key, "bool", "true|false", doc,
+          [key, m](RenderSettings& s, const std::string& v) { s.*m = parse_bool(key, v); },
+          [m](const RenderSettings& s) { return std::string(s.*m ? "true" : "false"); }};
+}
+ParamDef real(const std::string& key, double RenderSettings::*m, double lo, double hi, const std::string& doc) {
+  return {key, "float", "[" + fmt(lo) + ", " + fmt(hi) + "]", doc,
+          [key, m, lo, hi](RenderSettings& s, const std::string& v) { s.*m = parse_double(key, v, lo, hi); },
+          [m](const RenderSettings& s) { return fmt(s.*m); }};
+}
+ParamDef integer(const std::string& key, int RenderSettings::*m, int lo, int hi, const std::string& doc) {
+  return {key, "int", "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]", doc,
+          [key, m, lo, hi](RenderSettings& s, const std::string& v) { s.*m = parse_int(key, v, lo, hi); },
+          [m](const RenderSettings& s) { return std::to_string(s.*m); }};
+}
+template <class E>
+ParamDef enumeration(const std::string& key, E RenderSettings::*m, std::vector<std::string> names,
+                     const std::string& doc) {
+  std::string allowed;
+  for (size_t i = 0; i < names.size(); ++i) allowed += (i ? "|" : "") + names[i];
+  return {key, "enum", allowed, doc,
+          [key, m, names, allowed](RenderSettings& s, const std::string& v) {
+            for (size_t i = 0; i < names.size(); ++i)
+              if (names[i] == v) {
+                s.*m = E(int(i));
+                return;
+              }
+            bad(key, v, allowed);
+          },
+          [m, names](const RenderSettings& s) { return names[size_t(int(s.*m))]; }};
+}
+
+std::vector<ParamDef> build() {
+  std::vector<ParamDef> t;
+  t.push_back(integer("steps", &RenderSettings::steps, 1, 8192, "small steps across the volume's largest extent (step = extent / steps)"));
+  t.push_back(boolean("occupancy", &RenderSettings::occupancy, "occupancy skipping: large steps through empty coarse cells (thesis 2.4.2)"));
+  t.push_back(integer("occupancy_cell", &RenderSettings::occupancy_cell, 2, 64, "coarse occupancy cell edge in voxels (padding 2 cells)"));
+  t.push_back(boolean("adaptive", &RenderSettings::adaptive, "step grows linearly with distance beyond adaptive_start"));
+  t.push_back(real("adaptive_start", &RenderSettings::adaptive_start, 0, 1e7, "distance where the step starts growing, m (0 = largest extent)"));
+  t.push_back(real("adaptive_growth", &RenderSettings::adaptive_growth, 0, 10, "step growth per metre beyond the start, 1/m (0 = 1 / largest extent)"));
+  t.push_back(boolean("jitter", &RenderSettings::jitter, "jitter the sample inside each step per pixel and frame (else the midpoint)"));
+  t.push_back(boolean("exact_filter", &RenderSettings::exact_filter, "trilinear filtering by hand from texelFetch (strict GPU-vs-CPU mode)"));
+  t.push_back(real("max_distance", &RenderSettings::max_distance, 1, 1e8, "march no farther than this, m"));
+  t.push_back(real("sigma_t", &RenderSettings::sigma_t, 0, 1e4, "extinction per metre at density 1 (0 = 16 / smallest extent)"));
+  t.push_back(real("density", &RenderSettings::density, 0, 1e3, "density multiplier"));
+  t.push_back(real("erosion", &RenderSettings::erosion, 0, 1, "strength of the G/B/A detail erosion of the R base shape"));
+  t.push_back(real("albedo", &RenderSettings::albedo, 0, 1, "single-scattering albedo sigma_s / sigma_t"));
+  t.push_back(boolean("light_march", &RenderSettings::light_march, "secondary march toward the sun (off: no self-shadowing)"));
+  t.push_back(integer("light_samples", &RenderSettings::light_samples, 1, 128, "samples of the light march"));
+  t.push_back(real("light_step", &RenderSettings::light_step, 0, 1e6, "first light step, m (0 = largest extent / 48)"));
+  t.push_back(real("light_growth", &RenderSettings::light_growth, 1, 4, "each light step is this many times the previous"));
+  t.push_back(enumeration("phase", &RenderSettings::phase, {"none", "hg", "mie"}, "phase function: none (isotropic), Henyey-Greenstein, Mie table"));
+  t.push_back(real("g", &RenderSettings::g, -0.99, 0.99, "Henyey-Greenstein asymmetry"));
+  t.push_back(real("powder", &RenderSettings::powder, 0, 1, "strength of the powder term 1 - exp(-c d)"));
+  t.push_back(real("powder_c", &RenderSettings::powder_c, 0, 100, "c of the powder term"));
+  t.push_back(real("sun_intensity", &RenderSettings::sun_intensity, 0, 1e6, "sun radiance scale"));
+  t.push_back(real("ambient", &RenderSettings::ambient, 0, 1e6, "ambient sky radiance scale"));
+  t.push_back(boolean("ground", &RenderSettings::ground, "draw the ground pass"));
+  t.push_back({"ground_height", "float", "number or auto", "ground plane height, m (auto = min(0, volume bottom))",
+               [](RenderSettings& s, const std::string& v) {
+                 if (v == "auto") {
+                   s.ground_height_auto = true;
+                   return;
+                 }
+                 s.ground_height = parse_double("ground_height", v, -1e7, 1e7);
+                 s.ground_height_auto = false;
+               },
+               [](const RenderSettings& s) { return s.ground_height_auto ? std::string("auto") : fmt(s.ground_height); }});
+  t.push_back(real("ground_albedo", &RenderSettings::ground_albedo, 0, 1, "ground albedo"));
+  t.push_back(integer("shadow_samples", &RenderSettings::shadow_samples, 1, 256, "samples of the cloud-shadow march from the ground"));
+  t.push_back(real("exposure", &RenderSettings::exposure, 0, 1e6, "exposure multiplier before tone mapping"));
+  t.push_back(enumeration("tonemap", &RenderSettings::tonemap, {"reinhard", "aces", "clamp"}, "tone map: Reinhard L/(1+L), ACES filmic, clamp"));
+  t.push_back(real("bloom", &RenderSettings::bloom, 0, 10, "bloom strength (0 = off)"));
+  t.push_back(real("bloom_threshold", &RenderSettings::bloom_threshold, 0, 1e6, "bright-pass threshold (linear radiance)"));
+  t.push_back(enumeration("output", &RenderSettings::output, {"radiance", "transmittance", "iterations"}, "what the cloud pass writes (debug views)"));
+  t.push_back(integer("frame", &RenderSettings::frame, 0, 1 << 30, "frame index of the jitter pattern"));
+  return t;
+}
+
+}  // namespace
+
+const std::vector<ParamDef>& render_params() {
+  static const std::vector<ParamDef> table = build();
+  return table;
+}
+
+void apply_setting(RenderSettings& s, const std::string& assignment) {
+  auto eq = assignment.find('=');
+  if (eq == std::string::npos)
+    throw InputError("--set " + assignment + ": expected render.key=value");
+  std::string key = assignment.substr(0, eq);
+  std::string value = assignment.substr(eq + 1);
+  if (key.rfind("render.", 0) == 0) key = key.substr(7);
+  std::string known;
+  for (const ParamDef& p : render_params()) {
+    if (p.key == key) {
+      p.set(s, value);
+      return;
+    }
+    known += (known.empty() ? "" : ", ") + p.key;
+  }
+  throw InputError("--set " + assignment + ": unknown key render." + key + " (known: " + known + ")");
+}
+
+std::string describe_settings(const RenderSettings& s) {
+  std::string out;
+  for (const ParamDef& p : render_params()) out += "render." + p.key + "=" + p.get(s) + "\n";
+  return out;
+}
+
+}  // namespace cloudviewer
