@@ -302,7 +302,7 @@ vec3 ground_radiance(vec3 p) {
   Number wx = Number(u_cloud.camera_world.x) + p.x;
   Number wz = Number(u_cloud.camera_world.z) + p.z;
   Number variation = 0.5 + 0.25 * (sin(wx * (CV_PI / 4096.0)) + sin(wz * (CV_PI / 4096.0)));
-  vec3 albedo = vec3(0.14, 0.17, 0.10) * (Number(u_cloud.ground.y) / 0.18) * (0.9 + 0.2 * variation);
+  vec3 albedo = vec3(0.10, 0.12, 0.07) * (Number(u_cloud.ground.y) / 0.18) * (0.9 + 0.2 * variation);
   Number shadow = mu > 0.0 ? sun_shadow_transmittance(p) : 0.0;
   vec3 irradiance = vec3(u_cloud.sun_color) * (Number(u_cloud.sun_dir.w) * mu * shadow)
                   + vec3(u_cloud.ambient_color) * (Number(u_cloud.sun_color.w) * CV_PI);

@@ -359,7 +359,7 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   p.sun_dir = glm::dvec4(sun.direction(), s.sun_intensity);
   p.sun_color = glm::dvec4(1.0, 0.96, 0.9, s.ambient);
   p.ambient_color = glm::dvec4(0.30, 0.38, 0.52, s.albedo);
-  double sigma = s.sigma_t > 0 ? s.sigma_t : 16.0 / min_extent;
+  double sigma = s.sigma_t > 0 ? s.sigma_t : 48.0 / min_extent;
   p.medium = glm::dvec4(sigma, s.erosion, s.density, s.powder_c);
   p.march = glm::dvec4(dt, k, s.max_distance, 4.0 * std::ceil(diag / dt) + 64.0);
   double a_start = s.adaptive_start > 0 ? s.adaptive_start : max_extent;

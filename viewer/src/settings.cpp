@@ -86,7 +86,7 @@ std::vector<ParamDef> build() {
   t.push_back(boolean("jitter", &RenderSettings::jitter, "jitter the sample inside each step per pixel and frame (else the midpoint)"));
   t.push_back(boolean("exact_filter", &RenderSettings::exact_filter, "trilinear filtering by hand from texelFetch (strict GPU-vs-CPU mode)"));
   t.push_back(real("max_distance", &RenderSettings::max_distance, 1, 1e8, "march no farther than this, m"));
-  t.push_back(real("sigma_t", &RenderSettings::sigma_t, 0, 1e4, "extinction per metre at density 1 (0 = 16 / smallest extent)"));
+  t.push_back(real("sigma_t", &RenderSettings::sigma_t, 0, 1e4, "extinction per metre at density 1 (0 = 48 / smallest extent)"));
   t.push_back(real("density", &RenderSettings::density, 0, 1e3, "density multiplier"));
   t.push_back(real("erosion", &RenderSettings::erosion, 0, 1, "strength of the G/B/A detail erosion of the R base shape"));
   t.push_back(real("albedo", &RenderSettings::albedo, 0, 1, "single-scattering albedo sigma_s / sigma_t"));

@@ -1,5 +1,284 @@
+// Window mode: GLFW, OpenGL 4.5 core through libepoxy, orbit/fly camera, keys for the sun, density
+// and every toggle, GPU frame time and toggle state in the title bar, F12 saves PNG + EXR, the
+// input preset regenerates when its file changes, shaders hot-reload from --shader-dir.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <ostream>
+#include <sstream>
+
+#include <epoxy/gl.h>
+#include <GLFW/glfw3.h>
+
 #include "cloudviewer/errors.h"
 #include "internal.h"
+
 namespace cloudviewer {
-int run_window(const Options&, std::ostream&, std::ostream&) { throw InputError("window: not yet"); }
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::file_time_type mtime_of(const std::string& path) {
+  std::error_code ec;
+  auto t = fs::last_write_time(path, ec);
+  return ec ? fs::file_time_type{} : t;
 }
+
+std::map<std::string, fs::file_time_type> dir_times(const std::string& dir) {
+  std::map<std::string, fs::file_time_type> m;
+  std::error_code ec;
+  if (dir.empty()) return m;
+  for (const auto& e : fs::directory_iterator(dir, ec)) m[e.path().string()] = mtime_of(e.path().string());
+  return m;
+}
+
+struct ViewState {
+  // Orbit camera around `pivot` (yaw/pitch in degrees, distance in metres) or a fly camera.
+  bool fly = false;
+  glm::dvec3 pivot{0.0};
+  double yaw = 0, pitch = 8, distance = 1000;
+  glm::dvec3 fly_eye{0.0};
+  double fly_yaw = 0, fly_pitch = 0;
+  double move_speed = 100;
+  double last_x = 0, last_y = 0;
+  bool dragging = false;
+  bool save_requested = false;
+  bool reload_requested = false;
+  RenderSettings* settings = nullptr;
+  Sun* sun = nullptr;
+  std::ostream* out = nullptr;
+};
+
+glm::dvec3 forward_of(double yaw_deg, double pitch_deg) {
+  double y = glm::radians(yaw_deg), p = glm::radians(pitch_deg);
+  return glm::dvec3(std::cos(p) * std::sin(y), std::sin(p), std::cos(p) * std::cos(y));
+}
+
+Camera camera_of(const ViewState& v, double fov) {
+  Camera c;
+  c.fov_y_deg = fov;
+  if (v.fly) {
+    c.eye = v.fly_eye;
+    c.target = v.fly_eye + forward_of(v.fly_yaw, v.fly_pitch);
+  } else {
+    c.target = v.pivot;
+    c.eye = v.pivot - forward_of(v.yaw, -v.pitch) * v.distance;
+  }
+  return c;
+}
+
+const char* phase_name(PhaseMode p) { return p == PhaseMode::None ? "none" : p == PhaseMode::Mie ? "mie" : "hg"; }
+const char* tonemap_name(ToneMap t) { return t == ToneMap::Aces ? "aces" : t == ToneMap::Clamp ? "clamp" : "reinhard"; }
+
+void on_key(GLFWwindow* w, int key, int, int action, int mods) {
+  if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
+  auto* v = static_cast<ViewState*>(glfwGetWindowUserPointer(w));
+  RenderSettings& s = *v->settings;
+  Sun& sun = *v->sun;
+  switch (key) {
+    case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(w, 1); break;
+    case GLFW_KEY_LEFT: sun.azimuth_deg -= 5; break;
+    case GLFW_KEY_RIGHT: sun.azimuth_deg += 5; break;
+    case GLFW_KEY_UP: sun.elevation_deg = std::min(90.0, sun.elevation_deg + 2.5); break;
+    case GLFW_KEY_DOWN: sun.elevation_deg = std::max(-10.0, sun.elevation_deg - 2.5); break;
+    case GLFW_KEY_EQUAL: case GLFW_KEY_KP_ADD: s.density *= 1.25; break;
+    case GLFW_KEY_MINUS: case GLFW_KEY_KP_SUBTRACT: s.density /= 1.25; break;
+    case GLFW_KEY_O: s.occupancy = !s.occupancy; break;
+    case GLFW_KEY_J: s.adaptive = !s.adaptive; break;
+    case GLFW_KEY_L: s.light_march = !s.light_march; break;
+    case GLFW_KEY_P: s.phase = PhaseMode((int(s.phase) + 1) % 3); break;
+    case GLFW_KEY_T: s.tonemap = ToneMap((int(s.tonemap) + 1) % 3); break;
+    case GLFW_KEY_B: s.bloom = s.bloom > 0 ? 0.0 : 0.05; break;
+    case GLFW_KEY_G: s.ground = !s.ground; break;
+    case GLFW_KEY_I: s.output = OutputMode((int(s.output) + 1) % 3); break;
+    case GLFW_KEY_X: s.exact_filter = !s.exact_filter; break;
+    case GLFW_KEY_N: s.jitter = !s.jitter; break;
+    case GLFW_KEY_LEFT_BRACKET: s.steps = std::max(4, s.steps / 2); break;
+    case GLFW_KEY_RIGHT_BRACKET: s.steps = std::min(4096, s.steps * 2); break;
+    case GLFW_KEY_1: s.exposure /= 1.25; break;
+    case GLFW_KEY_2: s.exposure *= 1.25; break;
+    case GLFW_KEY_3: s.g = std::max(-0.95, s.g - 0.05); break;
+    case GLFW_KEY_4: s.g = std::min(0.95, s.g + 0.05); break;
+    case GLFW_KEY_F: v->fly = !v->fly; break;
+    case GLFW_KEY_R: v->reload_requested = true; break;
+    case GLFW_KEY_F12: v->save_requested = true; break;
+    case GLFW_KEY_H:
+      *v->out << "keys: mouse drag orbit/look, wheel zoom, F fly (WASD QE, shift fast), arrows sun, +/- density,\n"
+                 "      O occupancy, J adaptive, L light march, P phase, T tone map, B bloom, G ground,\n"
+                 "      I debug view, X exact filter, N jitter, [ ] steps, 1/2 exposure, 3/4 HG g,\n"
+                 "      R reload shaders/preset, F12 save PNG+EXR, Esc quit\n";
+      break;
+    default: break;
+  }
+  (void)mods;
+}
+
+void on_button(GLFWwindow* w, int button, int action, int) {
+  auto* v = static_cast<ViewState*>(glfwGetWindowUserPointer(w));
+  if (button == GLFW_MOUSE_BUTTON_LEFT || button == GLFW_MOUSE_BUTTON_RIGHT) {
+    v->dragging = action == GLFW_PRESS;
+    glfwGetCursorPos(w, &v->last_x, &v->last_y);
+  }
+}
+
+void on_cursor(GLFWwindow* w, double x, double y) {
+  auto* v = static_cast<ViewState*>(glfwGetWindowUserPointer(w));
+  if (!v->dragging) return;
+  double dx = x - v->last_x, dy = y - v->last_y;
+  v->last_x = x, v->last_y = y;
+  if (v->fly) {
+    v->fly_yaw -= dx * 0.2;
+    v->fly_pitch = std::clamp(v->fly_pitch - dy * 0.2, -89.0, 89.0);
+  } else {
+    v->yaw -= dx * 0.3;
+    v->pitch = std::clamp(v->pitch + dy * 0.3, -89.0, 89.0);
+  }
+}
+
+void on_scroll(GLFWwindow* w, double, double dy) {
+  auto* v = static_cast<ViewState*>(glfwGetWindowUserPointer(w));
+  if (v->fly) v->move_speed *= std::pow(1.2, dy);
+  else v->distance *= std::pow(0.9, dy);
+}
+
+}  // namespace
+
+int run_window(const Options& o, std::ostream& out, std::ostream& err) {
+  // Load first, so a bad input fails before a window opens.
+  cloudgen::Volume volume = load_volume(o.input);
+  RenderSettings settings = o.settings;
+  PreparedVolume vol = prepare_volume(volume, settings.occupancy_cell);
+  if (!glfwInit()) throw GlError("GLFW could not initialise (no display? use --headless, or run under xvfb-run)");
+  struct Terminate {
+    ~Terminate() { glfwTerminate(); }
+  } terminate;
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  GLFWwindow* window = glfwCreateWindow(o.width, o.height, "cloudviewer", nullptr, nullptr);
+  if (!window) throw GlError("could not open an OpenGL 4.5 core window");
+  glfwMakeContextCurrent(window);
+  glfwSwapInterval(0);
+
+  Camera start = resolve_camera(o, vol, o.width, o.height);
+  Sun sun = resolve_sun(o, start);
+  ViewState view;
+  view.settings = &settings;
+  view.sun = &sun;
+  view.out = &out;
+  view.pivot = start.target;
+  glm::dvec3 d = start.target - start.eye;
+  view.distance = glm::length(d);
+  view.yaw = glm::degrees(std::atan2(d.x, d.z));
+  view.pitch = -glm::degrees(std::asin(std::clamp(d.y / view.distance, -1.0, 1.0)));
+  view.fly_eye = start.eye;
+  view.fly_yaw = view.yaw;
+  view.fly_pitch = -view.pitch;
+  view.move_speed = std::max(10.0, glm::length(vol.size()) * 0.1);
+  glfwSetWindowUserPointer(window, &view);
+  glfwSetKeyCallback(window, on_key);
+  glfwSetMouseButtonCallback(window, on_button);
+  glfwSetCursorPosCallback(window, on_cursor);
+  glfwSetScrollCallback(window, on_scroll);
+
+  GlRenderer renderer{ShaderSource(o.shader_dir)};
+  renderer.set_volume(vol);
+  out << "window: " << renderer.renderer_string() << " (press H for keys)\n";
+
+  bool watch_input = o.input.rfind("synthetic:", 0) != 0;
+  auto input_time = watch_input ? mtime_of(o.input) : fs::file_time_type{};
+  auto shader_times = dir_times(o.shader_dir);
+  auto last_poll = std::chrono::steady_clock::now();
+  auto last_frame = last_poll;
+  int frame = 0, saved = 0;
+  double gpu_ms_avg = 0, cloud_ms_avg = 0;
+  const int auto_frames = o.out.empty() ? 0 : 3;  // with --out: render a few frames, save, exit
+  while (!glfwWindowShouldClose(window)) {
+    glfwPollEvents();
+    auto now = std::chrono::steady_clock::now();
+    double dt = std::chrono::duration<double>(now - last_frame).count();
+    last_frame = now;
+    if (view.fly) {
+      glm::dvec3 f = forward_of(view.fly_yaw, view.fly_pitch);
+      glm::dvec3 r = glm::normalize(glm::cross(f, glm::dvec3(0, 1, 0)));
+      double sp = view.move_speed * dt * (glfwGetKey(window, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ? 5.0 : 1.0);
+      if (glfwGetKey(window, GLFW_KEY_W) == GLFW_PRESS) view.fly_eye += f * sp;
+      if (glfwGetKey(window, GLFW_KEY_S) == GLFW_PRESS) view.fly_eye -= f * sp;
+      if (glfwGetKey(window, GLFW_KEY_D) == GLFW_PRESS) view.fly_eye += r * sp;
+      if (glfwGetKey(window, GLFW_KEY_A) == GLFW_PRESS) view.fly_eye -= r * sp;
+      if (glfwGetKey(window, GLFW_KEY_E) == GLFW_PRESS) view.fly_eye.y += sp;
+      if (glfwGetKey(window, GLFW_KEY_Q) == GLFW_PRESS) view.fly_eye.y -= sp;
+    }
+    // Poll the preset and the shader directory twice a second.
+    if (now - last_poll > std::chrono::milliseconds(500) || view.reload_requested) {
+      last_poll = now;
+      auto st = dir_times(o.shader_dir);
+      if (st != shader_times || (view.reload_requested && !o.shader_dir.empty())) {
+        shader_times = st;
+        try {
+          renderer.reload_shaders();
+          out << "shaders reloaded from " << o.shader_dir << "\n";
+        } catch (const ShaderError& e) {
+          err << e.what() << "(keeping the previous shaders)\n";
+        }
+      }
+      if (watch_input && (mtime_of(o.input) != input_time || view.reload_requested)) {
+        input_time = mtime_of(o.input);
+        try {
+          vol = prepare_volume(load_volume(o.input), settings.occupancy_cell);
+          renderer.set_volume(vol);
+          out << "reloaded " << o.input << "\n";
+        } catch (const Error& e) {
+          err << "reload failed: " << e.what() << " (keeping the previous volume)\n";
+        }
+      }
+      view.reload_requested = false;
+    }
+    int fw = 0, fh = 0;
+    glfwGetFramebufferSize(window, &fw, &fh);
+    if (fw < 1 || fh < 1) continue;
+    settings.frame = frame;
+    Camera cam = camera_of(view, o.fov);
+    FrameSetup fs = make_frame(vol, settings, cam, sun, fw, fh);
+    GpuTimings t;
+    renderer.render(fs, &t);
+    renderer.present(fw, fh);
+    glfwSwapBuffers(window);
+    gpu_ms_avg = frame == 0 ? t.total_ms : gpu_ms_avg * 0.9 + t.total_ms * 0.1;
+    cloud_ms_avg = frame == 0 ? t.cloud_ms : cloud_ms_avg * 0.9 + t.cloud_ms * 0.1;
+    ++frame;
+    if (frame % 4 == 1) {
+      std::ostringstream title;
+      title.precision(3);
+      title << "cloudviewer | GPU " << gpu_ms_avg << " ms (clouds " << cloud_ms_avg << ") | steps " << settings.steps
+            << " occ:" << (settings.occupancy ? "on" : "off") << " adapt:" << (settings.adaptive ? "on" : "off")
+            << " light:" << (settings.light_march ? "on" : "off") << " phase:" << phase_name(settings.phase)
+            << " g:" << settings.g << " tone:" << tonemap_name(settings.tonemap) << " bloom:" << settings.bloom
+            << " density:" << settings.density << " exp:" << settings.exposure << " | sun " << sun.azimuth_deg
+            << "," << sun.elevation_deg << (view.fly ? " | fly" : " | orbit");
+      glfwSetWindowTitle(window, title.str().c_str());
+    }
+    bool auto_save = auto_frames > 0 && frame == auto_frames;
+    if (view.save_requested || auto_save) {
+      view.save_requested = false;
+      FrameImages img = renderer.read_back();
+      std::string base = auto_save ? o.out : "cloudviewer_" + std::to_string(saved++);
+      if (auto_save) {
+        write_image(o.out, img.display, img.linear);
+        out << "wrote " << o.out << " (frame " << frame << ", GPU " << t.total_ms << " ms)\n";
+        glfwSetWindowShouldClose(window, 1);
+      } else {
+        write_png(base + ".png", img.display);
+        write_exr(base + ".exr", img.linear);
+        out << "saved " << base << ".png and " << base << ".exr\n";
+      }
+    }
+  }
+  glfwDestroyWindow(window);
+  return 0;
+}
+
+}  // namespace cloudviewer
