@@ -9,7 +9,7 @@ endfunction()
 find_package(TBB CONFIG QUIET)
 cloud_require(TBB_FOUND "oneTBB" "libtbb-dev")
 
-if(CLOUD_BUILD_CLOUDGEN OR CLOUD_BUILD_VIEWER)
+if(CLOUD_BUILD_CLOUDGEN OR CLOUD_BUILD_VIEWER OR CLOUD_FUZZ)
   find_package(nlohmann_json 3 CONFIG QUIET)
   cloud_require(nlohmann_json_FOUND "nlohmann-json" "nlohmann-json3-dev")
   find_package(CLI11 CONFIG QUIET)

@@ -116,6 +116,7 @@ TEST(Presets, BadPresetsGiveTheirSpecificError) {
       {R"({"channels": {"r": {"period": 65536, "octaves": 16}}})", "/channels/r: octaves: period * lacunarity^(octaves-1)"},
       {"{\n  \"seed\": 1,\n  \"threshold\": 0.3,,\n}", "JSON syntax error at line 3, column 20"},
       {R"([1, 2])", "the preset must be a JSON object"},
+      {"999999999999999999999999991e5000000.9[ ", "invalid JSON"},  // found by fuzz_preset
   };
   for (const Case& c : cases) {
     std::string e = error_of(c.json);

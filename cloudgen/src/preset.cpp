@@ -434,6 +434,8 @@ Preset parse_preset(const std::string& text, const std::string& source, const st
     auto pos = msg.find("syntax error");
     throw InputError(source + ": JSON syntax error at " + line_col(text, e.byte ? e.byte - 1 : 0) + ": " +
                      (pos == std::string::npos ? msg : msg.substr(pos)));
+  } catch (const json::exception& e) {  // e.g. out_of_range for a number too large (found by fuzzing)
+    throw InputError(source + ": invalid JSON: " + e.what());
   }
   if (!doc.is_object()) throw InputError(source + ": the preset must be a JSON object");
   for (const std::string& ov : overrides) apply_override(doc, ov, r);
