@@ -91,7 +91,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   app.add_option("--bench", o.bench, "benchmark camera track (JSON, see viewer/tracks/default.json)");
   app.add_option("--csv", o.csv, "benchmark per-frame results as CSV");
   app.add_option("--bench-reference", o.bench_reference, "also render each track frame with the CPU reference at this step count and report RMSE");
-  app.add_option("--bench-repeat", o.bench_repeat, "timed renders per frame and configuration")->check(CLI::Range(1, 100));
+  app.add_option("--bench-repeat", o.bench_repeat, "timing rounds over all configurations and frames (best of N per frame)")->check(CLI::Range(1, 100));
   app.add_flag("--help-params", help_params, "list every render.KEY with type, range, default and meaning");
   std::vector<std::string> argv_rest(args.begin() + (args.empty() ? 0 : 1), args.end());
   std::reverse(argv_rest.begin(), argv_rest.end());

@@ -100,7 +100,8 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
       dvec3 rd = normalize(dvec3(near_point) / near_point.w);
       double t_scene = 1e30;
       dvec3 background(0.0);
-      if (P.ground.z > 0.5 && rd.y < 0.0 && P.ground.x < 0.0) {
+      // The GL ground quad is visible from both sides; so is this plane.
+      if (P.ground.z > 0.5 && rd.y != 0.0 && P.ground.x / rd.y > 0.0) {
         double t = P.ground.x / rd.y;
         dvec3 p = rd * t;
         if (std::abs(p.x) <= P.ground.w && std::abs(p.z) <= P.ground.w) {

@@ -321,4 +321,13 @@ void GlRenderer::present(int ww, int wh) {
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
+Image GlRenderer::read_window(int ww, int wh) {
+  Image img(ww, wh);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+  glReadBuffer(GL_BACK);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, ww, wh, GL_RGBA, GL_FLOAT, img.rgba.data());
+  return img;
+}
+
 }  // namespace cloudviewer

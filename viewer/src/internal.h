@@ -25,7 +25,7 @@ struct Options {
   std::string bench;
   std::string csv;
   int bench_reference = 0;  ///< CPU reference step count for RMSE columns (0 = none)
-  int bench_repeat = 2;
+  int bench_repeat = 3;
   RenderSettings settings;  ///< after --set
 };
 

@@ -158,8 +158,19 @@ int run_window(const Options& o, std::ostream& out, std::ostream& err) {
   glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
   glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
   glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  // EGL first: libepoxy then finds the context through EGL, and the same driver stack serves the
+  // headless path; GLX as the fallback.
+  glfwWindowHint(GLFW_CONTEXT_CREATION_API, GLFW_EGL_CONTEXT_API);
   GLFWwindow* window = glfwCreateWindow(o.width, o.height, "cloudviewer", nullptr, nullptr);
+  if (!window) {
+    glfwWindowHint(GLFW_CONTEXT_CREATION_API, GLFW_NATIVE_CONTEXT_API);
+    window = glfwCreateWindow(o.width, o.height, "cloudviewer", nullptr, nullptr);
+  }
   if (!window) throw GlError("could not open an OpenGL 4.5 core window");
+  struct DestroyWindow {  // declared before the renderer, so it outlives it (GL objects need the context)
+    GLFWwindow* w;
+    ~DestroyWindow() { glfwDestroyWindow(w); }
+  } destroy_window{window};
   glfwMakeContextCurrent(window);
   glfwSwapInterval(0);
 
@@ -246,6 +257,12 @@ int run_window(const Options& o, std::ostream& out, std::ostream& err) {
     GpuTimings t;
     renderer.render(fs, &t);
     renderer.present(fw, fh);
+    bool auto_save = auto_frames > 0 && frame + 1 == auto_frames;
+    if (auto_save) {  // what the window shows, read from its back buffer before the swap
+      std::string shot = fs::path(o.out).replace_extension("").string() + ".window.png";
+      write_png(shot, renderer.read_window(fw, fh));
+      out << "wrote " << shot << " (window back buffer " << fw << "x" << fh << ")\n";
+    }
     glfwSwapBuffers(window);
     gpu_ms_avg = frame == 0 ? t.total_ms : gpu_ms_avg * 0.9 + t.total_ms * 0.1;
     cloud_ms_avg = frame == 0 ? t.cloud_ms : cloud_ms_avg * 0.9 + t.cloud_ms * 0.1;
@@ -261,7 +278,7 @@ int run_window(const Options& o, std::ostream& out, std::ostream& err) {
             << "," << sun.elevation_deg << (view.fly ? " | fly" : " | orbit");
       glfwSetWindowTitle(window, title.str().c_str());
     }
-    bool auto_save = auto_frames > 0 && frame == auto_frames;
+    auto_save = auto_frames > 0 && frame == auto_frames;
     if (view.save_requested || auto_save) {
       view.save_requested = false;
       FrameImages img = renderer.read_back();
@@ -277,7 +294,6 @@ int run_window(const Options& o, std::ostream& out, std::ostream& err) {
       }
     }
   }
-  glfwDestroyWindow(window);
   return 0;
 }
 

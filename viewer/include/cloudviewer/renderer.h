@@ -60,6 +60,8 @@ class GlRenderer {
   FrameImages read_back();
   /// Blits the display image into the default framebuffer (window mode).
   void present(int window_width, int window_height);
+  /// Reads the default framebuffer's back buffer (what present() drew), 8-bit display values.
+  Image read_window(int window_width, int window_height);
   std::string renderer_string() const;
 
  private:

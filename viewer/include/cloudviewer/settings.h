@@ -23,7 +23,7 @@ struct RenderSettings {
   bool exact_filter = false;       ///< trilinear by hand (texelFetch) instead of the texture unit
   double max_distance = 1e7;       ///< m
   // medium
-  double sigma_t = 0;              ///< extinction per metre at density 1; 0 = auto (16 / smallest extent)
+  double sigma_t = 0;              ///< extinction per metre at density 1; 0 = auto (48 / smallest extent)
   double density = 1;              ///< density multiplier
   double erosion = 0.35;           ///< detail erosion strength [0,1]
   double albedo = 1;               ///< single-scattering albedo
