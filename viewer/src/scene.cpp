@@ -345,7 +345,6 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   f.settings = s;
   glm::dvec3 size = vol.size();
   double max_extent = std::max(size.x, std::max(size.y, size.z));
-  double min_extent = std::min(size.x, std::min(size.y, size.z));
   double dt = max_extent / s.steps;
   double cell_m = vol.occ_cell * vol.voxel_size;
   int k = std::max(1, int(std::floor(0.999 * cell_m / dt)));  // large step just under one cell
@@ -359,13 +358,15 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   p.sun_dir = glm::dvec4(sun.direction(), s.sun_intensity);
   p.sun_color = glm::dvec4(1.0, 0.96, 0.9, s.ambient);
   p.ambient_color = glm::dvec4(0.30, 0.38, 0.52, s.albedo);
-  double sigma = s.sigma_t > 0 ? s.sigma_t : 48.0 / min_extent;
+  // Auto values follow the voxel size, not the box, so a VDB cropped to its active voxels renders
+  // like the dense texture it came from.
+  double sigma = s.sigma_t > 0 ? s.sigma_t : 0.5 / vol.voxel_size;
   p.medium = glm::dvec4(sigma, s.erosion, s.density, s.powder_c);
   p.march = glm::dvec4(dt, k, s.max_distance, 4.0 * std::ceil(diag / dt) + 64.0);
   double a_start = s.adaptive_start > 0 ? s.adaptive_start : max_extent;
   double a_growth = s.adaptive_growth > 0 ? s.adaptive_growth : 1.0 / max_extent;
   p.march2 = glm::dvec4(s.adaptive ? 1 : 0, a_start, a_growth, s.occupancy ? 1 : 0);
-  double light_step = s.light_step > 0 ? s.light_step : max_extent / 48.0;
+  double light_step = s.light_step > 0 ? s.light_step : 2.5 * vol.voxel_size;
   p.light = glm::dvec4(s.light_march ? 1 : 0, s.light_samples, light_step, s.light_growth);
   p.phase = glm::dvec4(double(int(s.phase)), s.g, double(mie_phase_table().size()), s.powder);
   p.control = glm::dvec4(s.jitter ? 1 : 0, s.frame, s.exact_filter ? 1 : 0, double(int(s.output)));

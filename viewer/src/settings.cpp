@@ -86,13 +86,13 @@ std::vector<ParamDef> build() {
   t.push_back(boolean("jitter", &RenderSettings::jitter, "jitter the sample inside each step per pixel and frame (else the midpoint)"));
   t.push_back(boolean("exact_filter", &RenderSettings::exact_filter, "trilinear filtering by hand from texelFetch (strict GPU-vs-CPU mode)"));
   t.push_back(real("max_distance", &RenderSettings::max_distance, 1, 1e8, "march no farther than this, m"));
-  t.push_back(real("sigma_t", &RenderSettings::sigma_t, 0, 1e4, "extinction per metre at density 1 (0 = 48 / smallest extent)"));
+  t.push_back(real("sigma_t", &RenderSettings::sigma_t, 0, 1e4, "extinction per metre at density 1 (0 = 0.5 / voxel size)"));
   t.push_back(real("density", &RenderSettings::density, 0, 1e3, "density multiplier"));
   t.push_back(real("erosion", &RenderSettings::erosion, 0, 1, "strength of the G/B/A detail erosion of the R base shape"));
   t.push_back(real("albedo", &RenderSettings::albedo, 0, 1, "single-scattering albedo sigma_s / sigma_t"));
   t.push_back(boolean("light_march", &RenderSettings::light_march, "secondary march toward the sun (off: no self-shadowing)"));
   t.push_back(integer("light_samples", &RenderSettings::light_samples, 1, 128, "samples of the light march"));
-  t.push_back(real("light_step", &RenderSettings::light_step, 0, 1e6, "first light step, m (0 = largest extent / 48)"));
+  t.push_back(real("light_step", &RenderSettings::light_step, 0, 1e6, "first light step, m (0 = 2.5 voxels)"));
   t.push_back(real("light_growth", &RenderSettings::light_growth, 1, 4, "each light step is this many times the previous"));
   t.push_back(enumeration("phase", &RenderSettings::phase, {"none", "hg", "mie"}, "phase function: none (isotropic), Henyey-Greenstein, Mie table"));
   t.push_back(real("g", &RenderSettings::g, -0.99, 0.99, "Henyey-Greenstein asymmetry"));

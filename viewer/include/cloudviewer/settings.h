@@ -23,14 +23,14 @@ struct RenderSettings {
   bool exact_filter = false;       ///< trilinear by hand (texelFetch) instead of the texture unit
   double max_distance = 1e7;       ///< m
   // medium
-  double sigma_t = 0;              ///< extinction per metre at density 1; 0 = auto (48 / smallest extent)
+  double sigma_t = 0;              ///< extinction per metre at density 1; 0 = auto (0.5 / voxel size)
   double density = 1;              ///< density multiplier
   double erosion = 0.35;           ///< detail erosion strength [0,1]
   double albedo = 1;               ///< single-scattering albedo
   // lighting
   bool light_march = true;         ///< secondary march toward the sun
   int light_samples = 6;
-  double light_step = 0;           ///< m; 0 = auto (largest extent / 48)
+  double light_step = 0;           ///< m; 0 = auto (2.5 voxels)
   double light_growth = 1.5;
   PhaseMode phase = PhaseMode::HenyeyGreenstein;
   double g = 0.3;                  ///< HG asymmetry
