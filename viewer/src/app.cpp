@@ -126,7 +126,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   }
   auto t0 = std::chrono::steady_clock::now();
   cloudgen::Volume volume = load_volume(o.input);
-  PreparedVolume vol = prepare_volume(volume, o.settings.occupancy_cell);
+  PreparedVolume vol = prepare_volume(volume, o.settings.occupancy_cell, o.settings.occupancy_padding);
   auto t1 = std::chrono::steady_clock::now();
   out << "volume " << vol.dims[0] << "x" << vol.dims[1] << "x" << vol.dims[2] << " voxels of "
       << vol.voxel_size << " m" << (vol.tiles ? " (tiles in x,z)" : "") << ", occupancy "

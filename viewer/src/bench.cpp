@@ -158,19 +158,44 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
   // interleave all configurations, and the fastest round counts (best of N), so a burst of other
   // work slows one sample of each, not one whole configuration.
   const size_t nc = configs.size(), nfr = frames.size();
+  // Configurations may change the occupancy grid (cell, padding): one volume per grid.
+  std::map<std::pair<int, int>, PreparedVolume> grids;
+  auto grid_for = [&](const RenderSettings& s) -> const PreparedVolume& {
+    std::pair<int, int> key{s.occupancy_cell, s.occupancy_padding};
+    if (key == std::make_pair(vol.occ_cell, vol.occ_padding)) return vol;
+    auto it = grids.find(key);
+    if (it == grids.end()) {
+      PreparedVolume copy = vol;
+      build_occupancy(copy, key.first, key.second);
+      out << "occupancy grid of " << key.first << "-voxel cells, padding " << key.second << ": "
+          << std::lround(copy.occupied_fraction * 100) << "% occupied (base grid "
+          << std::lround(vol.occupied_fraction * 100) << "%)\n";
+      it = grids.emplace(key, std::move(copy)).first;
+    }
+    return it->second;
+  };
+  const PreparedVolume* uploaded = &vol;
+  auto use_grid = [&](const RenderSettings& s) {
+    const PreparedVolume* g = &grid_for(s);
+    if (g != uploaded) renderer.set_volume(*g), uploaded = g;
+  };
   std::vector<FrameSetup> setups(nc * nfr);
   for (size_t c = 0; c < nc; ++c)
     for (size_t i = 0; i < nfr; ++i) {
       Sun sun = has_sun ? fixed_sun : default_sun(frames[i].camera);
-      setups[c * nfr + i] = make_frame(vol, settings[c], frames[i].camera, sun, o.width, o.height);
+      setups[c * nfr + i] = make_frame(grid_for(settings[c]), settings[c], frames[i].camera, sun, o.width, o.height);
     }
   std::vector<GpuTimings> best(nc * nfr);
   std::vector<double> best_wall(nc * nfr, 1e300);
   for (GpuTimings& t : best) t.total_ms = 1e300;
   std::vector<Image> images(nc * nfr);
-  for (size_t c = 0; c < nc; ++c) renderer.render(setups[c * nfr]);  // warm-up: compile, first touch
+  for (size_t c = 0; c < nc; ++c) {  // warm-up: compile, first touch
+    use_grid(settings[c]);
+    renderer.render(setups[c * nfr]);
+  }
   for (int r = 0; r < o.bench_repeat; ++r) {
     for (size_t c = 0; c < nc; ++c) {
+      use_grid(settings[c]);
       for (size_t i = 0; i < nfr; ++i) {
         GpuTimings t;
         auto w0 = std::chrono::steady_clock::now();

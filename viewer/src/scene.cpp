@@ -195,8 +195,13 @@ PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_p
     p.rgba[i * 4] = std::max(d, 0.f);
     for (int c = 0; c < 3; ++c) p.rgba[i * 4 + 1 + c] = v.detail[c].empty() ? 0.f : v.detail[c][i];
   }
-  // Occupancy: mark coarse cells holding non-zero voxels, then dilate by `padding` cells
-  // (Chebyshev, separable max filter; wraps in x/z for tiling volumes).
+  build_occupancy(p, occ_cell, occ_padding);
+  return p;
+}
+
+void build_occupancy(PreparedVolume& p, int occ_cell, int occ_padding) {
+  // Mark coarse cells holding non-zero voxels, then dilate by `padding` cells (Chebyshev,
+  // separable max filter; wraps in x/z for tiling volumes).
   p.occ_cell = occ_cell;
   p.occ_padding = occ_padding;
   for (int i = 0; i < 3; ++i) p.occ_dims[i] = (p.dims[i] + occ_cell - 1) / occ_cell;
@@ -231,7 +236,6 @@ PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_p
   for (uint8_t o : occ) count += o;
   p.occupied_fraction = occ.empty() ? 0 : double(count) / double(occ.size());
   p.occ = std::move(occ);
-  return p;
 }
 
 glm::dvec3 Sun::direction() const {
@@ -347,7 +351,12 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   double max_extent = std::max(size.x, std::max(size.y, size.z));
   double dt = max_extent / s.steps;
   double cell_m = vol.occ_cell * vol.voxel_size;
-  int k = std::max(1, int(std::floor(0.999 * cell_m / dt)));  // large step just under one cell
+  // Large step: k small steps, just under one coarse cell less half a voxel. Why that is safe with
+  // any padding >= 1: non-zero density (trilinear reaches half a voxel past a non-empty cell) lies
+  // within half a voxel of a non-empty cell, and every unoccupied cell is at least one full cell
+  // away from a non-empty one, so a segment shorter than (cell - voxel/2) that starts and ends in
+  // unoccupied cells cannot touch density. The march checks both ends of every large step.
+  int k = std::max(1, int(std::floor(0.999 * (cell_m - 0.5 * vol.voxel_size) / dt)));
   double diag = glm::length(size);
   ref::CloudParams& p = f.params;
   glm::dvec3 rel_min = vol.origin - cam.eye;
@@ -363,8 +372,8 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   double sigma = s.sigma_t > 0 ? s.sigma_t : 0.5 / vol.voxel_size;
   p.medium = glm::dvec4(sigma, s.erosion, s.density, s.powder_c);
   p.march = glm::dvec4(dt, k, s.max_distance, 4.0 * std::ceil(diag / dt) + 64.0);
-  double a_start = s.adaptive_start > 0 ? s.adaptive_start : max_extent;
-  double a_growth = s.adaptive_growth > 0 ? s.adaptive_growth : 1.0 / max_extent;
+  double a_start = s.adaptive_start > 0 ? s.adaptive_start : 0.25 * max_extent;
+  double a_growth = s.adaptive_growth > 0 ? s.adaptive_growth : 4.0 / max_extent;
   p.march2 = glm::dvec4(s.adaptive ? 1 : 0, a_start, a_growth, s.occupancy ? 1 : 0);
   double light_step = s.light_step > 0 ? s.light_step : 2.5 * vol.voxel_size;
   p.light = glm::dvec4(s.light_march ? 1 : 0, s.light_samples, light_step, s.light_growth);

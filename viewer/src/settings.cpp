@@ -79,10 +79,11 @@ std::vector<ParamDef> build() {
   std::vector<ParamDef> t;
   t.push_back(integer("steps", &RenderSettings::steps, 1, 8192, "small steps across the volume's largest extent (step = extent / steps)"));
   t.push_back(boolean("occupancy", &RenderSettings::occupancy, "occupancy skipping: large steps through empty coarse cells (thesis 2.4.2)"));
-  t.push_back(integer("occupancy_cell", &RenderSettings::occupancy_cell, 2, 64, "coarse occupancy cell edge in voxels (padding 2 cells)"));
+  t.push_back(integer("occupancy_cell", &RenderSettings::occupancy_cell, 2, 64, "coarse occupancy cell edge in voxels"));
+  t.push_back(integer("occupancy_padding", &RenderSettings::occupancy_padding, 1, 4, "occupancy dilation in cells (thesis: 2, \"double padding\"; 1 is provably enough here)"));
   t.push_back(boolean("adaptive", &RenderSettings::adaptive, "step grows linearly with distance beyond adaptive_start"));
-  t.push_back(real("adaptive_start", &RenderSettings::adaptive_start, 0, 1e7, "distance where the step starts growing, m (0 = largest extent)"));
-  t.push_back(real("adaptive_growth", &RenderSettings::adaptive_growth, 0, 10, "step growth per metre beyond the start, 1/m (0 = 1 / largest extent)"));
+  t.push_back(real("adaptive_start", &RenderSettings::adaptive_start, 0, 1e7, "distance where the step starts growing, m (0 = largest extent / 4)"));
+  t.push_back(real("adaptive_growth", &RenderSettings::adaptive_growth, 0, 10, "step growth per metre beyond the start, 1/m (0 = 4 / largest extent: the step doubles every quarter extent)"));
   t.push_back(boolean("jitter", &RenderSettings::jitter, "jitter the sample inside each step per pixel and frame (else the midpoint)"));
   t.push_back(boolean("exact_filter", &RenderSettings::exact_filter, "trilinear filtering by hand from texelFetch (strict GPU-vs-CPU mode)"));
   t.push_back(real("max_distance", &RenderSettings::max_distance, 1, 1e8, "march no farther than this, m"));

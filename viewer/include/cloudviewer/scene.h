@@ -50,6 +50,8 @@ struct PreparedVolume {
 /// tiling) has density > 0. Built here, not taken from the file, because its conservativeness is
 /// what makes skipping image-neutral (trilinear reads reach half a voxel into the next cell).
 PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_padding = 2);
+/// Rebuilds only the occupancy grid with another cell size / padding.
+void build_occupancy(PreparedVolume& p, int occ_cell, int occ_padding);
 
 struct Camera {
   glm::dvec3 eye{0.0, 0.0, -10.0};

@@ -16,9 +16,10 @@ struct RenderSettings {
   int steps = 128;                 ///< small steps across the volume's largest extent
   bool occupancy = true;           ///< occupancy skipping (thesis 2.4.2)
   int occupancy_cell = 8;          ///< coarse cell edge in voxels
+  int occupancy_padding = 2;       ///< dilation in cells (thesis: 2; 1 is enough, see make_frame)
   bool adaptive = false;           ///< step grows with distance
-  double adaptive_start = 0;       ///< m; 0 = auto (the volume's largest extent)
-  double adaptive_growth = 0;      ///< 1/m; 0 = auto (1 / largest extent)
+  double adaptive_start = 0;       ///< m; 0 = auto (a quarter of the largest extent)
+  double adaptive_growth = 0;      ///< 1/m; 0 = auto (4 / largest extent)
   bool jitter = true;              ///< jittered start against banding
   bool exact_filter = false;       ///< trilinear by hand (texelFetch) instead of the texture unit
   double max_distance = 1e7;       ///< m
