@@ -52,7 +52,8 @@ std::string error_of(const std::string& json, std::vector<std::string> sets = {}
 }
 
 bool same_bytes(const std::vector<float>& a, const std::vector<float>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+  // memcmp on the null data() of empty vectors is undefined even for 0 bytes (UBSan)
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);
 }
 
 int run_cli(const std::string& args, std::string* out = nullptr) {

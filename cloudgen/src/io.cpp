@@ -93,12 +93,6 @@ std::vector<uint8_t> read_bytes(const std::string& path) {
   return std::vector<uint8_t>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
-int channel_count(const Volume& v) {
-  int n = 1;
-  for (int c = 0; c < 3; ++c)
-    if (!v.detail[c].empty()) n = c + 2;
-  return n;
-}
 
 }  // namespace
 

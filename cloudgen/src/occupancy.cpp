@@ -9,7 +9,7 @@ namespace cloudgen {
 
 void build_occupancy(Volume& v) {
   const uint32_t c = std::max<uint32_t>(1, v.occupancy_cell);
-  std::array<uint32_t, 3> od;
+  std::array<uint32_t, 3> od{};
   for (int a = 0; a < 3; ++a) od[a] = (v.dims[a] + c - 1) / c;
   std::vector<uint8_t> raw(size_t(od[0]) * od[1] * od[2], 0);
   for (uint32_t z = 0; z < v.dims[2]; ++z)

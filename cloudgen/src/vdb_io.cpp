@@ -45,6 +45,15 @@ openvdb::FloatGrid::Ptr make_grid(const Volume& v, const std::vector<float>& dat
   return grid;
 }
 
+void open_or_throw(openvdb::io::File& file, const std::string& path) {
+  init_vdb();
+  try {
+    file.open();
+  } catch (const openvdb::Exception& e) {
+    throw InputError(path + ": not a readable OpenVDB file (" + e.what() + ")");
+  }
+}
+
 }  // namespace
 
 void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o) {
@@ -79,11 +88,7 @@ void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o)
 Volume read_vdb(const std::string& path) {
   init_vdb();
   openvdb::io::File file(path);
-  try {
-    file.open();
-  } catch (const openvdb::Exception& e) {
-    throw InputError(path + ": not a readable OpenVDB file (" + e.what() + ")");
-  }
+  open_or_throw(file, path);
   openvdb::GridBase::Ptr base;
   std::vector<std::string> names;
   for (auto it = file.beginName(); it != file.endName(); ++it) names.push_back(it.gridName());
@@ -137,11 +142,7 @@ Volume read_vdb(const std::string& path) {
 std::string describe_vdb(const std::string& path) {
   init_vdb();
   openvdb::io::File file(path);
-  try {
-    file.open();
-  } catch (const openvdb::Exception& e) {
-    throw InputError(path + ": not a readable OpenVDB file (" + e.what() + ")");
-  }
+  open_or_throw(file, path);
   std::ostringstream o;
   o << path << " (OpenVDB, compression " << openvdb::io::compressionToString(file.compression()) << ")\n";
   auto fmeta = file.getMetadata();
