@@ -11,7 +11,8 @@ void build_occupancy(Volume& v) {
   const uint32_t c = std::max<uint32_t>(1, v.occupancy_cell);
   std::array<uint32_t, 3> od{};
   for (int a = 0; a < 3; ++a) od[a] = (v.dims[a] + c - 1) / c;
-  std::vector<uint8_t> raw(size_t(od[0]) * od[1] * od[2], 0);
+  const size_t ncells = size_t{od[0]} * od[1] * od[2];
+  std::vector<uint8_t> raw(ncells, 0);
   for (uint32_t z = 0; z < v.dims[2]; ++z)
     for (uint32_t y = 0; y < v.dims[1]; ++y) {
       const float* row = &v.density[v.index(0, y, z)];
