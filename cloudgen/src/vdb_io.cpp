@@ -2,7 +2,9 @@
 // 15-25 s to compile).
 #include <openvdb/io/File.h>
 #include <openvdb/openvdb.h>
+#include <openvdb/tools/Dense.h>
 #include <openvdb/tools/Prune.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <mutex>
@@ -34,13 +36,12 @@ openvdb::FloatGrid::Ptr make_grid(const Volume& v, const std::vector<float>& dat
   grid->setGridClass(openvdb::GRID_FOG_VOLUME);
   grid->setTransform(make_transform(v));
   grid->setSaveFloatAsHalf(half);
-  auto acc = grid->getAccessor();
-  for (uint32_t z = 0; z < v.dims[2]; ++z)
-    for (uint32_t y = 0; y < v.dims[1]; ++y) {
-      const float* row = &data[v.index(0, y, z)];
-      for (uint32_t x = 0; x < v.dims[0]; ++x)
-        if (row[x] > 0.0f) acc.setValueOn(openvdb::Coord(int(x), int(y), int(z)), row[x]);
-    }
+  // Wrap our x-fastest buffer (no copy) and let OpenVDB's threaded copy activate every voxel
+  // that differs from the background 0 (densities are >= 0, so exactly the cloud voxels).
+  const openvdb::CoordBBox box(openvdb::Coord(0), openvdb::Coord(int(v.dims[0]) - 1, int(v.dims[1]) - 1,
+                                                                 int(v.dims[2]) - 1));
+  openvdb::tools::Dense<const float, openvdb::tools::LayoutXYZ> dense(box, data.data());
+  openvdb::tools::copyFromDense(dense, *grid, 0.0f);
   openvdb::tools::prune(grid->tree());
   return grid;
 }
@@ -58,15 +59,19 @@ void open_or_throw(openvdb::io::File& file, const std::string& path) {
 
 void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o) {
   init_vdb();
-  openvdb::GridPtrVec grids;
-  auto density = make_grid(v, v.density, "density", o.vdb_half);
+  // The density grid and the detail grids are built in parallel.
+  std::vector<std::pair<const std::vector<float>*, std::string>> todo{{&v.density, "density"}};
+  if (o.vdb_detail)
+    for (int c = 0; c < 3; ++c)
+      if (!v.detail[c].empty()) todo.push_back({&v.detail[c], v.detail_names[c]});
+  openvdb::GridPtrVec grids(todo.size());
+  tbb::parallel_for(size_t(0), todo.size(), [&](size_t i) {
+    grids[i] = make_grid(v, *todo[i].first, todo[i].second, o.vdb_half);
+  });
+  auto density = openvdb::gridPtrCast<openvdb::FloatGrid>(grids[0]);
   for (auto& [k, val] : v.metadata) density->insertMeta(k, openvdb::StringMetadata(val));
   // Never a creator starting with "Houdini": Blender then assumes a Y-up Houdini file and rotates it.
   density->setCreator(std::string("cloudgen ") + CLOUDGEN_VERSION);
-  grids.push_back(density);
-  if (o.vdb_detail)
-    for (int c = 0; c < 3; ++c)
-      if (!v.detail[c].empty()) grids.push_back(make_grid(v, v.detail[c], v.detail_names[c], o.vdb_half));
   atomic_write(path, [&](const std::string& tmp) {
     openvdb::io::File file(tmp);
     uint32_t comp = openvdb::io::COMPRESS_ACTIVE_MASK;
