@@ -19,6 +19,8 @@
 //   vec4   volume_filtered(vec3 uvw)     filtered lookup (the GPU's texture unit; exact on the CPU)
 //   Number occupancy_texel(ivec3 cell)   1 where the coarse cell may hold density, else 0
 //   Number mie_table_value(int i)        i-th entry of the Mie phase table over theta in [0, pi]
+//   vec2   coverage_texel(ivec2 texel)   layer coverage map: R coverage, G cloud type, in [0, 1]
+//   ivec2  coverage_size()               size of the coverage map in texels
 // Constants are macros, not globals, so that the file also works inside a C++ class body.
 
 #define CV_PI 3.14159265358979323846
@@ -103,7 +105,8 @@ vec2 ray_box(vec3 rd, vec3 bmin, vec3 bmax) {
 
 // ---------------------------------------------------------------- volume sampling
 
-int wrap_index(int i, int n) { return ((i % n) + n) % n; }
+// GLSL leaves % undefined for negative operands (C++ truncates): keep both operands non-negative.
+int wrap_index(int i, int n) { return i >= 0 ? i % n : (n - 1) - ((-i - 1) % n); }
 int clamp_index(int i, int n) { return min(max(i, 0), n - 1); }
 
 // Trilinear filter done by hand from texel fetches: texel centres at (i + 0.5) / n, x and z
@@ -128,8 +131,98 @@ vec4 volume_trilinear(vec3 uvw) {
   return acc;
 }
 
-// Normalised volume coordinates of a camera-relative position.
+// ---------------------------------------------------------------- layer mode
+// Horizon Zero Dawn style (Schneider 2015, seed 001): the tileable texture repeats over a cloud
+// layer between two altitudes over a curved Earth; a 2D coverage map says where clouds are and
+// the cloud-type height gradient shapes their profile.
+
+bool layer_mode() { return u_cloud.layer.x > 0.5; }
+
+// Altitude above the ground sphere of camera-relative p. Parabolic Earth: the exact
+// sqrt(r^2 + (R + h)^2) - R loses everything to float rounding at R = 6360 km, while
+// h + y + (x^2 + z^2) / 2R is exact to d^4/(8 R^3) (2 m at 200 km) and well conditioned.
+Number layer_altitude(vec3 p) {
+  return Number(u_cloud.layer2.x) + p.y + (p.x * p.x + p.z * p.z) / (2.0 * Number(u_cloud.layer.w));
+}
+
+// Roots of a t^2 + b t + c = 0 (a >= 0), sorted; (1e30, -1e30) when there are none.
+// The stable form (q = -(b + sign(b) sqrt(D)) / 2; roots c/q and q/a) avoids cancellation.
+vec2 parabola_roots(Number a, Number b, Number c) {
+  Number aa = max(a, 1e-12);
+  Number disc = b * b - 4.0 * aa * c;
+  if (disc < 0.0) return vec2(1e30, -1e30);
+  Number s = sqrt(disc);
+  Number q = -0.5 * (b + (b >= 0.0 ? s : -s));
+  Number r1 = q != 0.0 ? c / q : 0.0;
+  Number r2 = q / aa;
+  return vec2(min(r1, r2), max(r1, r2));
+}
+
+// The part [t0, t1] of the ray p + t d (t >= 0) inside the cloud layer, up to the first time it
+// leaves (empty when x >= y). Altitude along the ray is the convex parabola a0 + a1 t + a2 t^2.
+vec2 shell_interval(vec3 p, vec3 d) {
+  Number R = Number(u_cloud.layer.w);
+  Number bottom = Number(u_cloud.layer.y);
+  Number top = Number(u_cloud.layer.z);
+  Number a0 = layer_altitude(p);
+  Number a1 = d.y + (p.x * d.x + p.z * d.z) / R;
+  Number a2 = (d.x * d.x + d.z * d.z) / (2.0 * R);
+  vec2 up = parabola_roots(a2, a1, a0 - top);
+  vec2 down = parabola_roots(a2, a1, a0 - bottom);
+  bool hits_bottom = down.x <= down.y;
+  if (a0 < bottom) {  // below the layer: enter through its bottom, leave through its top
+    if (!hits_bottom) return vec2(1e30, -1e30);
+    return vec2(down.y, up.y);
+  }
+  if (a0 <= top) {  // inside: leave through the top, or the bottom when looking down
+    Number t1 = up.y;
+    if (hits_bottom && down.x > 0.0) t1 = min(t1, down.x);
+    return vec2(0.0, t1);
+  }
+  if (!(up.x <= up.y) || up.y < 0.0) return vec2(1e30, -1e30);  // above, never reaching down
+  Number t0 = max(up.x, 0.0);
+  Number t1 = up.y;
+  if (hits_bottom && down.x > t0) t1 = min(t1, down.x);
+  return vec2(t0, t1);
+}
+
+// Coverage (x) and cloud type (y) at camera-relative p: bilinear, wrapped (the map tiles).
+vec2 coverage_at(vec3 p) {
+  ivec2 n = coverage_size();
+  Number period = Number(u_cloud.layer3.w);
+  vec2 x = vec2((Number(u_cloud.layer4.x) + p.x) / period * Number(n.x) - 0.5,
+                (Number(u_cloud.layer4.y) + p.z) / period * Number(n.y) - 0.5);
+  vec2 fl = floor(x);
+  vec2 f = x - fl;
+  ivec2 i0 = ivec2(fl);
+  vec2 acc = vec2(0.0);
+  for (int k = 0; k < 4; ++k) {
+    ivec2 o = ivec2(k & 1, k >> 1);
+    ivec2 i = ivec2(wrap_index(i0.x + o.x, n.x), wrap_index(i0.y + o.y, n.y));
+    vec2 w = mix(vec2(1.0) - f, f, vec2(o));
+    acc += (w.x * w.y) * coverage_texel(i);
+  }
+  return acc;
+}
+
+// Height gradient of a cloud type at normalised layer height h: 0 stratus (low, thin),
+// 0.5 cumulus, 1 cumulonimbus (the full layer) (Schneider 2015).
+Number cloud_type_gradient(Number h, Number type) {
+  Number stratus = smoothstep(0.0, 0.05, h) * (1.0 - smoothstep(0.1, 0.25, h));
+  Number cumulus = smoothstep(0.0, 0.1, h) * (1.0 - smoothstep(0.4, 0.65, h));
+  Number cumulonimbus = smoothstep(0.0, 0.1, h) * (1.0 - smoothstep(0.75, 1.0, h));
+  if (type < 0.5) return mix(stratus, cumulus, type * 2.0);
+  return mix(cumulus, cumulonimbus, type * 2.0 - 1.0);
+}
+
+// Normalised volume coordinates of a camera-relative position: the box, or in layer mode the
+// repeating tile horizontally and the layer's height vertically.
 vec3 volume_uvw(vec3 p) {
+  if (layer_mode()) {
+    Number h = (layer_altitude(p) - Number(u_cloud.layer.y)) / Number(u_cloud.layer.z - u_cloud.layer.y);
+    return vec3((Number(u_cloud.layer2.y) + p.x) / Number(u_cloud.layer3.x), h,
+                (Number(u_cloud.layer2.z) + p.z) / Number(u_cloud.layer3.z));
+  }
   return (p - vec3(u_cloud.volume_min)) / vec3(u_cloud.volume_size);
 }
 
@@ -144,6 +237,15 @@ Number cloud_density(vec3 p) {
   if (!tiles && (uvw.x < 0.0 || uvw.x > 1.0 || uvw.z < 0.0 || uvw.z > 1.0)) return 0.0;
   vec4 v = u_cloud.control.z > 0.5 ? volume_trilinear(uvw) : volume_filtered(uvw);
   Number base = v.x;
+  if (layer_mode()) {
+    // Coverage remap (HZD): raise the threshold where coverage is low, then scale by coverage.
+    // Like erosion it only lowers density, so the texture's occupancy grid stays conservative.
+    vec2 cov = coverage_at(p);
+    Number c = clamp(cov.x + Number(u_cloud.layer4.z), 0.0, 1.0);
+    Number type = u_cloud.layer4.w >= 0.0 ? Number(u_cloud.layer4.w) : cov.y;
+    Number x = base * cloud_type_gradient(uvw.y, type);
+    base = clamp((x - (1.0 - c)) / max(c, 1e-4), 0.0, 1.0) * c;
+  }
   Number erosion = Number(u_cloud.medium.y);
   if (u_cloud.volume_dims.w > 0.5 && erosion > 0.0 && base > 0.0) {
     Number detail = dot(vec3(v.y, v.z, v.w), vec3(0.625, 0.25, 0.125));
@@ -160,7 +262,7 @@ Number cloud_density(vec3 p) {
 // through a face must see that face's cell even when rounding puts the point a hair outside, or a
 // large step could skip a whole corner of a dense boundary cell.
 bool occupied(vec3 p) {
-  vec3 c = (p - vec3(u_cloud.volume_min)) / Number(u_cloud.occ_dims.w);
+  vec3 c = volume_uvw(p) * vec3(u_cloud.volume_dims) / Number(u_cloud.occ_dims.w);
   ivec3 cell = ivec3(floor(c));
   ivec3 n = ivec3(vec3(u_cloud.occ_dims));
   bool tiles = u_cloud.volume_size.w > 0.5;
@@ -215,7 +317,7 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations) {
   iterations = 0;
   vec3 bmin = vec3(u_cloud.volume_min);
   vec3 bmax = bmin + vec3(u_cloud.volume_size);
-  vec2 tb = ray_box(rd, bmin, bmax);
+  vec2 tb = layer_mode() ? shell_interval(vec3(0.0), rd) : ray_box(rd, bmin, bmax);
   Number t0 = tb.x;
   Number t1 = min(tb.y, min(t_scene, Number(u_cloud.march.z)));
   vec3 radiance = vec3(0.0);
@@ -283,7 +385,8 @@ Number sun_shadow_transmittance(vec3 p) {
   vec3 sun = vec3(u_cloud.sun_dir);
   vec3 bmin = vec3(u_cloud.volume_min) - p;
   vec3 bmax = bmin + vec3(u_cloud.volume_size);
-  vec2 tb = ray_box(sun, bmin, bmax);
+  vec2 tb = layer_mode() ? shell_interval(p, sun) : ray_box(sun, bmin, bmax);
+  if (layer_mode()) tb.y = min(tb.y, tb.x + 20000.0);  // shadows from within 20 km
   if (!(tb.y > tb.x)) return 1.0;
   int samples = int(u_cloud.camera_world.w);
   Number seg = (tb.y - tb.x) / Number(samples);

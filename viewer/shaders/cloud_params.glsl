@@ -7,7 +7,7 @@ struct CloudParams {
   vec4 volume_min;     // xyz: volume min corner relative to the camera (m); w: voxel size (m)
   vec4 volume_size;    // xyz: volume extent (m); w: 1 when x and z wrap (tileable texture)
   vec4 volume_dims;    // xyz: voxel counts; w: 1 when G/B/A detail channels are present
-  vec4 occ_dims;       // xyz: coarse occupancy cells; w: coarse cell edge (m)
+  vec4 occ_dims;       // xyz: coarse occupancy cells; w: coarse cell edge (voxels)
   vec4 sun_dir;        // xyz: unit vector toward the sun; w: sun radiance scale
   vec4 sun_color;      // rgb: sun colour; w: ambient scale
   vec4 ambient_color;  // rgb: ambient (sky) radiance colour; w: single-scattering albedo
@@ -20,4 +20,10 @@ struct CloudParams {
   vec4 ground;         // x: ground height relative to camera (m); y: ground albedo; z: ground on; w: ground half-extent (m)
   vec4 camera_world;   // xyz: camera world position modulo 1024 m (ground pattern phase); w: shadow march samples
   vec4 sky;            // rgb: zenith sky radiance; w: sun disc radiance scale
+  // Layer mode (the tileable texture repeated over a spherical shell; parabolic Earth, see
+  // layer_altitude): all distances in metres, horizontal offsets already reduced modulo their period.
+  vec4 layer;          // x: 1 in layer mode; y: layer bottom altitude; z: layer top altitude; w: Earth radius
+  vec4 layer2;         // x: camera altitude above the ground; y, z: camera x, z modulo the tile; w: unused
+  vec4 layer3;         // x, z: tile size in x and z; y: unused; w: coverage map period (m)
+  vec4 layer4;         // x, y: camera x, z modulo the coverage period; z: coverage bias; w: cloud type (-1 = map)
 };

@@ -167,7 +167,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
 
 Camera resolve_camera(const Options& o, const PreparedVolume& vol, int width, int height) {
   if (o.camera) return *o.camera;
-  return default_camera(vol, o.fov, double(width) / height);
+  return default_camera(vol, o.settings, o.fov, double(width) / height);
 }
 
 Sun resolve_sun(const Options& o, const Camera& cam) { return o.sun ? *o.sun : default_sun(cam); }

@@ -60,7 +60,7 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
   double fov = track.value("fov", o.fov);
   int per_segment = track.value("frames_per_segment", 1);
   if (per_segment < 1 || per_segment > 1000) throw InputError(where + ": /frames_per_segment must be 1..1000");
-  auto to_world = [&](const glm::dvec3& p) { return space == "volume" ? vol.origin + p * vol.size() : p; };
+  auto to_world = [&](const glm::dvec3& p) { return space == "volume" ? volume_space_to_world(vol, o.settings, p) : p; };
   if (!track.contains("keys") || !track["keys"].is_array() || track["keys"].empty())
     throw InputError(where + ": /keys must be a non-empty array of {name, view, eye, target}");
   std::vector<TrackFrame> keys;

@@ -41,6 +41,11 @@ struct CpuShader {
     return vol.occ[(size_t(c.z) * vol.occ_dims[1] + c.y) * vol.occ_dims[0] + c.x];
   }
   Number mie_table_value(int i) const { return mie[size_t(i)]; }
+  vec2 coverage_texel(ivec2 t) const {
+    const float* c = &coverage_map()[(size_t(t.y) * 256 + size_t(t.x)) * 2];
+    return vec2(c[0], c[1]);
+  }
+  ivec2 coverage_size() const { return ivec2(256, 256); }
 
 #define IN(x) const x&
 #define OUT(x) x&
@@ -100,9 +105,16 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
       dvec3 rd = normalize(dvec3(near_point) / near_point.w);
       double t_scene = 1e30;
       dvec3 background(0.0);
-      // The GL ground quad is visible from both sides; so is this plane.
-      if (P.ground.z > 0.5 && rd.y != 0.0 && P.ground.x / rd.y > 0.0) {
-        double t = P.ground.x / rd.y;
+      // The GL ground quad is visible from both sides; so is this plane. In layer mode the ground
+      // is the parabolic Earth (altitude 0), tessellated finely on the GPU.
+      double t = -1;
+      if (P.ground.z > 0.5 && P.layer.x > 0.5) {
+        dvec2 r = sh.parabola_roots((1.0 - rd.y * rd.y) / (2.0 * P.layer.w), rd.y, -P.ground.x);
+        if (r.x <= r.y) t = r.x > 0 ? r.x : r.y;
+      } else if (P.ground.z > 0.5 && rd.y != 0.0 && P.ground.x / rd.y > 0.0) {
+        t = P.ground.x / rd.y;
+      }
+      if (t > 0) {
         dvec3 p = rd * t;
         if (std::abs(p.x) <= P.ground.w && std::abs(p.z) <= P.ground.w) {
           t_scene = t;

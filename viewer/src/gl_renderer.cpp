@@ -1,6 +1,7 @@
 // OpenGL 4.5 deferred renderer: ground pass (HDR + distance), full-screen cloud pass, bloom
 // (half resolution, separable Gaussian), tone map + sRGB. GPU timer queries around every pass.
 #include <array>
+#include <vector>
 #include <cstring>
 
 #include <epoxy/gl.h>
@@ -54,12 +55,15 @@ GLuint link_program(const ShaderSource& src, const std::string& vs, const std::s
   return p;
 }
 
+constexpr int kGroundGrid = 96;  // ground cells per side in layer mode (curved Earth)
+
 }  // namespace
 
 struct GlRenderer::Impl {
   ShaderSource shaders;
   GLuint prog_ground = 0, prog_cloud = 0, prog_bright = 0, prog_blur = 0, prog_tonemap = 0;
-  GLuint tex_volume = 0, tex_occ = 0, tex_mie = 0;
+  GLuint tex_volume = 0, tex_occ = 0, tex_mie = 0, tex_coverage = 0;
+  GLsizei ground_vertices = 0;
   GLuint ubo_cloud = 0, ubo_frame = 0;
   GLuint vao_empty = 0, vao_ground = 0, vbo_ground = 0;
   int w = 0, h = 0, bw = 0, bh = 0;
@@ -153,7 +157,7 @@ GlRenderer::GlRenderer(ShaderSource shaders) : impl_(std::make_unique<Impl>()) {
   glCreateVertexArrays(1, &m.vao_empty);
   glCreateVertexArrays(1, &m.vao_ground);
   glCreateBuffers(1, &m.vbo_ground);
-  glNamedBufferStorage(m.vbo_ground, sizeof(float) * 18, nullptr, GL_DYNAMIC_STORAGE_BIT);
+  glNamedBufferStorage(m.vbo_ground, sizeof(float) * 3 * 6 * kGroundGrid * kGroundGrid, nullptr, GL_DYNAMIC_STORAGE_BIT);
   glVertexArrayVertexBuffer(m.vao_ground, 0, m.vbo_ground, 0, sizeof(float) * 3);
   glEnableVertexArrayAttrib(m.vao_ground, 0);
   glVertexArrayAttribFormat(m.vao_ground, 0, 3, GL_FLOAT, GL_FALSE, 0);
@@ -166,13 +170,19 @@ GlRenderer::GlRenderer(ShaderSource shaders) : impl_(std::make_unique<Impl>()) {
   glTextureSubImage1D(m.tex_mie, 0, 0, GLsizei(mie.size()), GL_RED, GL_FLOAT, mie.data());
   glTextureParameteri(m.tex_mie, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTextureParameteri(m.tex_mie, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  const std::vector<float>& cov = coverage_map();
+  glCreateTextures(GL_TEXTURE_2D, 1, &m.tex_coverage);
+  glTextureStorage2D(m.tex_coverage, 1, GL_RG32F, 256, 256);
+  glTextureSubImage2D(m.tex_coverage, 0, 0, 0, 256, 256, GL_RG, GL_FLOAT, cov.data());
+  glTextureParameteri(m.tex_coverage, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTextureParameteri(m.tex_coverage, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
 }
 
 GlRenderer::~GlRenderer() {
   Impl& m = *impl_;
   m.delete_programs();
   m.delete_targets();
-  GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_mie};
+  GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_mie, m.tex_coverage};
   for (GLuint t : texs)
     if (t) glDeleteTextures(1, &t);
   glDeleteBuffers(1, &m.ubo_cloud);
@@ -239,6 +249,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glBindTextureUnit(0, m.tex_volume);
   glBindTextureUnit(1, m.tex_occ);
   glBindTextureUnit(2, m.tex_mie);
+  glBindTextureUnit(5, m.tex_coverage);
   glDisable(GL_BLEND);
   glDisable(GL_CULL_FACE);
   glDisable(GL_FRAMEBUFFER_SRGB);
@@ -253,14 +264,31 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   const float one = 1.0f;
   glClearNamedFramebufferfv(m.fbo_scene, GL_DEPTH, 0, &one);
   if (f.params.ground.z > 0.5) {
-    float y = float(f.params.ground.x), r = float(f.ground_half_extent);
-    float quad[18] = {-r, y, -r, r, y, -r, r, y, r, -r, y, -r, r, y, r, -r, y, r};
-    glNamedBufferSubData(m.vbo_ground, 0, sizeof(quad), quad);
+    double y = f.params.ground.x, r = f.ground_half_extent;
+    std::vector<float> verts;
+    if (f.params.layer.x > 0.5) {
+      // Curved Earth: altitude 0 of the parabolic model, y = -h_cam - (x^2 + z^2) / 2R.
+      const int n = kGroundGrid;
+      auto vertex = [&](int i, int j) {
+        double x = -r + 2 * r * i / n, z = -r + 2 * r * j / n;
+        verts.insert(verts.end(), {float(x), float(y - (x * x + z * z) / (2 * f.params.layer.w)), float(z)});
+      };
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+          vertex(i, j), vertex(i + 1, j), vertex(i + 1, j + 1);
+          vertex(i, j), vertex(i + 1, j + 1), vertex(i, j + 1);
+        }
+    } else {
+      float fy = float(y), fr = float(r);
+      verts = {-fr, fy, -fr, fr, fy, -fr, fr, fy, fr, -fr, fy, -fr, fr, fy, fr, -fr, fy, fr};
+    }
+    m.ground_vertices = GLsizei(verts.size() / 3);
+    glNamedBufferSubData(m.vbo_ground, 0, GLsizeiptr(verts.size() * sizeof(float)), verts.data());
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
     glUseProgram(m.prog_ground);
     glBindVertexArray(m.vao_ground);
-    glDrawArrays(GL_TRIANGLES, 0, 6);
+    glDrawArrays(GL_TRIANGLES, 0, m.ground_vertices);
     glDisable(GL_DEPTH_TEST);
   }
   glQueryCounter(m.queries[1], GL_TIMESTAMP);

@@ -329,6 +329,55 @@ const std::vector<float>& mie_phase_table(int n) {
   return table;
 }
 
+const std::vector<float>& coverage_map(int n) {
+  static std::mutex mutex;
+  static std::vector<float> map;
+  static int cached = 0;
+  std::lock_guard<std::mutex> lock(mutex);
+  if (cached == n) return map;
+  map.assign(size_t(n) * n * 2, 0.f);
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      double u = (x + 0.5) / n, v = (y + 0.5) / n;
+      double c = fbm(u * 4, v * 4, 0.5, 4, 4, 21);
+      double t = fbm(u * 2, v * 2, 7.5, 2, 2, 33);
+      map[(size_t(y) * n + x) * 2] = float(std::clamp((c - 0.38) / 0.3, 0.0, 1.0));
+      map[(size_t(y) * n + x) * 2 + 1] = float(std::clamp((t - 0.3) / 0.4, 0.0, 1.0));
+    }
+  cached = n;
+  return map;
+}
+
+double ground_height(const PreparedVolume& vol, const RenderSettings& s) {
+  if (!s.ground_height_auto) return s.ground_height;
+  return s.mode == PlaceMode::Layer ? 0.0 : std::min(0.0, vol.origin.y);
+}
+
+glm::dvec2 layer_altitudes(const PreparedVolume& vol, const RenderSettings& s) {
+  double top = s.layer_top > 0 ? s.layer_top : s.layer_bottom + vol.size().y;
+  if (top <= s.layer_bottom)
+    throw InputError("render.layer_top (" + std::to_string(top) + " m) must be above render.layer_bottom (" +
+                     std::to_string(s.layer_bottom) + " m)");
+  return glm::dvec2(s.layer_bottom, top);
+}
+
+glm::dvec3 volume_space_to_world(const PreparedVolume& vol, const RenderSettings& s, const glm::dvec3& uvw) {
+  if (s.mode != PlaceMode::Layer) return vol.origin + uvw * vol.size();
+  glm::dvec2 alt = layer_altitudes(vol, s);
+  glm::dvec3 size = vol.size();
+  return glm::dvec3(uvw.x * size.x, ground_height(vol, s) + alt.x + uvw.y * (alt.y - alt.x), uvw.z * size.z);
+}
+
+Camera default_camera(const PreparedVolume& vol, const RenderSettings& s, double fov_y_deg, double aspect) {
+  if (s.mode != PlaceMode::Layer) return default_camera(vol, fov_y_deg, aspect);
+  glm::dvec2 alt = layer_altitudes(vol, s);
+  Camera cam;
+  cam.fov_y_deg = fov_y_deg;
+  cam.eye = glm::dvec3(0.0, ground_height(vol, s) + 0.4 * alt.x, 0.0);
+  cam.target = cam.eye + glm::dvec3(0.0, 0.22, 1.0) * 1000.0;
+  return cam;
+}
+
 glm::dmat4 view_projection(const Camera& cam, int width, int height) {
   glm::dvec3 dir = cam.target - cam.eye;
   if (glm::length(dir) < 1e-9) dir = glm::dvec3(0, 0, 1);
@@ -347,44 +396,67 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   f.camera = cam;
   f.sun = sun;
   f.settings = s;
+  const bool layer = s.mode == PlaceMode::Layer;
+  if (layer && !vol.tiles)
+    throw InputError("render.mode=layer repeats the texture over the sky, so it needs a tileable volume "
+                     "(x and z wrap; cloudgen presets and synthetic:noise tile, this input does not)");
   glm::dvec3 size = vol.size();
+  glm::dvec2 alt = layer ? layer_altitudes(vol, s) : glm::dvec2(0.0);
+  if (layer) size.y = alt.y - alt.x;  // the texture's height stretches over the layer
+  glm::dvec3 voxel = size / glm::dvec3(vol.dims[0], vol.dims[1], vol.dims[2]);
+  double min_voxel = std::min(voxel.x, std::min(voxel.y, voxel.z));
   double max_extent = std::max(size.x, std::max(size.y, size.z));
   double dt = max_extent / s.steps;
-  double cell_m = vol.occ_cell * vol.voxel_size;
+  double cell_m = vol.occ_cell * min_voxel;
   // Large step: k small steps, just under one coarse cell less half a voxel. Why that is safe with
   // any padding >= 1: non-zero density (trilinear reaches half a voxel past a non-empty cell) lies
   // within half a voxel of a non-empty cell, and every unoccupied cell is at least one full cell
   // away from a non-empty one, so a segment shorter than (cell - voxel/2) that starts and ends in
   // unoccupied cells cannot touch density. The march checks both ends of every large step.
-  int k = std::max(1, int(std::floor(0.999 * (cell_m - 0.5 * vol.voxel_size) / dt)));
+  // In layer mode cells are measured in the smallest world voxel edge (the texture may be stretched
+  // vertically); the Earth's curvature bends a large step by d^2/2R, far below half a voxel.
+  int k = std::max(1, int(std::floor(0.999 * (cell_m - 0.5 * min_voxel) / dt)));
   double diag = glm::length(size);
   ref::CloudParams& p = f.params;
   glm::dvec3 rel_min = vol.origin - cam.eye;
   p.volume_min = glm::dvec4(rel_min, vol.voxel_size);
-  p.volume_size = glm::dvec4(size, vol.tiles ? 1.0 : 0.0);
+  p.volume_size = glm::dvec4(size, vol.tiles ? 1.0 : 0.0);  // box mode only, except w
   p.volume_dims = glm::dvec4(vol.dims[0], vol.dims[1], vol.dims[2], vol.has_detail ? 1.0 : 0.0);
-  p.occ_dims = glm::dvec4(vol.occ_dims[0], vol.occ_dims[1], vol.occ_dims[2], cell_m);
+  p.occ_dims = glm::dvec4(vol.occ_dims[0], vol.occ_dims[1], vol.occ_dims[2], vol.occ_cell);
   p.sun_dir = glm::dvec4(sun.direction(), s.sun_intensity);
   p.sun_color = glm::dvec4(1.0, 0.96, 0.9, s.ambient);
   p.ambient_color = glm::dvec4(0.30, 0.38, 0.52, s.albedo);
   // Auto values follow the voxel size, not the box, so a VDB cropped to its active voxels renders
   // like the dense texture it came from.
-  double sigma = s.sigma_t > 0 ? s.sigma_t : 0.5 / vol.voxel_size;
+  double sigma = s.sigma_t > 0 ? s.sigma_t : 0.5 / min_voxel;
   p.medium = glm::dvec4(sigma, s.erosion, s.density, s.powder_c);
-  p.march = glm::dvec4(dt, k, s.max_distance, 4.0 * std::ceil(diag / dt) + 64.0);
+  // Layer rays can run to the horizon: cap the loop (use render.adaptive=true there).
+  double max_iter = layer ? 2048.0 + 8.0 * s.steps : 4.0 * std::ceil(diag / dt) + 64.0;
+  p.march = glm::dvec4(dt, k, s.max_distance, max_iter);
   double a_start = s.adaptive_start > 0 ? s.adaptive_start : 0.25 * max_extent;
   double a_growth = s.adaptive_growth > 0 ? s.adaptive_growth : 4.0 / max_extent;
   p.march2 = glm::dvec4(s.adaptive ? 1 : 0, a_start, a_growth, s.occupancy ? 1 : 0);
-  double light_step = s.light_step > 0 ? s.light_step : 2.5 * vol.voxel_size;
+  double light_step = s.light_step > 0 ? s.light_step : 2.5 * min_voxel;
   p.light = glm::dvec4(s.light_march ? 1 : 0, s.light_samples, light_step, s.light_growth);
   p.phase = glm::dvec4(double(int(s.phase)), s.g, double(mie_phase_table().size()), s.powder);
   p.control = glm::dvec4(s.jitter ? 1 : 0, s.frame, s.exact_filter ? 1 : 0, double(int(s.output)));
-  double gh = s.ground_height_auto ? std::min(0.0, vol.origin.y) : s.ground_height;
-  f.ground_half_extent = 5e4;
+  double gh = ground_height(vol, s);
+  f.ground_half_extent = layer ? 2e5 : 5e4;
   p.ground = glm::dvec4(gh - cam.eye.y, s.ground_albedo, s.ground ? 1 : 0, f.ground_half_extent);
   glm::dvec3 cw = glm::mod(cam.eye, glm::dvec3(1024.0));
   p.camera_world = glm::dvec4(cw, s.shadow_samples);
   p.sky = glm::dvec4(0.12, 0.24, 0.55, 40.0);
+  if (layer) {
+    double period = size.x * s.coverage_tiles;
+    p.layer = glm::dvec4(1.0, alt.x, alt.y, s.earth_radius);
+    p.layer2 = glm::dvec4(cam.eye.y - gh, glm::mod(cam.eye.x, size.x), glm::mod(cam.eye.z, size.z), 0.0);
+    p.layer3 = glm::dvec4(size.x, 0.0, size.z, period);
+    p.layer4 = glm::dvec4(glm::mod(cam.eye.x, period), glm::mod(cam.eye.z, period), s.coverage, s.cloud_type);
+    p.volume_size.w = 1.0;
+  } else {
+    p.layer = p.layer2 = p.layer3 = p.layer4 = glm::dvec4(0.0);
+    p.layer.w = s.earth_radius;
+  }
   f.params = rounded_to_float(p);
   f.view_proj = view_projection(cam, width, height);
   f.inv_view_proj = glm::dmat4(glm::mat4(glm::inverse(f.view_proj)));

@@ -77,6 +77,13 @@ ParamDef enumeration(const std::string& key, E RenderSettings::*m, std::vector<s
 
 std::vector<ParamDef> build() {
   std::vector<ParamDef> t;
+  t.push_back(enumeration("mode", &RenderSettings::mode, {"box", "layer"}, "box: the volume where its file puts it; layer: the tileable texture repeated over a spherical cloud layer"));
+  t.push_back(real("layer_bottom", &RenderSettings::layer_bottom, 0, 1e5, "layer mode: cloud layer bottom altitude, m"));
+  t.push_back(real("layer_top", &RenderSettings::layer_top, 0, 1e5, "layer mode: layer top altitude, m (0 = bottom + the texture's height)"));
+  t.push_back(real("earth_radius", &RenderSettings::earth_radius, 1e3, 1e9, "layer mode: Earth radius, m"));
+  t.push_back(real("coverage", &RenderSettings::coverage, -1, 1, "layer mode: added to the coverage map"));
+  t.push_back(real("cloud_type", &RenderSettings::cloud_type, -1, 1, "layer mode: 0 stratus, 0.5 cumulus, 1 cumulonimbus (-1 = from the map)"));
+  t.push_back(integer("coverage_tiles", &RenderSettings::coverage_tiles, 1, 1024, "layer mode: texture tiles spanned by one period of the coverage map"));
   t.push_back(integer("steps", &RenderSettings::steps, 1, 8192, "small steps across the volume's largest extent (step = extent / steps)"));
   t.push_back(boolean("occupancy", &RenderSettings::occupancy, "occupancy skipping: large steps through empty coarse cells (thesis 2.4.2)"));
   t.push_back(integer("occupancy_cell", &RenderSettings::occupancy_cell, 2, 64, "coarse occupancy cell edge in voxels"));

@@ -16,7 +16,7 @@ using vec4 = glm::dvec4;
 #include "../../shaders/cloud_params.glsl"
 }  // namespace ref
 
-constexpr int kCloudParamsVec4 = 16;
+constexpr int kCloudParamsVec4 = 20;
 static_assert(sizeof(gpu::CloudParams) == kCloudParamsVec4 * 16, "std140 CloudBlock size");
 static_assert(sizeof(ref::CloudParams) == kCloudParamsVec4 * 32, "double CloudParams size");
 

@@ -74,6 +74,19 @@ Sun default_sun(const Camera& cam);
 /// sphere. Computed once and cached.
 const std::vector<float>& mie_phase_table(int n = 1801);
 
+/// Layer-mode coverage map: n x n texels, RG interleaved (coverage, cloud type), tileable fBm.
+const std::vector<float>& coverage_map(int n = 256);
+
+/// Position given in the volume's unit box (the bench track's "volume" space) in world metres. In
+/// layer mode x and z count texture tiles and y runs from the layer bottom (0) to its top (1).
+glm::dvec3 volume_space_to_world(const PreparedVolume& vol, const RenderSettings& s, const glm::dvec3& uvw);
+/// Layer bottom and top altitudes (m above the ground) after the auto rules.
+glm::dvec2 layer_altitudes(const PreparedVolume& vol, const RenderSettings& s);
+/// World height of the ground plane after the auto rule.
+double ground_height(const PreparedVolume& vol, const RenderSettings& s);
+/// The default camera for the settings' mode (layer: below the layer, looking at the horizon).
+Camera default_camera(const PreparedVolume& vol, const RenderSettings& s, double fov_y_deg, double aspect);
+
 /// Projection used by both renderers (near 0.5 m, far 1e6 m, OpenGL clip conventions), and the
 /// camera-relative view (camera at the origin).
 glm::dmat4 view_projection(const Camera& cam, int width, int height);

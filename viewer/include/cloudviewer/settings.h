@@ -10,8 +10,17 @@ namespace cloudviewer {
 enum class PhaseMode { None = 0, HenyeyGreenstein = 1, Mie = 2 };
 enum class ToneMap { Reinhard = 0, Aces = 1, Clamp = 2 };
 enum class OutputMode { Radiance = 0, Transmittance = 1, Iterations = 2 };
+enum class PlaceMode { Box = 0, Layer = 1 };
 
 struct RenderSettings {
+  // placement
+  PlaceMode mode = PlaceMode::Box;  ///< box: the volume where its file puts it; layer: tiled shell
+  double layer_bottom = 1500;       ///< m above the ground
+  double layer_top = 0;             ///< m; 0 = bottom + the texture's height in metres
+  double earth_radius = 6360e3;     ///< m
+  double coverage = 0;              ///< added to the coverage map [-1, 1]
+  double cloud_type = -1;           ///< 0 stratus .. 0.5 cumulus .. 1 cumulonimbus; -1 = from the map
+  int coverage_tiles = 8;           ///< the coverage map spans this many texture tiles
   // marching
   int steps = 128;                 ///< small steps across the volume's largest extent
   bool occupancy = true;           ///< occupancy skipping (thesis 2.4.2)
