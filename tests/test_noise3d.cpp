@@ -383,6 +383,22 @@ TEST(Batch, SubRegionEqualsTheSameSamplesOfTheWholeTile) {
   }
 }
 
+TEST(PerlinWorley, BlendGoesFromPerlinToPerlinWorley) {
+  FractalParams pw = fp(Kind::PerlinWorley, 4, 3, 8), pl = fp(Kind::Perlin, 4, 3, 8);
+  for (int n = 0; n < 200; ++n) {
+    double x = uni(0, 4), y = uni(0, 4), z = uni(0, 4);
+    const double full = evaluate(pw, x, y, z), perlin01 = std::clamp(0.5 + 0.5 * evaluate(pl, x, y, z), 0.0, 1.0);
+    pw.blend = 0;
+    EXPECT_NEAR(evaluate(pw, x, y, z), perlin01, 1e-12);
+    pw.blend = 0.25;
+    EXPECT_NEAR(evaluate(pw, x, y, z), perlin01 + 0.25 * (full - perlin01), 1e-12);
+    EXPECT_GE(full, perlin01 - 1e-12);  // Worley only dilates
+    pw.blend = 1;
+  }
+  pw.blend = 1.5;
+  EXPECT_THROW(validate(pw), InvalidParameter);
+}
+
 TEST(Determinism, IdenticalBytesAcrossThreadCountsAndRuns) {
   for (Kind k : {Kind::Perlin, Kind::Worley, Kind::PerlinWorley}) {
     FractalParams p = fp(k, 4, 5, 1234567890123ull);

@@ -104,6 +104,9 @@ std::vector<Spec> build_table() {
     add(base + "/worley_octaves", "integer", "0", 0, noise3d::kMaxOctaves,
         "Perlin-Worley: octaves of the Worley part (0 = same as octaves).",
         [c](Preset& p, const json& j, const Index&) { p.channels[c].worley_octaves = j.get<int>(); });
+    add(base + "/blend", "number", "1.0", 0, 1,
+        "Perlin-Worley: how much Worley dilates the Perlin fBm (1 = full Perlin-Worley, 0 = Perlin alone).",
+        [c](Preset& p, const json& j, const Index&) { p.channels[c].blend = j.get<double>(); });
     add(base + "/invert", "bool", "false", 0, 0, "Store 1 - noise.",
         [c](Preset& p, const json& j, const Index&) { p.channels[c].invert = j.get<bool>(); });
     add(base + "/seed_offset", "integer", std::to_string(c), 0, 9.007199254740992e15,
@@ -421,6 +424,7 @@ noise3d::FractalParams channel_params(const Preset& p, int c) {
   f.gain = ch.gain;
   f.lacunarity = ch.lacunarity;
   f.worley_octaves = ch.worley_octaves;
+  f.blend = ch.blend;
   return f;
 }
 

@@ -43,6 +43,8 @@ void validate(const FractalParams& p) {
                                                  std::to_string(p.worley_octaves));
   if (!std::isfinite(p.gain) || p.gain <= 0 || p.gain > 1)
     throw InvalidParameter("gain", "must be a finite number in (0, 1], got " + std::to_string(p.gain));
+  if (!(p.blend >= 0 && p.blend <= 1))
+    throw InvalidParameter("blend", "must be a number in [0, 1], got " + std::to_string(p.blend));
   if (!std::isfinite(p.lacunarity) || p.lacunarity != std::floor(p.lacunarity))
     throw InvalidParameter("lacunarity",
                            "must be an integer when tiling (a non-integer lacunarity gives octave "
@@ -91,10 +93,11 @@ std::vector<Octave> octaves(const FractalParams& p, Kind which) {
   return out;
 }
 
-double combine_perlin_worley(double perlin_fbm, double worley_fbm) {
+double combine_perlin_worley(double perlin_fbm, double worley_fbm, double blend) {
   double pp = 0.5 + 0.5 * perlin_fbm;
   pp = pp < 0 ? 0 : (pp > 1 ? 1 : pp);
-  return worley_fbm + pp * (1.0 - worley_fbm);
+  const double pw = worley_fbm + pp * (1.0 - worley_fbm);
+  return blend == 1.0 ? pw : pp + blend * (pw - pp);
 }
 
 }  // namespace detail
@@ -121,7 +124,7 @@ double evaluate(const FractalParams& p, double x, double y, double z) {
     case Kind::Worley: return fbm_point(p, Kind::Worley, x, y, z);
     case Kind::PerlinWorley:
       return detail::combine_perlin_worley(fbm_point(p, Kind::Perlin, x, y, z),
-                                           fbm_point(p, Kind::Worley, x, y, z));
+                                           fbm_point(p, Kind::Worley, x, y, z), p.blend);
   }
   return 0;
 }

@@ -18,6 +18,6 @@ struct Octave {
 
 /// The octaves of `which` (Perlin or Worley) for params p (p already validated).
 std::vector<Octave> octaves(const FractalParams& p, Kind which);
-double combine_perlin_worley(double perlin_fbm, double worley_fbm);
+double combine_perlin_worley(double perlin_fbm, double worley_fbm, double blend);
 
 }  // namespace noise3d::detail

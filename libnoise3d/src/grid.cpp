@@ -370,7 +370,7 @@ MinMax run(const FractalParams& p, const GridRegion& r, T* out, const BatchOptio
       for (size_t o = 0; o < po.size(); ++o) perlin_slice(po[o], k, dst, ps[o]);
       for (size_t o = 0; o < wo.size(); ++o) worley_slice(wo[o], k, wdst, ws[o]);
       if (want_p && want_w)
-        for (size_t q = 0; q < slice; ++q) dst[q] = T(combine_perlin_worley(dst[q], wacc[q]));
+        for (size_t q = 0; q < slice; ++q) dst[q] = T(combine_perlin_worley(dst[q], wacc[q], p.blend));
     }
   };
   // Grain of a few slices keeps the plane caches warm; values never depend on the split.

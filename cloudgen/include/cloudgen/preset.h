@@ -21,6 +21,7 @@ struct Channel {
   double gain = 0.5;
   int lacunarity = 2;
   int worley_octaves = 0;  ///< Perlin-Worley only; 0 = same as octaves
+  double blend = 1.0;      ///< Perlin-Worley only: 1 = Perlin-Worley, 0 = Perlin alone
   bool invert = false;     ///< store 1 - v
   uint64_t seed_offset = 0;
 };

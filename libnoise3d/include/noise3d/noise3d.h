@@ -114,6 +114,9 @@ struct FractalParams {
   double lacunarity = 2.0;
   /// Perlin-Worley only: number of Worley octaves (0 = same as `octaves`).
   int worley_octaves = 0;
+  /// Perlin-Worley only, in [0, 1]: 1 = the full Perlin-Worley remap, 0 = the Perlin fBm alone
+  /// (mapped to [0, 1]); in between, value = p + blend * (pw - p).
+  double blend = 1.0;
 };
 
 /// Throws InvalidParameter naming the first bad field (and the allowed range).
@@ -123,7 +126,8 @@ void validate(const FractalParams& p);
 ///  - Perlin fBm:  sum_o gain^o * perlin_o / (kPerlinBound * sum_o gain^o), in [-1, 1]
 ///  - Worley fBm:  sum_o gain^o * worley_inverted_o / sum_o gain^o,          in [0, 1]
 ///  - Perlin-Worley (Hillaire's TileableVolumeNoise remap of Schneider's Nubis base shape):
-///      p = clamp(0.5 + 0.5 * perlin_fbm, 0, 1); w = worley_fbm; value = w + p * (1 - w), in [0, 1]
+///      p = clamp(0.5 + 0.5 * perlin_fbm, 0, 1); w = worley_fbm; pw = w + p * (1 - w), in [0, 1];
+///      value = pw when blend = 1 (default), else p + blend * (pw - p)
 ///    Perlin dilated by Worley: billowy Perlin blobs with Worley's round, connected cells.
 /// Each octave uses its own seed derived from `seed` and the octave index.
 double evaluate(const FractalParams& p, double x, double y, double z);
