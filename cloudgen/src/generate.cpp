@@ -102,7 +102,7 @@ Volume generate(const Preset& p, const GenerateOptions& opt, GenerateStats* stat
   // Per-voxel factors that need no noise: profile by row, coverage by column, towers per voxel.
   std::vector<float> profile(N[1]);
   for (uint32_t y = 0; y < N[1]; ++y) profile[y] = float(height_profile(p, (y + 0.5) / N[1]));
-  std::vector<float> coverage;  // [z][x] over the region, empty = 1
+  std::vector<float> coverage;  // [z][x] over the whole x-z plane (2D, cheap), empty = 1
   if (p.coverage_enabled) {
     noise3d::FractalParams cp;
     cp.kind = p.coverage_kind;
@@ -112,8 +112,6 @@ Volume generate(const Preset& p, const GenerateOptions& opt, GenerateStats* stat
     cp.seed = p.seed ^ 0xC0FEC0FEull;
     noise3d::GridRegion g;
     g.size = {N[0], 1, N[2]};
-    g.origin = {region.lo[0], 0, region.lo[2]};
-    g.extent = {v.dims[0], 1, v.dims[2]};
     coverage.resize(g.count());
     noise3d::evaluate_grid(cp, g, coverage.data(), {opt.threads});
     for (float& c : coverage) c = float(smoothstep(p.coverage_low, p.coverage_high, to_unit(cp.kind, c, false)));
@@ -135,7 +133,7 @@ Volume generate(const Preset& p, const GenerateOptions& opt, GenerateStats* stat
       }
       prof += float(add);
     }
-    if (!coverage.empty()) prof *= coverage[size_t(z - region.lo[2]) * v.dims[0] + (x - region.lo[0])];
+    if (!coverage.empty()) prof *= coverage[size_t(z) * N[0] + x];
     return prof;
   };
   auto finish = [&](float r, float s) -> float {
@@ -143,16 +141,29 @@ Volume generate(const Preset& p, const GenerateOptions& opt, GenerateStats* stat
     return std::clamp((d - t) * inv * scale, 0.0f, 1.0f);
   };
 
-  // Bricks aligned to the global grid, clipped to the region.
+  // Bricks aligned to the global grid. Whether a brick holds cloud decides the detail channels of
+  // its neighbours, so the density pass covers the region's bricks plus a one-brick halo and
+  // always evaluates whole bricks: a region then gets exactly the full run's values everywhere.
   std::array<uint32_t, 3> b0, nb;
-  for (int a = 0; a < 3; ++a) b0[a] = region.lo[a] / kBrick, nb[a] = (region.hi[a] + kBrick - 1) / kBrick - b0[a];
+  for (int a = 0; a < 3; ++a) {
+    const uint32_t total = (N[a] + kBrick - 1) / kBrick;
+    b0[a] = region.lo[a] / kBrick > 0 ? region.lo[a] / kBrick - 1 : 0;
+    nb[a] = std::min(total, (region.hi[a] + kBrick - 1) / kBrick + 1) - b0[a];
+  }
   const size_t nbricks = size_t(nb[0]) * nb[1] * nb[2];
-  auto brick_box = [&](size_t b) {
+  auto brick_box = [&](size_t b) {  // whole brick, clipped to the volume
     Box bx;
     size_t q[3] = {b % nb[0], b / nb[0] % nb[1], b / (size_t(nb[0]) * nb[1])};
     for (int a = 0; a < 3; ++a) {
-      bx.lo[a] = std::max(region.lo[a], uint32_t((b0[a] + q[a]) * kBrick));
-      bx.hi[a] = std::min(region.hi[a], uint32_t((b0[a] + q[a] + 1) * kBrick));
+      bx.lo[a] = uint32_t((b0[a] + q[a]) * kBrick);
+      bx.hi[a] = std::min(N[a], uint32_t((b0[a] + q[a] + 1) * kBrick));
+    }
+    return bx;
+  };
+  auto clip = [&](Box bx) {  // part of a brick inside the region (possibly empty)
+    for (int a = 0; a < 3; ++a) {
+      bx.lo[a] = std::max(bx.lo[a], region.lo[a]);
+      bx.hi[a] = std::max(bx.lo[a], std::min(bx.hi[a], region.hi[a]));
     }
     return bx;
   };
@@ -194,15 +205,15 @@ Volume generate(const Preset& p, const GenerateOptions& opt, GenerateStats* stat
       noise3d::evaluate_grid(rp, grid_of(bx), noise.data(), {1});
       q = 0;
       bool any = false;
+      const Box in = clip(bx);
       for (uint32_t z = bx.lo[2]; z < bx.hi[2]; ++z)
-        for (uint32_t y = bx.lo[1]; y < bx.hi[1]; ++y) {
-          float* row = &v.density[v.index(bx.lo[0] - region.lo[0], y - region.lo[1], z - region.lo[2])];
+        for (uint32_t y = bx.lo[1]; y < bx.hi[1]; ++y)
           for (uint32_t x = bx.lo[0]; x < bx.hi[0]; ++x, ++q) {
-            float d = finish(to_unit(rc.kind, noise[q], rc.invert), shp[q]);
-            row[x - bx.lo[0]] = d;
+            const float d = finish(to_unit(rc.kind, noise[q], rc.invert), shp[q]);
             any |= d > 0;
+            if (x >= in.lo[0] && x < in.hi[0] && y >= in.lo[1] && y < in.hi[1] && z >= in.lo[2] && z < in.hi[2])
+              v.density[v.index(x - region.lo[0], y - region.lo[1], z - region.lo[2])] = d;
           }
-        }
       nonempty[b] = any;
       tick();
     }
@@ -213,7 +224,11 @@ Volume generate(const Preset& p, const GenerateOptions& opt, GenerateStats* stat
   auto detail_pass = [&](const tbb::blocked_range<size_t>& range) {
     std::vector<float> noise;
     for (size_t b = range.begin(); b != range.end(); ++b) {
-      const Box bx = brick_box(b);
+      const Box bx = clip(brick_box(b));
+      if (bx.count() == 0) {  // halo brick: only its emptiness was needed
+        tick();
+        continue;
+      }
       const int64_t q[3] = {int64_t(b % nb[0]), int64_t(b / nb[0] % nb[1]), int64_t(b / (size_t(nb[0]) * nb[1]))};
       bool near = false;
       for (int dz = -1; dz <= 1 && !near; ++dz)
