@@ -142,11 +142,11 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
   if (!o.csv.empty()) {
     csv.open(o.csv);
     if (!csv) throw InputError("--csv " + o.csv + ": cannot write");
-    csv << "config,frame,view,gpu_total_ms,gpu_ground_ms,gpu_cloud_ms,gpu_post_ms,wall_ms,rmse_vs_baseline,"
-           "max_diff_vs_baseline,rmse_vs_reference\n";
+    csv << "config,frame,view,gpu_total_ms,gpu_ground_ms,gpu_cloud_ms,gpu_post_ms,wall_ms,loop_trips_per_pixel,"
+           "rmse_vs_baseline,max_diff_vs_baseline,rmse_vs_reference\n";
   }
   struct Summary {
-    double total = 0, cloud = 0, wall = 0, rmse_base = 0, max_diff = 0, rmse_ref = 0;
+    double total = 0, cloud = 0, wall = 0, rmse_base = 0, max_diff = 0, rmse_ref = 0, trips = 0;
     std::map<std::string, std::pair<double, int>> by_view;
   };
   std::vector<Summary> sums(configs.size());
@@ -155,8 +155,8 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
     if (std::find(views.begin(), views.end(), f.view) == views.end()) views.push_back(f.view);
 
   // Timing on a shared machine: every (configuration, frame) is rendered once per round, the rounds
-  // interleave all configurations, and the fastest round counts (best of N), so a burst of other
-  // work slows one sample of each, not one whole configuration.
+  // interleave all configurations in a rotating order, and the fastest round counts (best of N),
+  // so a burst of other work slows one sample of each, not one whole configuration.
   const size_t nc = configs.size(), nfr = frames.size();
   // Configurations may change the occupancy grid (cell, padding): one volume per grid.
   std::map<std::pair<int, int>, PreparedVolume> grids;
@@ -189,12 +189,16 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
   std::vector<double> best_wall(nc * nfr, 1e300);
   for (GpuTimings& t : best) t.total_ms = 1e300;
   std::vector<Image> images(nc * nfr);
+  std::vector<double> trips(nc * nfr, 0.0);
   for (size_t c = 0; c < nc; ++c) {  // warm-up: compile, first touch
     use_grid(settings[c]);
     renderer.render(setups[c * nfr]);
   }
   for (int r = 0; r < o.bench_repeat; ++r) {
-    for (size_t c = 0; c < nc; ++c) {
+    for (size_t cc = 0; cc < nc; ++cc) {
+      // Rotate the order every round: the first configuration of a round measured ~10% slower
+      // (same settings at two positions), so no configuration may always hold that place.
+      size_t c = (cc + size_t(r)) % nc;
       use_grid(settings[c]);
       for (size_t i = 0; i < nfr; ++i) {
         GpuTimings t;
@@ -203,7 +207,17 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
         double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - w0).count();
         if (t.total_ms < best[c * nfr + i].total_ms) best[c * nfr + i] = t;
         best_wall[c * nfr + i] = std::min(best_wall[c * nfr + i], wall);
-        if (r == 0) images[c * nfr + i] = renderer.read_back().display;
+        if (r == 0) {
+          images[c * nfr + i] = renderer.read_back().display;
+          // Work count, independent of machine load: primary-loop trips per pixel (output=iterations).
+          RenderSettings si = settings[c];
+          si.output = OutputMode::Iterations;
+          renderer.render(make_frame(grid_for(si), si, setups[c * nfr + i].camera, setups[c * nfr + i].sun, o.width, o.height));
+          const Image lin = renderer.read_back().linear;
+          double sum = 0;
+          for (size_t k = 0; k < lin.rgba.size(); k += 4) sum += lin.rgba[k];
+          trips[c * nfr + i] = sum / double(o.width) / double(o.height);
+        }
       }
     }
     err << "  round " << r + 1 << "/" << o.bench_repeat << " done\n";
@@ -218,13 +232,14 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
       double rr = o.bench_reference > 0 ? rmse(img, reference[i]) : std::nan("");
       Summary& s = sums[c];
       s.total += mean.total_ms, s.cloud += mean.cloud_ms, s.wall += wall, s.rmse_base += rb;
+      s.trips += trips[c * nfr + i];
       s.max_diff = std::max(s.max_diff, md), s.rmse_ref += o.bench_reference > 0 ? rr : 0;
       s.by_view[frames[i].view].first += mean.total_ms;
       s.by_view[frames[i].view].second += 1;
       if (csv) {
         csv << '"' << configs[c].name << "\",\"" << frames[i].name << "\"," << frames[i].view << "," << mean.total_ms
-            << "," << mean.ground_ms << "," << mean.cloud_ms << "," << mean.post_ms << "," << wall << "," << rb << ","
-            << md << ",";
+            << "," << mean.ground_ms << "," << mean.cloud_ms << "," << mean.post_ms << "," << wall << ","
+            << trips[c * nfr + i] << "," << rb << "," << md << ",";
         if (o.bench_reference > 0) csv << rr;
         csv << "\n";
       }
@@ -235,7 +250,8 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
   out << "\n" << std::left << std::setw(18) << "configuration" << std::right << std::setw(11) << "frame ms"
       << std::setw(11) << "clouds ms";
   for (const std::string& v : views) out << std::setw(10) << (v.substr(0, 8) + " ms");
-  out << std::setw(9) << "speed-up" << std::setw(12) << "max|diff|" << std::setw(12) << "RMSE base";
+  out << std::setw(9) << "speed-up" << std::setw(10) << "trips/px" << std::setw(12) << "max|diff|" << std::setw(12)
+      << "RMSE base";
   if (o.bench_reference > 0) out << std::setw(12) << "RMSE ref";
   out << "\n";
   out << std::fixed;
@@ -247,13 +263,15 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
       auto it = s.by_view.find(v);
       out << std::setw(10) << (it == s.by_view.end() ? 0.0 : it->second.first / it->second.second);
     }
-    out << std::setw(8) << (sums[0].total / s.total) << "x" << std::setprecision(5) << std::setw(12) << s.max_diff
+    out << std::setw(8) << (sums[0].total / s.total) << "x" << std::setprecision(1) << std::setw(10) << s.trips / nf
+        << std::setprecision(5) << std::setw(12) << s.max_diff
         << std::setw(12) << s.rmse_base / nf;
     if (o.bench_reference > 0) out << std::setw(12) << s.rmse_ref / nf;
     out << "\n";
   }
   out << std::defaultfloat;
   out << "(frame/clouds ms: GPU timer queries, best of the rounds per frame, mean over the track; speed-up: baseline frame time / this one;\n"
+         " trips/px: primary-march loop trips per pixel (large or small steps), a load-independent work count;\n"
          " max|diff| and RMSE base: display image against the baseline configuration, 0..1 scale";
   if (o.bench_reference > 0) out << ";\n RMSE ref: against the CPU reference at " << o.bench_reference << " steps";
   out << ")\n";

@@ -109,7 +109,7 @@ std::vector<ParamDef> build() {
   t.push_back(real("sun_intensity", &RenderSettings::sun_intensity, 0, 1e6, "sun radiance scale"));
   t.push_back(real("ambient", &RenderSettings::ambient, 0, 1e6, "ambient sky radiance scale"));
   t.push_back(boolean("ground", &RenderSettings::ground, "draw the ground pass"));
-  t.push_back({"ground_height", "float", "number or auto", "ground plane height, m (auto = min(0, volume bottom))",
+  t.push_back({"ground_height", "float", "number or auto", "ground plane height, m (auto = min(0, volume bottom); 0 in layer mode)",
                [](RenderSettings& s, const std::string& v) {
                  if (v == "auto") {
                    s.ground_height_auto = true;
