@@ -14,7 +14,7 @@ struct CloudParams {
   vec4 medium;         // x: sigma_t per metre at density 1; y: detail erosion [0,1]; z: density multiplier; w: powder c
   vec4 march;          // x: small step (m); y: small steps per large step (integer); z: max distance (m); w: max iterations
   vec4 march2;         // x: adaptive on; y: adaptive start distance (m); z: adaptive growth (1/m); w: occupancy skipping on
-  vec4 light;          // x: light march on; y: light samples; z: first light step (m); w: light step growth factor
+  vec4 light;          // x: 0 off, 1 light march, 2 light march skipping empty cells; y: samples; z: first step (m); w: step growth
   vec4 phase;          // x: 0 isotropic ("none"), 1 Henyey-Greenstein, 2 Mie table; y: HG g; z: Mie table size; w: powder strength
   vec4 control;        // x: jitter on; y: frame index; z: exact (texelFetch) trilinear filtering; w: output 0 radiance, 1 transmittance
   vec4 ground;         // x: ground height relative to camera (m); y: ground albedo; z: ground on; w: ground half-extent (m)

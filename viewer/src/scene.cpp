@@ -437,7 +437,8 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   double a_growth = s.adaptive_growth > 0 ? s.adaptive_growth : 4.0 / max_extent;
   p.march2 = glm::dvec4(s.adaptive ? 1 : 0, a_start, a_growth, s.occupancy ? 1 : 0);
   double light_step = s.light_step > 0 ? s.light_step : 2.5 * min_voxel;
-  p.light = glm::dvec4(s.light_march ? 1 : 0, s.light_samples, light_step, s.light_growth);
+  double light_mode = !s.light_march ? 0.0 : (s.occupancy && s.occupancy_light ? 2.0 : 1.0);
+  p.light = glm::dvec4(light_mode, s.light_samples, light_step, s.light_growth);
   p.phase = glm::dvec4(double(int(s.phase)), s.g, double(mie_phase_table().size()), s.powder);
   p.control = glm::dvec4(s.jitter ? 1 : 0, s.frame, s.exact_filter ? 1 : 0, double(int(s.output)));
   double gh = ground_height(vol, s);
