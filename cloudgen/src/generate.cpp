@@ -28,6 +28,15 @@ float to_unit(noise3d::Kind k, float v, bool invert) {
   u = std::clamp(u, 0.0f, 1.0f);
   return invert ? 1.0f - u : u;
 }
+/// A channel's value: to [0, 1], contrast remap (identity for [0, 1] leaves bytes unchanged), invert.
+float channel_value(const Channel& ch, float v) {
+  float u = to_unit(ch.kind, v, false);
+  if (ch.remap[0] != 0.0 || ch.remap[1] != 1.0) {
+    const float lo = float(ch.remap[0]), hi = float(ch.remap[1]);
+    u = std::clamp((u - lo) / (hi - lo), 0.0f, 1.0f);
+  }
+  return ch.invert ? 1.0f - u : u;
+}
 
 // Portable uniform doubles for tower placement (std distributions differ between libraries).
 struct SplitMix {
@@ -209,7 +218,7 @@ Volume generate(const Preset& p, const GenerateOptions& opt, GenerateStats* stat
       for (uint32_t z = bx.lo[2]; z < bx.hi[2]; ++z)
         for (uint32_t y = bx.lo[1]; y < bx.hi[1]; ++y)
           for (uint32_t x = bx.lo[0]; x < bx.hi[0]; ++x, ++q) {
-            const float d = finish(to_unit(rc.kind, noise[q], rc.invert), shp[q]);
+            const float d = finish(channel_value(rc, noise[q]), shp[q]);
             any |= d > 0;
             if (x >= in.lo[0] && x < in.hi[0] && y >= in.lo[1] && y < in.hi[1] && z >= in.lo[2] && z < in.hi[2])
               v.density[v.index(x - region.lo[0], y - region.lo[1], z - region.lo[2])] = d;
@@ -249,7 +258,7 @@ Volume generate(const Preset& p, const GenerateOptions& opt, GenerateStats* stat
             for (uint32_t y = bx.lo[1]; y < bx.hi[1]; ++y) {
               float* row = &v.detail[c - 1][v.index(bx.lo[0] - region.lo[0], y - region.lo[1], z - region.lo[2])];
               for (uint32_t x = bx.lo[0]; x < bx.hi[0]; ++x, ++k)
-                row[x - bx.lo[0]] = to_unit(p.channels[c].kind, noise[k], p.channels[c].invert);
+                row[x - bx.lo[0]] = channel_value(p.channels[c], noise[k]);
             }
         }
       }

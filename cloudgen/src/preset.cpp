@@ -107,6 +107,10 @@ std::vector<Spec> build_table() {
     add(base + "/blend", "number", "1.0", 0, 1,
         "Perlin-Worley: how much Worley dilates the Perlin fBm (1 = full Perlin-Worley, 0 = Perlin alone).",
         [c](Preset& p, const json& j, const Index&) { p.channels[c].blend = j.get<double>(); });
+    add(base + "/remap", "vec2", "[0, 1]", -1, 2,
+        "Contrast: [lo, hi] of the noise mapped to [0, 1] (clamped), before invert. fBm values crowd "
+        "the middle of their range, e.g. Perlin-Worley has 80% of its values in [0.80, 0.90].",
+        [c](Preset& p, const json& j, const Index&) { p.channels[c].remap = {j[0].get<double>(), j[1].get<double>()}; });
     add(base + "/invert", "bool", "false", 0, 0, "Store 1 - noise.",
         [c](Preset& p, const json& j, const Index&) { p.channels[c].invert = j.get<bool>(); });
     add(base + "/seed_offset", "integer", std::to_string(c), 0, 9.007199254740992e15,
@@ -288,12 +292,14 @@ class Reader {
                  std::find(s.choices.begin(), s.choices.end(), v.get<std::string>()) == s.choices.end()) {
         ok = false, problem(ptr, dump(v) + " is not allowed; expected one of: " + s.info.range);
       }
-    } else if (t == "vec3" || t == "ivec3" || (t == "period" && v.is_array())) {
-      if (!v.is_array() || v.size() != 3) {
-        ok = false, problem(ptr, dump(v) + " has the wrong type; expected an array of 3 " +
-                                     (t == "vec3" ? "numbers" : "integers") + ", each " + s.info.range);
+    } else if (t == "vec2" || t == "vec3" || t == "ivec3" || (t == "period" && v.is_array())) {
+      const size_t n = t == "vec2" ? 2 : 3;
+      const bool ints = t == "ivec3" || t == "period";
+      if (!v.is_array() || v.size() != n) {
+        ok = false, problem(ptr, dump(v) + " has the wrong type; expected an array of " + std::to_string(n) + " " +
+                                     (ints ? "integers" : "numbers") + ", each " + s.info.range);
       } else {
-        for (int a = 0; a < 3 && ok; ++a) ok = number_ok(s, v[a], t != "vec3", ptr + "/" + std::to_string(a));
+        for (size_t a = 0; a < n && ok; ++a) ok = number_ok(s, v[a], ints, ptr + "/" + std::to_string(a));
       }
     } else if (t == "period") {
       ok = number_ok(s, v, true, ptr);
@@ -359,6 +365,10 @@ void cross_checks(const Preset& p, Reader& r) {
   if (p.coverage_low >= p.coverage_high)
     r.problem("/coverage/high", fmt(p.coverage_high) + " must be greater than /coverage/low (" + fmt(p.coverage_low) + ")");
   if (!p.channels[0].enabled) r.problem("/channels/r/enabled", "the base shape channel R must be enabled");
+  for (int c = 0; c < 4; ++c)
+    if (!(p.channels[c].remap[0] < p.channels[c].remap[1]))
+      r.problem(std::string("/channels/") + kChannelNames[c] + "/remap",
+                "lo must be below hi, got [" + fmt(p.channels[c].remap[0]) + ", " + fmt(p.channels[c].remap[1]) + "]");
   for (int c = 0; c < 4; ++c) {
     if (!p.channels[c].enabled) continue;
     try {
