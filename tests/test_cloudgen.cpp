@@ -117,6 +117,8 @@ TEST(Presets, BadPresetsGiveTheirSpecificError) {
       {R"({"channels": {"r": {"period": 65536, "octaves": 16}}})", "/channels/r: octaves: period * lacunarity^(octaves-1)"},
       {"{\n  \"seed\": 1,\n  \"threshold\": 0.3,,\n}", "JSON syntax error at line 3, column 20"},
       {R"([1, 2])", "the preset must be a JSON object"},
+      {R"({"channels": {"r": {"remap": [0.9, 0.8]}}})", "/channels/r/remap: lo must be below hi"},
+      {R"({"channels": {"r": {"remap": [0.9]}}})", "/channels/r/remap: [0.9] has the wrong type; expected an array of 2 numbers"},
       {"999999999999999999999999991e5000000.9[ ", "invalid JSON"},  // found by fuzz_preset
   };
   for (const Case& c : cases) {
