@@ -88,6 +88,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   app.add_option("--out", o.out, "headless output image (.png tone-mapped sRGB, .exr linear HDR)");
   app.add_option("--backend", o.backend, "gl (OpenGL) or cpu (double-precision reference)")->check(CLI::IsMember({"gl", "cpu"}));
   app.add_option("--shader-dir", o.shader_dir, "read shaders from this directory instead of the embedded copies (hot reload)");
+  app.add_option("--mie-table", o.mie_table, "Mie phase table to use for render.phase=mie (text: one value per line over 0..180 degrees, or 'theta value' columns)");
   app.add_option("--bench", o.bench, "benchmark camera track (JSON, see viewer/tracks/default.json)");
   app.add_option("--csv", o.csv, "benchmark per-frame results as CSV");
   app.add_option("--bench-reference", o.bench_reference, "also render each track frame with the CPU reference at this step count and report RMSE");
@@ -107,6 +108,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   }
   if (o.input.empty()) throw InputError("no INPUT given (try --help)");
   for (const std::string& s : o.sets) apply_setting(o.settings, s);
+  if (!o.mie_table.empty()) load_mie_table(o.mie_table);
   if (!size_text.empty()) parse_size(size_text, o.width, o.height);
   else if (o.headless) o.width = 320, o.height = 180;
   else o.width = 1280, o.height = 720;

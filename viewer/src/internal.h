@@ -22,6 +22,7 @@ struct Options {
   std::string out;
   std::string backend = "gl";
   std::string shader_dir;
+  std::string mie_table;
   std::string bench;
   std::string csv;
   int bench_reference = 0;  ///< CPU reference step count for RMSE columns (0 = none)

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <complex>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <mutex>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -263,11 +265,74 @@ Sun default_sun(const Camera& cam) {
   return sun;
 }
 
+namespace {
+std::mutex g_mie_mutex;
+std::vector<float> g_mie_override;
+}  // namespace
+
+void load_mie_table(const std::string& path) {
+  std::lock_guard<std::mutex> lock(g_mie_mutex);
+  if (path.empty()) {
+    g_mie_override.clear();
+    return;
+  }
+  std::ifstream in(path);
+  if (!in) throw InputError("--mie-table " + path + ": no such file");
+  std::vector<double> theta, value;
+  std::string line;
+  int columns = 0, line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    auto hash = line.find('#');
+    if (hash != std::string::npos) line.resize(hash);
+    std::istringstream ls(line);
+    std::vector<double> nums;
+    double d;
+    while (ls >> d) nums.push_back(d);
+    if (!ls.eof()) throw InputError("--mie-table " + path + ":" + std::to_string(line_no) + ": not a number");
+    if (nums.empty()) continue;
+    if (columns == 0) columns = int(nums.size());
+    if (int(nums.size()) != columns || columns > 2)
+      throw InputError("--mie-table " + path + ":" + std::to_string(line_no) + ": expected " +
+                       (columns == 2 ? "2 columns (theta_degrees value)" : "1 value per line"));
+    for (double x : nums)
+      if (!std::isfinite(x)) throw InputError("--mie-table " + path + ":" + std::to_string(line_no) + ": not finite");
+    if (columns == 2) theta.push_back(nums[0]), value.push_back(nums[1]);
+    else value.push_back(nums[0]);
+    if (value.back() < 0) throw InputError("--mie-table " + path + ":" + std::to_string(line_no) + ": negative phase value");
+  }
+  if (value.size() < 2) throw InputError("--mie-table " + path + ": needs at least 2 values");
+  if (columns == 1)
+    for (size_t i = 0; i < value.size(); ++i) theta.push_back(180.0 * double(i) / double(value.size() - 1));
+  for (size_t i = 1; i < theta.size(); ++i)
+    if (!(theta[i] > theta[i - 1])) throw InputError("--mie-table " + path + ": theta must increase");
+  if (theta.front() > 1e-6 || theta.back() < 180 - 1e-6)
+    throw InputError("--mie-table " + path + ": theta must cover 0 to 180 degrees");
+  const int n = 1801;
+  std::vector<double> t(n);
+  size_t j = 0;
+  for (int i = 0; i < n; ++i) {
+    double th = 180.0 * i / (n - 1);
+    while (j + 2 < theta.size() && theta[j + 1] < th) ++j;
+    double f = std::clamp((th - theta[j]) / (theta[j + 1] - theta[j]), 0.0, 1.0);
+    t[size_t(i)] = value[j] + f * (value[j + 1] - value[j]);
+  }
+  double integral = 0;
+  for (int i = 0; i + 1 < n; ++i) {
+    double t0 = M_PI * i / (n - 1), t1 = M_PI * (i + 1) / (n - 1);
+    integral += 0.5 * (t[size_t(i)] * std::sin(t0) + t[size_t(i + 1)] * std::sin(t1)) * (t1 - t0);
+  }
+  integral *= 2 * M_PI;
+  if (!(integral > 0)) throw InputError("--mie-table " + path + ": the phase function integrates to 0");
+  g_mie_override.resize(n);
+  for (int i = 0; i < n; ++i) g_mie_override[size_t(i)] = float(t[size_t(i)] / integral);
+}
+
 const std::vector<float>& mie_phase_table(int n) {
-  static std::mutex mutex;
   static std::vector<float> table;
   static int cached_n = 0;
-  std::lock_guard<std::mutex> lock(mutex);
+  std::lock_guard<std::mutex> lock(g_mie_mutex);
+  if (!g_mie_override.empty()) return g_mie_override;
   if (cached_n == n) return table;
   // Lorenz-Mie series (Bohren & Huffman's BHMIE) for water droplets, averaged over Deirmendjian's
   // C.1 cloud size distribution n(r) ~ r^6 exp(-1.5 r), r in micrometres (mode 4 um), weighted by

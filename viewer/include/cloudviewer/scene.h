@@ -73,6 +73,12 @@ Sun default_sun(const Camera& cam);
 /// modified-gamma size distribution), `n` samples over theta = 0..pi, normalised to 1 over the
 /// sphere. Computed once and cached.
 const std::vector<float>& mie_phase_table(int n = 1801);
+/// Replaces the computed Mie table with one read from a text file (`--mie-table`), e.g. the
+/// physically computed one of the sky-and-phase work: '#' comments, then either one value per line
+/// (uniform over theta = 0..180 degrees) or two columns "theta_degrees value" (any spacing,
+/// increasing, covering 0 and 180). Resampled to 1801 entries and normalised to 1 over the sphere.
+/// An empty path restores the computed table. Throws InputError naming the file and line.
+void load_mie_table(const std::string& path);
 
 /// Layer-mode coverage map: n x n texels, RG interleaved (coverage, cloud type), tileable fBm.
 const std::vector<float>& coverage_map(int n = 256);
