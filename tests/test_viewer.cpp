@@ -347,10 +347,15 @@ TEST(ViewerRender, OccupancyComparisonCatchesMissedIsolatedVoxels) {
                                  (gl ? render_gl(vol, foff) : render_cpu(vol, foff)).linear);
       std::cout << (gl ? "GL" : "CPU") << " padding " << padding << ": occupied " << vol.occupied_fraction
                 << ", max |diff| " << diff << "\n";
-      if (padding == 0) EXPECT_GT(diff, 0.05);  // proves the comparison can fail
-      else EXPECT_LE(diff, 1e-5);
+      if (padding == 0) {
+        EXPECT_GT(diff, 0.05);  // proves the comparison can fail
+      } else {
+        EXPECT_LE(diff, 1e-5);
+      }
     }
-    if (padding == 1) EXPECT_LT(vol.occupied_fraction, 0.5);  // and there was space to skip
+    if (padding == 1) {
+      EXPECT_LT(vol.occupied_fraction, 0.5);  // and there was space to skip
+    }
   }
 }
 
