@@ -17,7 +17,9 @@ void main() {
   float t_scene = texelFetch(s_scene_distance, px, 0).r;
   float jitter = u_cloud.control.x > 0.5 ? jitter_offset(px, int(u_cloud.control.y)) : 0.5;
   int iterations;
-  vec4 m = march_clouds(rd, t_scene, jitter, iterations);
+  float t_mean;
+  vec4 m = march_clouds(rd, t_scene, jitter, iterations, t_mean);
+  m = aerial_perspective(m, t_mean, rd);
   int mode = int(u_cloud.control.w);
   if (mode == 1) { o_color = vec4(m.w, m.w, m.w, 1.0); return; }
   if (mode == 2) { o_color = vec4(float(iterations), m.w, 0.0, 1.0); return; }

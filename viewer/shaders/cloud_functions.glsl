@@ -309,7 +309,8 @@ vec3 inscattered_radiance(vec3 p, Number phase) {
 // ---------------------------------------------------------------- primary march
 
 // Marches the camera ray along unit `rd` (camera at the origin) up to `t_scene` metres (scene depth).
-// Returns (in-scattered radiance, transmittance). `iterations` counts loop trips (large or small).
+// Returns (in-scattered radiance, transmittance). `iterations` counts loop trips (large or small);
+// `t_mean` is the distance of the cloud weighted by opacity (for aerial perspective), 0 if none.
 //
 // Segments lie on the lattice t0 + n*dt (fixed step); the sample of each segment is at its start plus
 // `jitter` times its length, so the jitter moves samples inside their segment and never changes the
@@ -317,8 +318,10 @@ vec3 inscattered_radiance(vec3 p, Number phase) {
 // Occupancy skipping moves by whole multiples of the small step (the large step is k small steps,
 // just under one coarse cell), so the samples it keeps are the very samples of the plain march and
 // the image does not change; it only skips samples whose density is zero.
-vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations) {
+vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, OUT(Number) t_mean) {
   iterations = 0;
+  t_mean = 0.0;
+  Number t_weighted = 0.0;
   vec3 bmin = vec3(u_cloud.volume_min);
   vec3 bmax = bmin + vec3(u_cloud.volume_size);
   vec2 tb = layer_mode() ? shell_interval(vec3(0.0), rd) : ray_box(rd, bmin, bmax);
@@ -366,7 +369,9 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations) {
       Number sigma_t = density * sigma_scale;
       vec3 source = inscattered_radiance(p, phase);
       radiance += transmittance * integrate_step(source, albedo * sigma_t, sigma_t, seg);
-      transmittance *= exp(-sigma_t * seg);
+      Number step_transmittance = exp(-sigma_t * seg);
+      t_weighted += transmittance * (1.0 - step_transmittance) * (t + jitter * seg);
+      transmittance *= step_transmittance;
     }
     if (adaptive) t += step_len; else n += 1;
     if (skipping) {
@@ -379,6 +384,7 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations) {
       }
     }
   }
+  if (transmittance < 1.0) t_mean = t_weighted / (1.0 - transmittance);
   return vec4(radiance, transmittance);
 }
 
@@ -427,6 +433,17 @@ vec3 sky_radiance(vec3 rd) {
   Number cos_sun = dot(rd, sun);
   Number disc = smoothstep(0.99994, 0.99998, cos_sun);
   return sky + vec3(u_cloud.sun_color) * (Number(u_cloud.sky.w) * disc);
+}
+
+// Aerial perspective for layer mode: distant clouds fade into the horizon sky with a 30 km scale
+// (Beer-Lambert of a clear atmosphere's haze), which also hides their sampling noise at the horizon.
+// `cloud` is (radiance, transmittance) from march_clouds; returns the faded pair.
+vec4 aerial_perspective(vec4 cloud, Number t_mean, vec3 rd) {
+  if (!layer_mode() || cloud.w >= 1.0) return cloud;
+  Number haze = 1.0 - exp(-t_mean / 30000.0);
+  vec3 sky = sky_radiance(vec3(rd.x, max(rd.y, 0.0), rd.z));
+  vec3 faded = mix(vec3(cloud), sky * (1.0 - cloud.w), haze);
+  return vec4(faded, cloud.w);
 }
 
 // ---------------------------------------------------------------- HDR post

@@ -124,7 +124,9 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
       if (t_scene >= 1e29) background = sh.sky_radiance(rd);
       double jitter = P.control.x > 0.5 ? sh.jitter_offset(ivec2(x, y), int(P.control.y)) : 0.5;
       int iterations = 0;
-      dvec4 m = sh.march_clouds(rd, t_scene, jitter, iterations);
+      double t_mean = 0;
+      dvec4 m = sh.march_clouds(rd, t_scene, jitter, iterations, t_mean);
+      m = sh.aerial_perspective(m, t_mean, rd);
       dvec3 c;
       if (output == 1) c = dvec3(m.w);
       else if (output == 2) c = dvec3(iterations, m.w, 0.0);
