@@ -86,7 +86,7 @@ std::vector<ParamDef> build() {
   t.push_back(integer("coverage_tiles", &RenderSettings::coverage_tiles, 1, 1024, "layer mode: texture tiles spanned by one period of the coverage map"));
   t.push_back(integer("steps", &RenderSettings::steps, 1, 8192, "small steps across the volume's largest extent (step = extent / steps)"));
   t.push_back(boolean("occupancy", &RenderSettings::occupancy, "occupancy skipping: large steps through empty coarse cells (thesis 2.4.2)"));
-  t.push_back(boolean("occupancy_light", &RenderSettings::occupancy_light, "with occupancy on, the light march also skips samples in empty cells (an addition to the thesis; image-neutral, measured slower on llvmpipe)"));
+  t.push_back(boolean("occupancy_light", &RenderSettings::occupancy_light, "with occupancy on, the light march also skips samples in empty cells (an addition to the thesis; image-neutral, no measurable gain on llvmpipe)"));
   t.push_back(integer("occupancy_cell", &RenderSettings::occupancy_cell, 2, 64, "coarse occupancy cell edge in voxels"));
   t.push_back(integer("occupancy_padding", &RenderSettings::occupancy_padding, 1, 4, "occupancy dilation in cells (thesis: 2, \"double padding\"; 1 is provably enough here)"));
   t.push_back(boolean("adaptive", &RenderSettings::adaptive, "step grows linearly with distance beyond adaptive_start"));

@@ -24,7 +24,7 @@ struct RenderSettings {
   // marching
   int steps = 128;                 ///< small steps across the volume's largest extent
   bool occupancy = true;           ///< occupancy skipping (thesis 2.4.2)
-  bool occupancy_light = false;    ///< the light march also skips empty cells (measured slower on llvmpipe)
+  bool occupancy_light = false;    ///< the light march also skips empty cells (no measurable gain on llvmpipe)
   int occupancy_cell = 8;          ///< coarse cell edge in voxels
   int occupancy_padding = 2;       ///< dilation in cells (thesis: 2; 1 is enough, see make_frame)
   bool adaptive = false;           ///< step grows with distance
