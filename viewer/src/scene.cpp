@@ -10,6 +10,8 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "noise3d/noise3d.h"
+
 #include "cloudviewer/errors.h"
 
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
@@ -31,40 +33,15 @@ bool has_cloudgen() {
 
 namespace {
 
-uint32_t hash3(uint32_t x, uint32_t y, uint32_t z, uint32_t seed) {
-  uint32_t h = seed * 0x9E3779B9u ^ x * 0x85EBCA6Bu ^ y * 0xC2B2AE35u ^ z * 0x27D4EB2Fu;
-  h ^= h >> 16;
-  h *= 0x7FEB352Du;
-  h ^= h >> 15;
-  h *= 0x846CA68Bu;
-  h ^= h >> 16;
-  return h;
-}
-
-// Periodic value noise in [0,1] with a smooth (quintic) fade; `period` lattice cells per unit.
-double value_noise(double x, double y, double z, int period, uint32_t seed) {
-  double fx = std::floor(x), fy = std::floor(y), fz = std::floor(z);
-  double tx = x - fx, ty = y - fy, tz = z - fz;
-  auto fade = [](double t) { return t * t * t * (t * (t * 6 - 15) + 10); };
-  tx = fade(tx), ty = fade(ty), tz = fade(tz);
-  auto wrap = [period](double v) { return uint32_t(((int64_t(v) % period) + period) % period); };
-  double acc = 0;
-  for (int k = 0; k < 8; ++k) {
-    int ox = k & 1, oy = (k >> 1) & 1, oz = (k >> 2) & 1;
-    double w = (ox ? tx : 1 - tx) * (oy ? ty : 1 - ty) * (oz ? tz : 1 - tz);
-    acc += w * (hash3(wrap(fx + ox), wrap(fy + oy), wrap(fz + oz), seed) >> 8) / 16777216.0;
-  }
-  return acc;
-}
-
+// Tileable fBm in [0, 1] for the synthetic volumes, from libnoise3d's Perlin fBm (std 0.16 on
+// [-1, 1]); 0.5 + 0.8 v gives mean 0.5 and std ~0.13.
 double fbm(double x, double y, double z, int period, int octaves, uint32_t seed) {
-  double sum = 0, amp = 0.5, norm = 0;
-  for (int o = 0; o < octaves; ++o) {
-    sum += amp * value_noise(x * (1 << o), y * (1 << o), z * (1 << o), period << o, seed + o);
-    norm += amp;
-    amp *= 0.5;
-  }
-  return sum / norm;
+  noise3d::FractalParams p;
+  p.kind = noise3d::Kind::Perlin;
+  p.period = noise3d::Period::cube(uint32_t(period));
+  p.octaves = octaves;
+  p.seed = seed;
+  return std::clamp(0.5 + 0.8 * noise3d::evaluate(p, x, y, z), 0.0, 1.0);
 }
 
 void fill_detail(cloudgen::Volume& v) {
