@@ -237,7 +237,6 @@ TEST(Statistics, FbmWithinNormalisedRange) {
 
 namespace {
 // Brute force: every feature point of the tile and of enough neighbouring tile copies.
-detail::Split sp(double v) { return detail::split(v, "x"); }
 std::array<double, 2> brute_f1f2(double x, double y, double z, uint32_t P, uint64_t seed) {
   const uint32_t key = detail::seed_key(seed, 0x3a71u);
   const int K = int(std::ceil(3.0 / P)) + 1;
@@ -273,7 +272,6 @@ TEST(Worley, F1AndF2EqualBruteForceOverAllFeaturePoints) {
       ASSERT_LE(w.f1, kSqrt3);
     }
   }
-  (void)sp;
 }
 
 TEST(Worley, ExactSearchFindsWhatA3x3x3SearchMisses) {

@@ -23,14 +23,13 @@ double smoothstep(double a, double b, double x) {
 }
 
 /// Noise value mapped to [0, 1] (Perlin fBm is in [-1, 1]).
-float to_unit(noise3d::Kind k, float v, bool invert) {
-  float u = k == noise3d::Kind::Perlin ? 0.5f + 0.5f * v : v;
-  u = std::clamp(u, 0.0f, 1.0f);
-  return invert ? 1.0f - u : u;
+float to_unit(noise3d::Kind k, float v) {
+  const float u = k == noise3d::Kind::Perlin ? 0.5f + 0.5f * v : v;
+  return std::clamp(u, 0.0f, 1.0f);
 }
 /// A channel's value: to [0, 1], contrast remap (identity for [0, 1] leaves bytes unchanged), invert.
 float channel_value(const Channel& ch, float v) {
-  float u = to_unit(ch.kind, v, false);
+  float u = to_unit(ch.kind, v);
   if (ch.remap[0] != 0.0 || ch.remap[1] != 1.0) {
     const float lo = float(ch.remap[0]), hi = float(ch.remap[1]);
     u = std::clamp((u - lo) / (hi - lo), 0.0f, 1.0f);
@@ -123,7 +122,7 @@ Volume generate(const Preset& p, const GenerateOptions& opt, GenerateStats* stat
     g.size = {N[0], 1, N[2]};
     coverage.resize(g.count());
     noise3d::evaluate_grid(cp, g, coverage.data(), {opt.threads});
-    for (float& c : coverage) c = float(smoothstep(p.coverage_low, p.coverage_high, to_unit(cp.kind, c, false)));
+    for (float& c : coverage) c = float(smoothstep(p.coverage_low, p.coverage_high, to_unit(cp.kind, c)));
   }
   const std::vector<Tower> towers = resolve_towers(p);
   const float t = float(p.threshold), inv = float(1.0 / (1.0 - p.threshold)), scale = float(p.density_scale);

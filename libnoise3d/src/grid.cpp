@@ -180,6 +180,7 @@ void perlin_slice(const OctaveSetup<T>& s, uint32_t k, T* acc, PerlinScratch<T>&
   sc.A.resize(nx), sc.B.resize(nx);
   const size_t ex = X.m.size(), ey = Y.m.size();
   const T wt = T(s.oc.weight);
+  const bool gather = X.short_runs();  // about one sample per cell: gather instead of runs
   for (size_t j = 0; j < ey; ++j) {
     const size_t r0 = size_t(Y.m[j]) * nx, r1 = r0 + nx;
     const T fy = Y.f[j], v = Y.u[j], v0 = T(1) - v, fy1 = fy - T(1);
@@ -193,7 +194,7 @@ void perlin_slice(const OctaveSetup<T>& s, uint32_t k, T* acc, PerlinScratch<T>&
     T* __restrict out = acc + j * ex;
     const T* __restrict f = X.f.data();
     const T* __restrict u = X.u.data();
-    if (X.short_runs()) {
+    if (gather) {
       const int32_t* __restrict mi = X.mi.data();
       for (size_t i = 0; i < ex; ++i) {
         const int32_t a = mi[i];
@@ -255,6 +256,7 @@ void worley_slice(const OctaveSetup<T>& s, uint32_t k, T* acc, WorleyScratch<T>&
   sc.jx.resize(9 * nx), sc.r2.resize(9 * nx), sc.best.resize(ex);
   const T wt = T(s.oc.weight), inv_sqrt3 = T(1.0 / kSqrt3);
   const T fzm = std::min(fz, T(1) - fz);
+  const bool gather = X.short_runs();  // about one sample per cell: gather instead of runs
   for (size_t j = 0; j < ey; ++j) {
     const T fy = Y.f[j];
     // Partial distances in y and z of the 9 (y, z) neighbour cells, for every x lattice entry.
@@ -272,7 +274,7 @@ void worley_slice(const OctaveSetup<T>& s, uint32_t k, T* acc, WorleyScratch<T>&
     }
     T* __restrict best = sc.best.data();
     const T* __restrict f = X.f.data();
-    if (X.short_runs()) {
+    if (gather) {
       // About one sample per cell: gather the neighbours' constants per sample instead.
       const int32_t* __restrict mi = X.mi.data();
       for (size_t i = 0; i < ex; ++i) best[i] = std::numeric_limits<T>::infinity();
@@ -289,33 +291,34 @@ void worley_slice(const OctaveSetup<T>& s, uint32_t k, T* acc, WorleyScratch<T>&
           }
         }
       }
-    }
-    for (size_t r = 0; r + 1 < X.run.size() && !X.short_runs(); ++r) {
-      const uint32_t s0 = X.run[r], s1 = X.run[r + 1], a = X.m[s0];
-      // The 27 neighbour feature points of this cell: x offset and y/z partial squared distance.
-      T cx[27], rr[27];
-      for (int q = 0; q < 27; ++q) {
-        const int n = q / 3, dx = q % 3;
-        cx[q] = sc.jx[n * nx + a + dx - 1] + T(dx - 1);
-        rr[q] = sc.r2[n * nx + a + dx - 1];
-      }
-      // One 64-byte vector of samples at a time, the running minimum held in a register:
-      // GCC/Clang vector extensions, elementwise IEEE operations (same values as scalar code),
-      // lowered to AVX-512, AVX2 or SSE as the target allows. `f` is padded by kLanes, so a
-      // vector may read past the run; only the run's lanes are stored.
-      using V = VecOf<T>;
-      constexpr int L = int(sizeof(V) / sizeof(T));
-      for (uint32_t c0 = s0; c0 < s1; c0 += L) {
-        V fv, m;
-        std::memcpy(&fv, f + c0, sizeof(V));
-        for (int l = 0; l < L; ++l) m[l] = std::numeric_limits<T>::infinity();
+    } else {
+      for (size_t r = 0; r + 1 < X.run.size(); ++r) {
+        const uint32_t s0 = X.run[r], s1 = X.run[r + 1], a = X.m[s0];
+        // The 27 neighbour feature points of this cell: x offset and y/z partial squared distance.
+        T cx[27], rr[27];
         for (int q = 0; q < 27; ++q) {
-          const V d = cx[q] - fv;
-          const V d2 = d * d + rr[q];
-          m = d2 < m ? d2 : m;
+          const int n = q / 3, dx = q % 3;
+          cx[q] = sc.jx[n * nx + a + dx - 1] + T(dx - 1);
+          rr[q] = sc.r2[n * nx + a + dx - 1];
         }
-        const uint32_t lanes = std::min<uint32_t>(L, s1 - c0);
-        for (uint32_t l = 0; l < lanes; ++l) best[c0 + l] = m[l];
+        // One 64-byte vector of samples at a time, the running minimum held in a register:
+        // GCC/Clang vector extensions, elementwise IEEE operations (same values as scalar code),
+        // lowered to AVX-512, AVX2 or SSE as the target allows. `f` is padded by kLanes, so a
+        // vector may read past the run; only the run's lanes are stored.
+        using V = VecOf<T>;
+        constexpr int L = int(sizeof(V) / sizeof(T));
+        for (uint32_t c0 = s0; c0 < s1; c0 += L) {
+          V fv, m;
+          std::memcpy(&fv, f + c0, sizeof(V));
+          for (int l = 0; l < L; ++l) m[l] = std::numeric_limits<T>::infinity();
+          for (int q = 0; q < 27; ++q) {
+            const V d = cx[q] - fv;
+            const V d2 = d * d + rr[q];
+            m = d2 < m ? d2 : m;
+          }
+          const uint32_t lanes = std::min<uint32_t>(L, s1 - c0);
+          for (uint32_t l = 0; l < lanes; ++l) best[c0 + l] = m[l];
+        }
       }
     }
     const T fym = std::min(fy, T(1) - fy);
