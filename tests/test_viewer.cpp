@@ -577,7 +577,7 @@ TEST(ViewerCloudgen, VdbAndRawInputsRenderLikeTheInMemoryVolume) {
   FrameSetup f = frame_for(mem, settings_for(mem), 96, 54);
   Image expected = render_cpu(mem, f).display;
   cloudgen::ExportOptions eo;
-  eo.texel = "rgba32f";
+  eo.texel = cloudgen::Texel::Rgba32f;
   for (const char* ext : {".vdb", ".raw"}) {
     fs::path p = output_dir() / (std::string("blob") + ext);
     cloudgen::write_volume(v, p.string(), cloudgen::format_from_path(p.string()), eo);
@@ -608,7 +608,7 @@ TEST(ViewerCloudgen, NonCloudVdbAndTruncatedTextureAreClearErrors) {
   // layout stays valid) - a well-formed VDB that is not a cloud volume.
   fs::path vdb = output_dir() / "not_a_cloud.vdb";
   eo.vdb_detail = false;
-  eo.vdb_compression = "none";
+  eo.vdb_compression = cloudgen::VdbCompression::None;
   cloudgen::write_volume(v, vdb.string(), cloudgen::Format::Vdb, eo);
   std::string bytes;
   {
@@ -626,7 +626,7 @@ TEST(ViewerCloudgen, NonCloudVdbAndTruncatedTextureAreClearErrors) {
   EXPECT_NE(err.find("not_a_cloud.vdb"), std::string::npos) << err;
   // A raw texture whose data is shorter than its sidecar says.
   fs::path raw = output_dir() / "short.raw";
-  eo.texel = "rgba8";
+  eo.texel = cloudgen::Texel::Rgba8;
   cloudgen::write_volume(v, raw.string(), cloudgen::Format::Raw, eo);
   fs::resize_file(raw, fs::file_size(raw) / 2);
   EXPECT_EQ(run({raw.string(), "--headless", "--size", "32x18", "--out", png}, &err), 1) << err;

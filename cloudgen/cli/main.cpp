@@ -12,6 +12,8 @@
 #include <mutex>
 #include <sstream>
 
+#include "cloudgen/cli_parse.h"
+#include "cloudgen/exit_codes.h"
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
 #include "cloudgen/preset.h"
@@ -22,6 +24,7 @@ namespace fs = std::filesystem;
 namespace cloudgen::cli {
 
 std::atomic<bool> g_cancel{false};
+bool g_cancel_reported = false;
 
 std::function<void(double)> progress_bar(const std::string& label, bool quiet) {
   if (quiet || !::isatty(STDERR_FILENO)) return {};
@@ -58,20 +61,6 @@ std::string resolve_preset(const std::string& p) {
   return p;  // load_preset reports the missing file
 }
 
-uint64_t parse_bytes(const std::string& s) {
-  size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(s, &used);
-  } catch (const std::exception&) {
-    throw InputError("--max-memory: \"" + s + "\" is not a size like 2G, 512M or 1000000");
-  }
-  std::string suf = s.substr(used);
-  double m = suf.empty() || suf == "B" ? 1 : suf == "K" ? 1024.0 : suf == "M" ? 1048576.0 : suf == "G" ? 1073741824.0 : -1;
-  if (m < 0 || v <= 0) throw InputError("--max-memory: \"" + s + "\" is not a size like 2G, 512M or 1000000");
-  return uint64_t(v * m);
-}
-
 std::string human(uint64_t b) {
   std::ostringstream o;
   o.precision(3);
@@ -81,34 +70,45 @@ std::string human(uint64_t b) {
 }
 
 struct GenerateArgs {
-  std::string preset, format, region, max_memory = "16G";
+  std::string preset, format, region, max_memory = "16G", seed;
   std::vector<std::string> outputs, sets;
-  int64_t seed = -1;
   uint32_t resolution = 0;
   int threads = 0;
   bool quiet = false, no_skip = false, stats = false;
 };
 
+/// Test hook (tests/test_cloudgen.cpp): CLOUDGEN_TEST_HOLD=generate pauses at the first progress
+/// report, =commit pauses with every output staged but none published; each prints a line and
+/// waits for SIGINT/SIGTERM, so a test can interrupt at a known point without sleeping.
+void test_hold(const char* where) {
+  const char* e = std::getenv("CLOUDGEN_TEST_HOLD");
+  if (!e || std::string(e) != where) return;
+  std::fprintf(stderr, "cloudgen: test hold at %s\n", where);
+  std::fflush(stderr);
+  while (!g_cancel) ::usleep(1000);
+}
+
 void run_generate(const GenerateArgs& a) {
   std::vector<std::string> sets = a.sets;
-  if (a.seed >= 0) sets.push_back("seed=" + std::to_string(a.seed));
+  if (!a.seed.empty()) sets.push_back("seed=" + std::to_string(parse_uint(a.seed, "--seed", kMaxSeed)));
   const std::string path = resolve_preset(a.preset);
   Preset p = load_preset(path, sets);
   if (a.resolution) rescale(p, a.resolution);
   if (a.outputs.empty()) throw InputError("-o/--output: give at least one output file (.vdb, .raw, .ktx2, .png, .exr)");
-  ExportOptions eo;
-  eo.vdb_half = p.vdb_half;
-  eo.vdb_compression = p.vdb_compression;
-  eo.vdb_detail = p.vdb_detail;
-  eo.texel = p.raw_format;
+  const ExportOptions& eo = p.export_options;
   std::vector<Format> formats;
   bool detail = false;
+  // Every file of every output is claimed before any work: an output that would replace the
+  // preset, or a sidecar that would collide with another output, is refused up front.
+  OutputBatch batch;
+  batch.protect(path, "the input preset " + path);
   for (const auto& o : a.outputs) {
     Format f = a.format.empty() ? format_from_path(o) : parse_format(a.format);
     formats.push_back(f);
     detail |= needs_detail(f, eo);
+    for (const OutputFile& of : output_files(o, f, true)) batch.claim(of.path, of.role);
   }
-  const uint64_t need = memory_estimate(p, detail), limit = parse_bytes(a.max_memory);
+  const uint64_t need = memory_estimate(p, detail), limit = parse_bytes(a.max_memory, "--max-memory");
   if (need > limit)
     throw InputError(path + ": resolution " + std::to_string(p.resolution[0]) + "x" + std::to_string(p.resolution[1]) + "x" +
                      std::to_string(p.resolution[2]) + " needs about " + human(need) + ", more than --max-memory " +
@@ -118,21 +118,30 @@ void run_generate(const GenerateArgs& a) {
   go.detail = detail;
   go.skip_empty = !a.no_skip;
   go.cancel = &g_cancel;
-  go.progress = progress_bar("generate", a.quiet);
+  auto bar = progress_bar("generate", a.quiet);
+  auto held = std::make_shared<std::atomic<bool>>(false);
+  go.progress = [bar, held](double f) {
+    if (!held->exchange(true)) test_hold("generate");
+    if (bar) bar(f);
+  };
   if (!a.region.empty()) {
-    unsigned o[3], e[3];
-    if (std::sscanf(a.region.c_str(), "%u,%u,%u:%u,%u,%u", &o[0], &o[1], &o[2], &e[0], &e[1], &e[2]) != 6)
-      throw InputError("--region: \"" + a.region + "\" should be X,Y,Z:W,H,D (origin and extent in voxels)");
-    for (int i = 0; i < 3; ++i) go.region_origin[i] = o[i], go.region_extent[i] = e[i];
+    const Region r = parse_region(a.region, p.resolution);
+    go.region_origin = r.origin;
+    go.region_extent = r.extent;
   }
   GenerateStats st;
   Volume v = generate(p, go, &st);
   const auto t0 = std::chrono::steady_clock::now();
   for (size_t i = 0; i < a.outputs.size(); ++i) {
     if (g_cancel) throw Cancelled();
-    write_volume(v, a.outputs[i], formats[i], eo);
-    if (!a.quiet) std::fprintf(stderr, "wrote %s (%s)\n", a.outputs[i].c_str(), format_name(formats[i]));
+    write_volume(v, a.outputs[i], formats[i], eo, batch);
   }
+  test_hold("commit");
+  if (g_cancel) throw Cancelled();
+  batch.commit();
+  if (!a.quiet)
+    for (size_t i = 0; i < a.outputs.size(); ++i)
+      std::fprintf(stderr, "wrote %s (%s)\n", printable(a.outputs[i]).c_str(), format_name(formats[i]));
   const double write_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!a.quiet || a.stats) {
     struct rusage ru;
@@ -140,9 +149,13 @@ void run_generate(const GenerateArgs& a) {
     std::fprintf(stderr,
                  "%s: %ux%ux%u voxels, %zu active (%.2f%%), bricks %zu (%zu skipped, %zu with detail), "
                  "generate %.3f s, write %.3f s, peak memory %s\n",
-                 p.name.c_str(), v.dims[0], v.dims[1], v.dims[2], st.active_voxels,
+                 printable(p.name).c_str(), v.dims[0], v.dims[1], v.dims[2], st.active_voxels,
                  100.0 * st.active_voxels / std::max<size_t>(1, v.voxel_count()), st.bricks, st.bricks_skipped,
                  st.detail_bricks, st.seconds, write_s, human(uint64_t(ru.ru_maxrss) * 1024).c_str());
+  }
+  if (g_cancel) {
+    std::fprintf(stderr, "interrupted after every output was complete and in place\n");
+    g_cancel_reported = true;  // main exits 130 without claiming nothing was written
   }
 }
 
@@ -154,6 +167,9 @@ int main(int argc, char** argv) {
   using namespace cloudgen::cli;
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
+  // A file-size limit (ulimit -f) then fails the write with EFBIG, reported like a full disk,
+  // instead of killing the process mid-write.
+  std::signal(SIGXFSZ, SIG_IGN);
 
   CLI::App app{"cloudgen: bake procedural cloud volumes from tileable noise.\n"
                "Presets (JSON) go through noise -> height profile -> towers -> coverage -> threshold -> channels\n"
@@ -171,12 +187,14 @@ int main(int argc, char** argv) {
   gen->add_option("preset", ga->preset, "Preset file, or the name of a shipped preset (see `cloudgen presets`)")->required();
   gen->add_option("-o,--output", ga->outputs, "Output file; repeat for several formats from one generation")->required();
   gen->add_option("--format", ga->format, "vdb | raw | ktx2 | atlas-png | atlas-exr (default: from each extension)");
-  gen->add_option("--seed", ga->seed, "Override the preset's seed");
+  gen->add_option("--seed", ga->seed, "Override the preset's seed: an integer in [0, 2^53]");
   gen->add_option("--resolution", ga->resolution, "Rescale so the longest axis has N voxels (world size kept)");
-  gen->add_option("--threads", ga->threads, "Worker threads (0 = all cores); output bytes are identical for any count");
+  gen->add_option("--threads", ga->threads, "Worker threads (0 = all cores); output bytes are identical for any count")
+      ->check(CLI::Range(0, kMaxThreads));
   gen->add_option("--set", ga->sets, "Override a preset key with the same validation, e.g. --set threshold=0.4 "
                                      "--set channels.r.octaves=6 --set resolution=[256,64,256]");
-  gen->add_option("--region", ga->region, "Generate only X,Y,Z:W,H,D voxels (values equal the full run's)");
+  gen->add_option("--region", ga->region,
+                  "Generate only X,Y,Z:W,H,D voxels, each extent >= 1, inside the volume (values equal the full run's)");
   gen->add_option("--max-memory", ga->max_memory, "Refuse presets whose memory estimate exceeds this (default 16G)");
   gen->add_flag("--no-skip", ga->no_skip, "Evaluate noise in empty bricks too (for benchmarks; same output)");
   gen->add_flag("--stats", ga->stats, "Print timing and memory even with --quiet");
@@ -200,9 +218,9 @@ int main(int argc, char** argv) {
       size_t bad = 0;
       for (const auto& p : *vpath) {
         auto problems = check_preset(resolve_preset(p), *vsets);
-        for (const auto& m : problems) std::fprintf(stderr, "%s\n", m.c_str());
+        for (const auto& m : problems) std::fprintf(stderr, "%s\n", printable(m).c_str());
         bad += !problems.empty();
-        if (problems.empty()) std::printf("%s: ok\n", resolve_preset(p).c_str());
+        if (problems.empty()) std::printf("%s: ok\n", printable(resolve_preset(p)).c_str());
       }
       if (bad) throw InputError(std::to_string(bad) + " preset(s) have problems");
     };
@@ -213,7 +231,7 @@ int main(int argc, char** argv) {
   info->add_option("file", *ipath, "File(s) written by cloudgen")->required();
   info->callback([ipath, &run] {
     run = [ipath] {
-      for (const auto& f : *ipath) std::printf("%s", describe_file(f).c_str());
+      for (const auto& f : *ipath) std::printf("%s", describe_file(f).c_str());  // escaped inside
     };
   });
 
@@ -233,10 +251,10 @@ int main(int argc, char** argv) {
       for (auto& f : files) {
         try {
           Preset p = load_preset(f.string());
-          std::printf("%-18s %4ux%ux%u  %s\n", f.stem().c_str(), p.resolution[0], p.resolution[1], p.resolution[2],
-                      p.description.c_str());
+          std::printf("%-18s %4ux%ux%u  %s\n", printable(f.stem().string()).c_str(), p.resolution[0],
+                      p.resolution[1], p.resolution[2], printable(p.description).c_str());
         } catch (const Error& e) {
-          std::printf("%-18s INVALID: %s\n", f.stem().c_str(), e.what());
+          std::printf("%-18s INVALID: %s\n", printable(f.stem().string()).c_str(), printable(e.what(), true).c_str());
         }
       }
     };
@@ -247,28 +265,21 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    const int rc = app.exit(e);  // prints the message (or the help)
+    return rc == 0 ? kExitOk : kExitInput;
   }
   try {
     if (run) run();
   } catch (const Cancelled&) {
     std::fprintf(stderr, "\ninterrupted: no output was written or replaced\n");
-    return 130;
-  } catch (const noise3d::InvalidParameter& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 1;
-  } catch (const InputError& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 1;
-  } catch (const IoError& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "internal error: %s\n", e.what());
-    return 3;
+    return kExitInterrupted;
+  } catch (...) {
+    const std::exception_ptr e = std::current_exception();
+    std::fprintf(stderr, "%s\n", error_message_of(e).c_str());
+    return exit_code_of(e);
   }
   if (g_cancel) {
-    std::fprintf(stderr, "interrupted\n");
+    if (!g_cancel_reported) std::fprintf(stderr, "interrupted\n");
     return 130;
   }
   return 0;

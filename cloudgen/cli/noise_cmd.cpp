@@ -9,6 +9,8 @@
 #include <sstream>
 #include <vector>
 
+#include "cloudgen/cli_parse.h"
+#include "cloudgen/generate.h"
 #include "cloudgen/io.h"
 #include "commands.h"
 #include "noise3d/noise3d.h"
@@ -20,40 +22,26 @@ struct NoiseArgs {
   std::string kind = "perlin", period = "4", at, out;
   int octaves = 1, threads = 0;
   double gain = 0.5, lacunarity = 2;
-  uint64_t seed = 0;
+  std::string seed = "0";
   uint32_t size = 64;
   bool dbl = false, reference = false;
 };
 
-std::vector<double> parse_list(const std::string& s, const char* what, size_t n1, size_t n3) {
-  std::vector<double> v;
-  std::stringstream ss(s);
-  for (std::string t; std::getline(ss, t, ',');) {
-    try {
-      size_t used = 0;
-      v.push_back(std::stod(t, &used));
-      if (used != t.size()) throw std::invalid_argument(t);
-    } catch (const std::exception&) {
-      throw InputError(std::string(what) + ": \"" + s + "\" is not a number list");
-    }
-  }
-  if (v.size() != n1 && v.size() != n3)
-    throw InputError(std::string(what) + ": expected " + std::to_string(n1) + (n1 != n3 ? " or " + std::to_string(n3) : "") +
-                     " comma-separated numbers, got \"" + s + "\"");
-  return v;
-}
-
 void run_noise(const NoiseArgs& a) {
   if (a.reference) {
     if (a.at.empty()) throw InputError("--reference needs --at X,Y,Z");
-    auto p = parse_list(a.at, "--at", 3, 3);
+    auto p = parse_number_list(a.at, "--at", 3, 3);
     std::printf("%.17g\n", noise3d::perlin_reference(p[0], p[1], p[2]));
     return;
   }
   if (a.out.empty()) throw InputError("-o/--output is required (or --reference --at X,Y,Z)");
+  const std::string side = std::filesystem::path(a.out).replace_extension(".json").string();
+  OutputBatch batch;  // the cube and its sidecar appear together or not at all
+  batch.claim(a.out, "the noise cube");
+  batch.claim(side, "the sidecar of " + a.out);
   noise3d::FractalParams p;
   p.kind = noise3d::parse_kind(a.kind);
-  auto per = parse_list(a.period, "--period", 1, 3);
+  auto per = parse_number_list(a.period, "--period", 1, 3);
   for (double v : per)
     if (v != std::floor(v) || v < 1 || v > noise3d::kMaxPeriod)
       throw InputError("--period: " + a.period + " must be integers in [1, " + std::to_string(noise3d::kMaxPeriod) + "]");
@@ -62,7 +50,7 @@ void run_noise(const NoiseArgs& a) {
   p.octaves = a.octaves;
   p.gain = a.gain;
   p.lacunarity = a.lacunarity;
-  p.seed = a.seed;
+  p.seed = parse_uint(a.seed, "--seed", ~uint64_t(0));
   noise3d::validate(p);
   if (a.size < 1 || a.size > 2048) throw InputError("--size: " + std::to_string(a.size) + " must be in [1, 2048]");
   const noise3d::GridRegion r = noise3d::GridRegion::whole(a.size);
@@ -77,7 +65,7 @@ void run_noise(const NoiseArgs& a) {
     mm = noise3d::evaluate_grid(p, r, cube.data(), {a.threads});
   }
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (g_cancel) throw Error("interrupted");
+  if (g_cancel) throw Cancelled();
   nlohmann::json j;
   j["size"] = {a.size, a.size, a.size};
   j["kind"] = a.kind;
@@ -90,17 +78,11 @@ void run_noise(const NoiseArgs& a) {
   j["min"] = mm.min;
   j["max"] = mm.max;
   j["generator"] = std::string("cloudgen ") + CLOUDGEN_VERSION;
-  atomic_write(a.out, [&](const std::string& tmp) {
-    std::ofstream o(tmp, std::ios::binary);
-    o.write(reinterpret_cast<const char*>(cube.data()), std::streamsize(cube.size() * sizeof(float)));
-    if (!o.flush()) throw IoError(a.out + ": write failed");
-  });
-  const std::string side = std::filesystem::path(a.out).replace_extension(".json").string();
-  atomic_write(side, [&](const std::string& tmp) {
-    std::ofstream o(tmp);
-    o << j.dump(2) << "\n";
-    if (!o.flush()) throw IoError(side + ": write failed");
-  });
+  batch.stage(a.out, [&](const std::string& tmp) { write_file_bytes(tmp, cube.data(), cube.size() * sizeof(float)); });
+  const std::string text = j.dump(2) + "\n";
+  batch.stage(side, [&](const std::string& tmp) { write_file_bytes(tmp, text.data(), text.size()); });
+  if (g_cancel) throw Cancelled();
+  batch.commit();
   std::fprintf(stderr, "%s: %u^3 %s, min %.6f max %.6f, %.3f s (%.2f ns/sample)\n", a.out.c_str(), a.size,
                a.kind.c_str(), mm.min, mm.max, secs, secs * 1e9 / double(r.count()));
 }
@@ -123,10 +105,11 @@ void add_noise_command(CLI::App& app, std::function<void()>& run) {
   c->add_option("--octaves", a->octaves, "fBm octaves, 1..16");
   c->add_option("--gain", a->gain, "Amplitude ratio between octaves, (0, 1]");
   c->add_option("--lacunarity", a->lacunarity, "Integer frequency ratio between octaves, 2..16 (non-integers break the wrap)");
-  c->add_option("--seed", a->seed, "64-bit seed");
+  c->add_option("--seed", a->seed, "Seed: an integer in [0, 2^64 - 1]");
   c->add_option("--size", a->size, "Voxels per axis spanning one tile");
   c->add_option("-o,--output", a->out, "Output cube (.raw); the sidecar is written beside it as .json");
-  c->add_option("--threads", a->threads, "Worker threads (0 = all cores); output is identical for any count");
+  c->add_option("--threads", a->threads, "Worker threads (0 = all cores); output is identical for any count")
+      ->check(CLI::Range(0, kMaxThreads));
   c->add_flag("--double", a->dbl, "Evaluate in double precision (output stays float32)");
   c->add_flag("--reference", a->reference, "Print Perlin's reference ImprovedNoise (period 256, double) at --at");
   c->add_option("--at", a->at, "X,Y,Z for --reference");

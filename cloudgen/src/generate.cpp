@@ -57,7 +57,7 @@ struct Box {
 }  // namespace
 
 double height_profile(const Preset& p, double h) {
-  if (p.height_profile == "exponential") {
+  if (p.height_profile == HeightProfile::Exponential) {
     auto hd = [&](double x) { return (1 - std::exp(-p.height_a * x)) * std::exp(-p.height_b * x); };
     if (!p.height_normalize || p.height_b <= 0) return hd(h);
     // Peak of (1 - e^{-a h}) e^{-b h} is at h* = ln(1 + a/b) / a.
@@ -66,8 +66,8 @@ double height_profile(const Preset& p, double h) {
   }
   // Horizon-Zero-Dawn-style cloud-type gradients: rise over [b0, b1], fall over [t0, t1].
   double b0 = 0, b1 = 0.1, t0 = 0.4, t1 = 0.75;
-  if (p.height_profile == "stratus") b0 = 0.0, b1 = 0.08, t0 = 0.15, t1 = 0.3;
-  if (p.height_profile == "cumulonimbus") b0 = 0.0, b1 = 0.08, t0 = 0.7, t1 = 1.0;
+  if (p.height_profile == HeightProfile::Stratus) b0 = 0.0, b1 = 0.08, t0 = 0.15, t1 = 0.3;
+  if (p.height_profile == HeightProfile::Cumulonimbus) b0 = 0.0, b1 = 0.08, t0 = 0.7, t1 = 1.0;
   return smoothstep(b0, b1, h) * (1 - smoothstep(t0, t1, h));
 }
 

@@ -1,6 +1,9 @@
 // The preset parameter table and the JSON reader it drives.
 #include "cloudgen/preset.h"
 
+#include <cstdio>
+#include <cstdlib>
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -9,6 +12,9 @@
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
+
+#include "cloudgen/io.h"
+#include "cloudgen/json_checked.h"
 
 namespace cloudgen {
 namespace {
@@ -23,13 +29,29 @@ struct Spec {
   std::function<void(Preset&, const json&, const Index&)> set;
 };
 
+/// The shortest text that reads back as v (0.999, not 0.99899999999999999; 9007199254740992, not 9.0072e+15).
 std::string fmt(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
+  char buf[40];
+  for (int prec = 6; prec <= 17; ++prec) {
+    std::snprintf(buf, sizeof buf, "%.*g", prec, v);
+    if (std::strtod(buf, nullptr) == v) break;
+  }
+  return buf;
 }
 
 const char* kChannelNames[4] = {"r", "g", "b", "a"};
+constexpr HeightProfile kHeightProfiles[] = {HeightProfile::Exponential, HeightProfile::Stratus, HeightProfile::Cumulus,
+                                             HeightProfile::Cumulonimbus};
+constexpr VdbCompression kCompressions[] = {VdbCompression::Blosc, VdbCompression::Zip, VdbCompression::None};
+constexpr Texel kTexels[] = {Texel::Rgba8, Texel::Rgba16f, Texel::Rgba32f};
+
+/// The choices of a string key, from the enum's one name table.
+template <class E, size_t N>
+std::vector<std::string> names_of(const E (&values)[N], const char* (*name)(E)) {
+  std::vector<std::string> v;
+  for (E e : values) v.push_back(name(e));
+  return v;
+}
 
 std::vector<Spec> build_table() {
   std::vector<Spec> t;
@@ -62,7 +84,7 @@ std::vector<Spec> build_table() {
       [](Preset& p, const json& j, const Index&) { p.name = j.get<std::string>(); });
   add("/description", "string", "\"\"", 0, 0, "One line shown by `cloudgen presets`.",
       [](Preset& p, const json& j, const Index&) { p.description = j.get<std::string>(); });
-  add("/seed", "integer", "1", 0, 9.007199254740992e15, "Master seed; every noise channel derives its own.",
+  add("/seed", "integer", "1", 0, double(kMaxSeed), "Master seed; every noise channel derives its own.",
       [](Preset& p, const json& j, const Index&) { p.seed = j.get<uint64_t>(); });
   add("/resolution", "ivec3", "[128, 128, 128]", 1, 4096, "Voxels along x, y (up), z.",
       [](Preset& p, const json& j, const Index&) {
@@ -113,15 +135,18 @@ std::vector<Spec> build_table() {
         [c](Preset& p, const json& j, const Index&) { p.channels[c].remap = {j[0].get<double>(), j[1].get<double>()}; });
     add(base + "/invert", "bool", "false", 0, 0, "Store 1 - noise.",
         [c](Preset& p, const json& j, const Index&) { p.channels[c].invert = j.get<bool>(); });
-    add(base + "/seed_offset", "integer", std::to_string(c), 0, 9.007199254740992e15,
+    add(base + "/seed_offset", "integer", std::to_string(c), 0, double(kMaxSeed),
         "Added to the master seed for this channel.",
         [c](Preset& p, const json& j, const Index&) { p.channels[c].seed_offset = j.get<uint64_t>(); });
   }
 
   add("/height/profile", "string", "\"exponential\"", 0, 0,
       "Vertical profile: the thesis's HD(h) = (1 - exp(-a h)) exp(-b h), or a cloud-type gradient.",
-      [](Preset& p, const json& j, const Index&) { p.height_profile = j.get<std::string>(); },
-      {"exponential", "stratus", "cumulus", "cumulonimbus"});
+      [](Preset& p, const json& j, const Index&) {
+        for (HeightProfile h : kHeightProfiles)
+          if (j.get<std::string>() == height_profile_name(h)) p.height_profile = h;
+      },
+      names_of(kHeightProfiles, height_profile_name));
   add("/height/a", "number", "50", 0.01, 1000, "HD sharpness of the flat bottom.",
       [](Preset& p, const json& j, const Index&) { p.height_a = j.get<double>(); });
   add("/height/b", "number", "4", 0, 1000, "HD falloff towards the top.",
@@ -139,7 +164,7 @@ std::vector<Spec> build_table() {
       [](Preset& p, const json& j, const Index& i) { p.towers[i[0]].amplitude = j.get<double>(); });
   add("/towers/count", "integer", "0", 0, 256, "Extra towers at random positions (from towers.seed).",
       [](Preset& p, const json& j, const Index&) { p.tower_count = j.get<int>(); });
-  add("/towers/seed", "integer", "7", 0, 9.007199254740992e15, "Seed of the random towers.",
+  add("/towers/seed", "integer", "7", 0, double(kMaxSeed), "Seed of the random towers.",
       [](Preset& p, const json& j, const Index&) { p.tower_seed = j.get<uint64_t>(); });
   add("/towers/amplitude", "number", "0.6", -10, 10, "Peak of each random tower.",
       [](Preset& p, const json& j, const Index&) { p.tower_amplitude = j.get<double>(); });
@@ -172,15 +197,17 @@ std::vector<Spec> build_table() {
       [](Preset& p, const json& j, const Index&) { p.occupancy_padding = j.get<uint32_t>(); });
 
   add("/export/vdb/half", "bool", "false", 0, 0, "Store VDB grids as half floats.",
-      [](Preset& p, const json& j, const Index&) { p.vdb_half = j.get<bool>(); });
+      [](Preset& p, const json& j, const Index&) { p.export_options.vdb_half = j.get<bool>(); });
   add("/export/vdb/compression", "string", "\"blosc\"", 0, 0, "VDB compression.",
-      [](Preset& p, const json& j, const Index&) { p.vdb_compression = j.get<std::string>(); },
-      {"blosc", "zip", "none"});
+      [](Preset& p, const json& j, const Index&) {
+        p.export_options.vdb_compression = parse_vdb_compression(j.get<std::string>());
+      },
+      names_of(kCompressions, vdb_compression_name));
   add("/export/vdb/detail", "bool", "true", 0, 0, "Write the enabled detail channels as extra grids.",
-      [](Preset& p, const json& j, const Index&) { p.vdb_detail = j.get<bool>(); });
+      [](Preset& p, const json& j, const Index&) { p.export_options.vdb_detail = j.get<bool>(); });
   add("/export/raw/format", "string", "\"rgba8\"", 0, 0, "Texel format of raw/KTX2 textures.",
-      [](Preset& p, const json& j, const Index&) { p.raw_format = j.get<std::string>(); },
-      {"rgba8", "rgba16f", "rgba32f"});
+      [](Preset& p, const json& j, const Index&) { p.export_options.texel = parse_texel(j.get<std::string>()); },
+      names_of(kTexels, texel_name));
   return t;
 }
 
@@ -204,8 +231,8 @@ size_t edit_distance(const std::string& a, const std::string& b) {
   return d[b.size()];
 }
 
-std::string dump(const json& j) {
-  std::string s = j.dump();
+std::string dump(const json& j) {  // safe: parse_json_checked bounded the depth
+  std::string s = printable(j.dump(-1, ' ', false, json::error_handler_t::replace));
   return s.size() > 60 ? s.substr(0, 57) + "..." : s;
 }
 
@@ -344,21 +371,21 @@ void apply_override(json& doc, const std::string& ov, Reader& r) {
     ptr += "/" + key.substr(s, e - s);
   }
   json v = json::parse(val, nullptr, false);
-  if (v.is_discarded()) v = val;
+  if (v.is_discarded()) {
+    v = val;  // not JSON: taken as a string
+  } else {
+    try {
+      v = parse_json_checked(val, "--set " + key);  // bounded depth, no duplicate keys
+    } catch (const InputError& e) {
+      r.problem("--set " + key, e.what());
+      return;
+    }
+  }
   try {
     doc[json::json_pointer(ptr)] = v;
   } catch (const json::exception& e) {
     r.problem("--set " + ov, e.what());
   }
-}
-
-std::string line_col(const std::string& text, size_t byte) {
-  size_t line = 1, col = 1;
-  for (size_t i = 0; i < byte && i < text.size(); ++i) {
-    if (text[i] == '\n') ++line, col = 1;
-    else ++col;
-  }
-  return "line " + std::to_string(line) + ", column " + std::to_string(col);
 }
 
 void cross_checks(const Preset& p, Reader& r) {
@@ -394,6 +421,21 @@ void cross_checks(const Preset& p, Reader& r) {
 }
 
 }  // namespace
+
+const char* height_profile_name(HeightProfile h) {
+  switch (h) {
+    case HeightProfile::Exponential: return "exponential";
+    case HeightProfile::Stratus: return "stratus";
+    case HeightProfile::Cumulus: return "cumulus";
+    case HeightProfile::Cumulonimbus: return "cumulonimbus";
+  }
+  return "?";
+}
+
+Preset::Preset() {
+  for (const Spec& s : table())
+    if (s.info.pointer.find('*') == std::string::npos) s.set(*this, json::parse(s.info.default_value), {});
+}
 
 const std::vector<ParamInfo>& params() {
   static const std::vector<ParamInfo> infos = [] {
@@ -440,22 +482,10 @@ noise3d::FractalParams channel_params(const Preset& p, int c) {
 
 Preset parse_preset(const std::string& text, const std::string& source, const std::vector<std::string>& overrides) {
   Reader r(source);
-  json doc;
-  try {
-    doc = json::parse(text);
-  } catch (const json::parse_error& e) {
-    std::string msg = e.what();
-    auto pos = msg.find("syntax error");
-    throw InputError(source + ": JSON syntax error at " + line_col(text, e.byte ? e.byte - 1 : 0) + ": " +
-                     (pos == std::string::npos ? msg : msg.substr(pos)));
-  } catch (const json::exception& e) {  // e.g. out_of_range for a number too large (found by fuzzing)
-    throw InputError(source + ": invalid JSON: " + e.what());
-  }
+  json doc = parse_json_checked(text, source);
   if (!doc.is_object()) throw InputError(source + ": the preset must be a JSON object");
   for (const std::string& ov : overrides) apply_override(doc, ov, r);
-  Preset p;
-  for (const Spec& s : table())
-    if (s.info.pointer.find('*') == std::string::npos) s.set(p, json::parse(s.info.default_value), {});
+  Preset p;  // the table's defaults
   p.source_path = source;
   r.walk(p, doc, "", "", {});
   if (r.problems().empty()) cross_checks(p, r);

@@ -7,10 +7,14 @@
 #include <string>
 #include <vector>
 
+#include "cloudgen/export_options.h"
 #include "cloudgen/volume.h"
 #include "noise3d/noise3d.h"
 
 namespace cloudgen {
+
+/// Largest seed: 2^53, the largest integer a JSON number holds exactly.
+inline constexpr uint64_t kMaxSeed = 9007199254740992ull;
 
 /// One noise channel of the 3D texture (R = base shape, G/B/A = detail).
 struct Channel {
@@ -37,7 +41,14 @@ struct Tower {
   double amplitude = 0.5;
 };
 
+/// Vertical profile: the thesis's HD(h), or one of the cloud-type gradients.
+enum class HeightProfile { Exponential, Stratus, Cumulus, Cumulonimbus };
+const char* height_profile_name(HeightProfile h);
+
+/// A preset. Every default comes from the parameter table: `Preset{}` equals parse_preset("{}").
 struct Preset {
+  Preset();  ///< the table's defaults
+
   std::string name = "untitled";
   std::string description;
   std::string source_path;  ///< file it was read from (for messages)
@@ -49,7 +60,7 @@ struct Preset {
 
   std::array<Channel, 4> channels;  ///< r, g, b, a
 
-  std::string height_profile = "exponential";  ///< exponential | stratus | cumulus | cumulonimbus
+  HeightProfile height_profile = HeightProfile::Exponential;
   double height_a = 50, height_b = 4;
   bool height_normalize = true;
 
@@ -71,10 +82,7 @@ struct Preset {
   uint32_t occupancy_cell = 8;
   uint32_t occupancy_padding = 2;
 
-  bool vdb_half = false;
-  std::string vdb_compression = "blosc";  ///< blosc | zip | none
-  bool vdb_detail = true;
-  std::string raw_format = "rgba8";  ///< rgba8 | rgba16f | rgba32f
+  ExportOptions export_options;  ///< export.vdb.* and export.raw.* keys
 };
 
 /// One entry of the parameter table.

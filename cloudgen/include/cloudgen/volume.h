@@ -67,9 +67,14 @@ struct Volume {
 /// Wraps the dilation around x and z when v.tiles_xz.
 void build_occupancy(Volume& v);
 
+/// Memory a reader may use for the dense volume unless told otherwise (16 GiB).
+inline constexpr uint64_t kDefaultReadBudget = uint64_t(16) << 30;
+
 /// Reads any volume cloudgen writes: `.vdb` (grid `density`, optional detail grids), a raw texture
 /// (`.raw` with its `.json` sidecar, or the sidecar itself), or `.ktx2`. Throws InputError with the
 /// path and what is wrong (missing file, no `density` grid, wrong size...).
-Volume read_volume(const std::string& path);
+/// An input whose dense channels would need more than `max_bytes` is refused (InputError with the
+/// estimate) before anything large is allocated.
+Volume read_volume(const std::string& path, uint64_t max_bytes = kDefaultReadBudget);
 
 }  // namespace cloudgen

@@ -1,0 +1,25 @@
+// The exit-code rule of every program of the toolkit (cloudgen and cloudviewer):
+//   0 success, 1 bad input (a preset, flag or file that is wrong: the message says what is allowed),
+//   2 I/O or environment (disk full, permissions, missing device or library, out of memory),
+//   3 internal error (a bug: please report it), 130 interrupted (SIGINT/SIGTERM).
+// Exceptions map to codes by type, in one place:
+//   cloudgen::InputError, noise3d::InvalidParameter              -> 1
+//   cloudgen::IoError, std::filesystem::filesystem_error,
+//   std::ios_base::failure, std::bad_alloc                        -> 2
+//   anything else                                                 -> 3
+#pragma once
+
+#include <exception>
+#include <string>
+
+namespace cloudgen {
+
+enum ExitCode : int { kExitOk = 0, kExitInput = 1, kExitIo = 2, kExitInternal = 3, kExitInterrupted = 130 };
+
+/// The exit code of exception `e` under the rule above.
+int exit_code_of(const std::exception_ptr& e);
+/// The one-line (or, for lists of problems, multi-line) message to print for `e`, control
+/// characters escaped: "error: ...", "internal error: ...".
+std::string error_message_of(const std::exception_ptr& e);
+
+}  // namespace cloudgen

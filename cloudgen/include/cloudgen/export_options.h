@@ -1,0 +1,41 @@
+// How a volume is written: one struct, filled from the preset's `export.*` keys (the parameter
+// table gives every default) and read by every writer. Names of each choice live in one table.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+namespace cloudgen {
+
+/// Texel layout of raw and KTX2 textures: four channels R, G, B, A per texel.
+enum class Texel { Rgba8, Rgba16f, Rgba32f };
+/// Compression of OpenVDB grids.
+enum class VdbCompression { Blosc, Zip, None };
+
+struct TexelInfo {
+  Texel texel;
+  const char* name;        ///< "rgba8" ...
+  uint32_t bytes;          ///< per texel (4 channels)
+  uint32_t vk_format;      ///< KTX2 vkFormat (VK_FORMAT_R8G8B8A8_UNORM = 37, ...)
+  uint32_t channel_bytes;  ///< KTX2 typeSize
+};
+const TexelInfo& texel_info(Texel t);
+const char* texel_name(Texel t);
+size_t texel_bytes(Texel t);
+/// "rgba8" | "rgba16f" | "rgba32f"; anything else is an InputError naming `where` and the choices.
+Texel parse_texel(const std::string& name, const std::string& where = "texel format");
+/// The texel whose KTX2 vkFormat is `vk`, or false.
+bool texel_from_vk(uint32_t vk, Texel* out);
+
+const char* vdb_compression_name(VdbCompression c);
+VdbCompression parse_vdb_compression(const std::string& name, const std::string& where = "export.vdb.compression");
+
+struct ExportOptions {
+  bool vdb_half = false;                                  ///< grids saved as 16-bit half floats
+  VdbCompression vdb_compression = VdbCompression::Blosc;  ///< export.vdb.compression
+  bool vdb_detail = true;                                  ///< detail channels as extra grids
+  Texel texel = Texel::Rgba8;                              ///< raw / KTX2 texel format
+};
+
+}  // namespace cloudgen

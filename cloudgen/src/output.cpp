@@ -1,0 +1,483 @@
+// Safe output files (see cloudgen/output.h for the rules).
+#include "cloudgen/output.h"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <filesystem>
+#include <map>
+#include <streambuf>
+#include <system_error>
+
+#include "cloudgen/volume.h"
+
+namespace cloudgen {
+namespace fs = std::filesystem;
+
+std::string system_error_text(int err) { return std::generic_category().message(err); }
+
+namespace {
+
+[[noreturn]] void throw_io(const std::string& path, const std::string& what, int err) {
+  throw IoError(path + ": " + what + ": " + system_error_text(err));
+}
+
+/// write(2) until every byte is out; returns 0 or the errno of the failure.
+int write_all(int fd, const char* p, size_t n) {
+  while (n > 0) {
+    const ssize_t w = ::write(fd, p, n);
+    if (w < 0) {
+      if (errno == EINTR) continue;
+      return errno;
+    }
+    if (w == 0) return EIO;
+    p += w;
+    n -= size_t(w);
+  }
+  return 0;
+}
+
+int close_checked(int fd) {
+  if (::close(fd) != 0 && errno != EINTR) return errno;
+  return 0;
+}
+
+/// A streambuf over a file descriptor that remembers the errno of the first failed write, so a
+/// full disk is reported as "No space left on device" instead of a bare failbit.
+class FdStreambuf : public std::streambuf {
+ public:
+  explicit FdStreambuf(int fd) : fd_(fd) { setp(buf_, buf_ + sizeof buf_); }
+  int error() const { return err_; }
+  int flush_all() {
+    if (err_ == 0 && pptr() > pbase()) {
+      err_ = write_all(fd_, pbase(), size_t(pptr() - pbase()));
+      setp(buf_, buf_ + sizeof buf_);
+    }
+    return err_;
+  }
+
+ protected:
+  int_type overflow(int_type ch) override {
+    if (flush_all() != 0) return traits_type::eof();
+    if (!traits_type::eq_int_type(ch, traits_type::eof())) {
+      *pptr() = traits_type::to_char_type(ch);
+      pbump(1);
+    }
+    return traits_type::not_eof(ch);
+  }
+  std::streamsize xsputn(const char* s, std::streamsize n) override {
+    if (n >= std::streamsize(sizeof buf_)) {
+      if (flush_all() != 0) return 0;
+      err_ = write_all(fd_, s, size_t(n));
+      return err_ ? 0 : n;
+    }
+    return std::streambuf::xsputn(s, n);
+  }
+  int sync() override { return flush_all() == 0 ? 0 : -1; }
+  // OpenVDB writes placeholder grid offsets and seeks back to fill them in.
+  pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode) override {
+    if (flush_all() != 0) return pos_type(off_type(-1));
+    const int whence = dir == std::ios_base::beg ? SEEK_SET : dir == std::ios_base::cur ? SEEK_CUR : SEEK_END;
+    const off_t r = ::lseek(fd_, off_t(off), whence);
+    if (r < 0) {
+      err_ = errno;
+      return pos_type(off_type(-1));
+    }
+    return pos_type(off_type(r));
+  }
+  pos_type seekpos(pos_type pos, std::ios_base::openmode which) override {
+    return seekoff(off_type(pos), std::ios_base::beg, which);
+  }
+
+ private:
+  int fd_;
+  int err_ = 0;
+  char buf_[1 << 16];
+};
+
+bool pid_alive(long pid) { return pid > 0 && (::kill(pid_t(pid), 0) == 0 || errno == EPERM); }
+
+/// Removes `.NAME.tmp-PID-N` / `.NAME.bak-PID-N` files that a killed earlier run left in `dir`.
+void remove_stale_temporaries(const fs::path& dir, const std::string& name) {
+  std::error_code ec;
+  for (const char* tag : {".tmp-", ".bak-"}) {
+    const std::string prefix = "." + name + tag;
+    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+      const std::string f = it->path().filename().string();
+      if (f.rfind(prefix, 0) != 0) continue;
+      const std::string rest = f.substr(prefix.size());
+      const size_t dash = rest.find('-');
+      if (dash == std::string::npos || dash == 0) continue;
+      char* endp = nullptr;
+      const long pid = std::strtol(rest.substr(0, dash).c_str(), &endp, 10);
+      if (!endp || *endp != '\0' || pid == long(::getpid()) || pid_alive(pid)) continue;
+      std::error_code rm;
+      fs::remove(it->path(), rm);
+    }
+  }
+}
+
+enum class DestKind { Regular, WriteThrough };
+struct Resolved {
+  std::string path;  ///< after following symlinks
+  DestKind kind = DestKind::Regular;
+  bool exists = false;
+  mode_t mode = 0;
+};
+
+/// Classifies the destination, following symlinks: the link stays and its target is written.
+Resolved resolve_destination(const std::string& path) {
+  auto refuse = [&](const struct stat& st, const std::string& shown) -> Resolved {
+    const char* what = S_ISDIR(st.st_mode) ? "a folder" : S_ISBLK(st.st_mode) ? "a block device"
+                       : S_ISSOCK(st.st_mode) ? "a socket" : "not a regular file";
+    throw InputError(shown + ": is " + what +
+                     "; outputs may be regular files (replaced atomically), character devices or FIFOs (written through)");
+  };
+  struct stat lst;
+  if (::lstat(path.c_str(), &lst) != 0) {
+    if (errno == ENOENT) return {path, DestKind::Regular, false, 0};
+    throw_io(path, "cannot inspect the output path", errno);
+  }
+  if (!S_ISLNK(lst.st_mode)) {
+    if (S_ISREG(lst.st_mode)) return {path, DestKind::Regular, true, mode_t(lst.st_mode & 07777)};
+    if (S_ISCHR(lst.st_mode) || S_ISFIFO(lst.st_mode)) return {path, DestKind::WriteThrough, true, 0};
+    return refuse(lst, path);
+  }
+  struct stat st;
+  if (::stat(path.c_str(), &st) == 0) {  // the link's final target exists
+    // Devices and pipes are opened through the link (/dev/stdout -> /proc/self/fd/1 -> pipe).
+    if (S_ISCHR(st.st_mode) || S_ISFIFO(st.st_mode)) return {path, DestKind::WriteThrough, true, 0};
+    if (!S_ISREG(st.st_mode)) return refuse(st, path + " (a symbolic link)");
+    std::error_code ec;
+    const fs::path real = fs::canonical(path, ec);
+    if (ec) throw_io(path, "cannot resolve the symbolic link", ec.value());
+    return {real.string(), DestKind::Regular, true, mode_t(st.st_mode & 07777)};
+  }
+  // A dangling link: create the file it names.
+  std::string p = path;
+  for (int hop = 0; hop < 40; ++hop) {
+    std::error_code ec;
+    fs::path target = fs::read_symlink(p, ec);
+    if (ec) throw_io(path, "cannot read the symbolic link", ec.value());
+    if (target.is_relative()) target = fs::path(p).parent_path() / target;
+    p = target.string();
+    if (::lstat(p.c_str(), &lst) != 0) return {p, DestKind::Regular, false, 0};
+    if (!S_ISLNK(lst.st_mode)) break;
+  }
+  throw InputError(path + ": too many levels of symbolic links");
+}
+
+std::atomic<unsigned> g_counter{0};
+
+std::string unique_sibling(const fs::path& dir, const std::string& name, const char* tag) {
+  return (dir / ("." + name + tag + std::to_string(::getpid()) + "-" + std::to_string(g_counter++))).string();
+}
+
+}  // namespace
+
+std::string file_identity(const std::string& path) {
+  std::error_code ec;
+  fs::path c = fs::canonical(path, ec);
+  if (!ec) return c.string();
+  fs::path p = fs::absolute(path, ec);
+  fs::path parent = fs::weakly_canonical(p.parent_path(), ec);
+  return (parent / p.filename()).lexically_normal().string();
+}
+
+// ---------------------------------------------------------------------------------------------
+
+struct OutputBatch::Impl {
+  struct Staged {
+    std::string dest;      ///< as the user named it (for messages)
+    Resolved target;       ///< where the bytes go
+    int fd = -1;           ///< the temporary's descriptor
+    bool anonymous = false;  ///< O_TMPFILE (no name until commit)
+    std::string named_tmp;   ///< fallback temporary's path
+  };
+  std::map<std::string, std::string> protected_;  ///< identity -> role
+  std::map<std::string, std::string> claimed_;    ///< identity -> role
+  std::vector<Staged> staged_;
+
+  ~Impl() { discard(); }
+  void discard() {
+    for (Staged& s : staged_) {
+      if (s.fd >= 0) ::close(s.fd);
+      if (!s.named_tmp.empty()) ::unlink(s.named_tmp.c_str());
+    }
+    staged_.clear();
+  }
+};
+
+OutputBatch::OutputBatch() : impl_(std::make_unique<Impl>()) {}
+OutputBatch::~OutputBatch() = default;
+size_t OutputBatch::staged() const { return impl_->staged_.size(); }
+
+void OutputBatch::protect(const std::string& path, const std::string& role) {
+  impl_->protected_[file_identity(path)] = role;
+}
+
+void OutputBatch::claim(const std::string& path, const std::string& role) {
+  const Resolved r = resolve_destination(path);
+  const std::string id = file_identity(r.path);
+  if (auto it = impl_->protected_.find(id); it != impl_->protected_.end())
+    throw InputError(path + ": writing " + role + " here would overwrite " + it->second +
+                     "; choose another output name");
+  if (auto it = impl_->claimed_.find(id); it != impl_->claimed_.end()) {
+    if (it->second == role) return;  // the same claim twice (claim, then stage)
+    throw InputError(path + ": would be written twice in this run, as " + it->second + " and as " + role +
+                     "; give the outputs different names");
+  }
+  impl_->claimed_[id] = role;
+}
+
+void OutputBatch::stage(const std::string& path, const std::function<void(const std::string&)>& fill) {
+  Impl::Staged s;
+  s.dest = path;
+  s.target = resolve_destination(path);
+  const std::string id = file_identity(s.target.path);
+  if (impl_->protected_.count(id))
+    throw InputError(path + ": would overwrite " + impl_->protected_[id] + "; choose another output name");
+  for (const Impl::Staged& o : impl_->staged_)
+    if (file_identity(o.target.path) == id)
+      throw InputError(path + ": would be written twice in this run (also as " + o.dest + ")");
+  const mode_t mode = s.target.exists && s.target.kind == DestKind::Regular ? s.target.mode : 0666;
+
+  fs::path dir;
+  if (s.target.kind == DestKind::WriteThrough) {
+    std::error_code ec;
+    dir = fs::temp_directory_path(ec);
+    if (ec) dir = "/tmp";
+  } else {
+    dir = fs::path(s.target.path).parent_path();
+    if (dir.empty()) dir = ".";
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec || !fs::is_directory(dir)) throw_io(path, "cannot create the folder " + dir.string(), ec ? ec.value() : ENOTDIR);
+    remove_stale_temporaries(dir, fs::path(s.target.path).filename().string());
+  }
+
+  // An anonymous temporary vanishes by itself if the process dies; libraries that want a file
+  // name reach it through /proc/self/fd.
+  static const bool have_proc = ::access("/proc/self/fd", X_OK) == 0;
+  if (have_proc) {
+    s.fd = ::open(dir.c_str(), O_TMPFILE | O_RDWR | O_CLOEXEC, mode);
+    s.anonymous = s.fd >= 0;
+  }
+  if (s.fd < 0) {
+    if (errno != EOPNOTSUPP && errno != EISDIR && errno != EINVAL && errno != ENOENT && have_proc)
+      throw_io(path, "cannot create a temporary file in " + dir.string(), errno);
+    s.named_tmp = unique_sibling(dir, fs::path(s.target.path).filename().string(), ".tmp-");
+    s.fd = ::open(s.named_tmp.c_str(), O_CREAT | O_EXCL | O_RDWR | O_CLOEXEC, mode);
+    if (s.fd < 0) {
+      const int e = errno;
+      s.named_tmp.clear();
+      throw_io(path, "cannot create a temporary file in " + dir.string(), e);
+    }
+  }
+  if (s.target.exists && s.target.kind == DestKind::Regular) (void)::fchmod(s.fd, mode);
+  const std::string tmp = s.anonymous ? "/proc/self/fd/" + std::to_string(s.fd) : s.named_tmp;
+  try {
+    fill(tmp);
+    if (::fsync(s.fd) != 0 && errno != EINVAL) throw_io(path, "cannot flush the written data to disk", errno);
+  } catch (const IoError& e) {
+    ::close(s.fd);
+    if (!s.named_tmp.empty()) ::unlink(s.named_tmp.c_str());
+    // Writers name the path they were given; the user knows the destination.
+    std::string msg = e.what();
+    for (size_t k; (k = msg.find(tmp)) != std::string::npos;) msg.replace(k, tmp.size(), path);
+    throw IoError(msg + "; the previous " + path + ", if any, is unchanged");
+  } catch (...) {
+    ::close(s.fd);
+    if (!s.named_tmp.empty()) ::unlink(s.named_tmp.c_str());
+    throw;
+  }
+  impl_->claimed_.emplace(id, path);
+  impl_->staged_.push_back(std::move(s));
+}
+
+std::vector<std::string> OutputBatch::commit() {
+  auto& staged = impl_->staged_;
+  std::vector<std::string> written;
+  // 1. Devices and FIFOs first: they cannot be rolled back, and a failure here leaves every
+  //    regular output untouched.
+  for (Impl::Staged& s : staged) {
+    if (s.target.kind != DestKind::WriteThrough) continue;
+    const int out = ::open(s.target.path.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
+    if (out < 0) throw_io(s.dest, "cannot open for writing", errno);
+    std::vector<char> buf(1 << 20);
+    int err = 0;
+    for (off_t off = 0;;) {
+      const int in = s.fd;
+      ssize_t n = ::pread(in, buf.data(), buf.size(), off);
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0) {
+        err = errno;
+        break;
+      }
+      if (n == 0) break;
+      if ((err = write_all(out, buf.data(), size_t(n))) != 0) break;
+      off += n;
+    }
+    const int cerr = close_checked(out);
+    if (err || cerr) {
+      std::string msg = s.dest + ": write failed: " + system_error_text(err ? err : cerr);
+      msg += written.empty() ? "; no other output was written or replaced"
+                             : "; already written through: " + [&] {
+                                 std::string w;
+                                 for (auto& x : written) w += (w.empty() ? "" : ", ") + x;
+                                 return w;
+                               }();
+      throw IoError(msg);
+    }
+    written.push_back(s.dest);
+  }
+  // 2. Regular files: give each temporary a name, keep a hard link to the file it replaces, and
+  //    rename. If any step fails, every file renamed so far is put back.
+  struct Done {
+    std::string dest, backup;
+    bool had_old;
+  };
+  std::vector<Done> done;
+  auto rollback = [&]() -> std::string {
+    std::string lost;
+    for (auto it = done.rbegin(); it != done.rend(); ++it) {
+      if (!it->backup.empty()) {
+        if (::rename(it->backup.c_str(), it->dest.c_str()) != 0) lost += (lost.empty() ? "" : ", ") + it->dest;
+      } else if (!it->had_old) {
+        ::unlink(it->dest.c_str());
+      } else {
+        lost += (lost.empty() ? "" : ", ") + it->dest;
+      }
+    }
+    return lost;
+  };
+  for (Impl::Staged& s : staged) {
+    if (s.target.kind != DestKind::Regular) continue;
+    const std::string& dest = s.target.path;
+    const fs::path dir = fs::path(dest).parent_path().empty() ? fs::path(".") : fs::path(dest).parent_path();
+    const std::string name = fs::path(dest).filename().string();
+    std::string linked = s.named_tmp;
+    auto fail = [&](const std::string& what, int err) {
+      if (s.anonymous && !linked.empty()) ::unlink(linked.c_str());
+      const std::string lost = rollback();
+      throw IoError(s.dest + ": " + what + ": " + system_error_text(err) +
+                    (lost.empty() ? "; every other output was left as it was"
+                                  : "; could not restore the previous " + lost));
+    };
+    if (s.anonymous) {
+      linked = unique_sibling(dir, name, ".tmp-");
+      const std::string proc = "/proc/self/fd/" + std::to_string(s.fd);
+      if (::linkat(AT_FDCWD, proc.c_str(), AT_FDCWD, linked.c_str(), AT_SYMLINK_FOLLOW) != 0) {
+        const int e = errno;
+        linked.clear();
+        fail("cannot give the finished file a name", e);
+      }
+    }
+    Done d{dest, "", false};
+    struct stat st;
+    if (::lstat(dest.c_str(), &st) == 0 && S_ISREG(st.st_mode)) {
+      d.had_old = true;
+      const std::string bak = unique_sibling(dir, name, ".bak-");
+      if (::link(dest.c_str(), bak.c_str()) == 0) d.backup = bak;
+    }
+    if (::rename(linked.c_str(), dest.c_str()) != 0) {
+      const int e = errno;
+      if (!d.backup.empty()) ::unlink(d.backup.c_str());
+      fail("cannot move the finished file into place", e);
+    }
+    if (!s.anonymous) s.named_tmp.clear();  // now it is the destination
+    done.push_back(d);
+    written.push_back(s.dest);
+  }
+  for (const Done& d : done) {
+    if (!d.backup.empty()) ::unlink(d.backup.c_str());
+    const fs::path dir = fs::path(d.dest).parent_path().empty() ? fs::path(".") : fs::path(d.dest).parent_path();
+    const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (dfd >= 0) {
+      (void)::fsync(dfd);  // the renames survive a power cut; best effort
+      ::close(dfd);
+    }
+  }
+  impl_->discard();
+  return written;
+}
+
+void atomic_write(const std::string& path, const std::function<void(const std::string&)>& fill) {
+  OutputBatch b;
+  b.stage(path, fill);
+  b.commit();
+}
+
+void write_file_bytes(const std::string& path, const void* data, size_t n) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd < 0) throw_io(path, "cannot open for writing", errno);
+  const int err = write_all(fd, static_cast<const char*>(data), n);
+  const int cerr = close_checked(fd);
+  if (err || cerr) throw_io(path, "write failed", err ? err : cerr);
+}
+
+void write_file_stream(const std::string& path, const std::function<void(std::ostream&)>& body) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd < 0) throw_io(path, "cannot open for writing", errno);
+  FdStreambuf buf(fd);
+  std::ostream os(&buf);
+  try {
+    body(os);
+  } catch (...) {
+    ::close(fd);
+    throw;
+  }
+  os.flush();
+  // Any failed operation counts: a failed seek sets only failbit, and the writes after it are
+  // silently dropped.
+  const int err = buf.flush_all() ? buf.error() : (os.fail() ? (buf.error() ? buf.error() : EIO) : 0);
+  const int cerr = close_checked(fd);
+  if (err || cerr) throw_io(path, "write failed", err ? err : cerr);
+}
+
+std::vector<uint8_t> read_file_bytes(const std::string& path, size_t max_bytes) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) {
+    const int e = errno;
+    if (e == ENOENT) throw InputError(path + ": no such file");
+    throw InputError(path + ": cannot open: " + system_error_text(e));
+  }
+  std::vector<uint8_t> out;
+  struct stat st;
+  if (::fstat(fd, &st) == 0 && S_ISDIR(st.st_mode)) {
+    ::close(fd);
+    throw InputError(path + ": is a folder, not a file");
+  }
+  if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode)) {
+    if (uint64_t(st.st_size) > max_bytes) {
+      ::close(fd);
+      throw InputError(path + ": " + std::to_string(st.st_size) + " bytes is more than the " +
+                       std::to_string(max_bytes) + " this reader accepts");
+    }
+    out.reserve(size_t(st.st_size));
+  }
+  char buf[1 << 16];
+  for (;;) {
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const int e = errno;
+      ::close(fd);
+      throw_io(path, "read failed", e);
+    }
+    if (n == 0) break;
+    if (out.size() + size_t(n) > max_bytes) {
+      ::close(fd);
+      throw InputError(path + ": more than the " + std::to_string(max_bytes) + " bytes this reader accepts");
+    }
+    out.insert(out.end(), buf, buf + n);
+  }
+  ::close(fd);
+  return out;
+}
+
+}  // namespace cloudgen
