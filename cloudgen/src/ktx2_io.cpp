@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "cloudgen/io.h"
+#include "cloudgen/json_checked.h"
 #include "format_internal.h"
 
 namespace cloudgen {
@@ -156,9 +157,8 @@ Volume parse_ktx2(const std::vector<uint8_t>& b, const std::string& name, uint64
       if (nul && std::string(kv, nul) == kVolumeKey) {
         std::string val(nul + 1, kv + n);
         while (!val.empty() && val.back() == '\0') val.pop_back();
-        const json j = json::parse(val, nullptr, false);
-        if (j.is_discarded() || !j.is_object())
-          throw InputError(where + ": KTX2 key \"" + kVolumeKey + "\" does not hold a JSON object");
+        const json j = parse_json_checked(val, where + ": KTX2 key \"" + std::string(kVolumeKey) + "\"");
+        if (!j.is_object()) throw InputError(where + ": KTX2 key \"" + kVolumeKey + "\" does not hold a JSON object");
         const detail::FieldReader f(j, where + ": KTX2 key \"" + kVolumeKey + "\"");
         v.voxel_size = f.number("voxel_size", 1.0, 1e-9, 1e9);
         if (f.has("origin")) v.origin = f.vec3("origin", -1e12, 1e12);

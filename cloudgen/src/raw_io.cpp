@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "cloudgen/io.h"
+#include "cloudgen/json_checked.h"
 #include "format_internal.h"
 
 namespace cloudgen {
@@ -40,8 +41,7 @@ void write_raw(const Volume& v, const std::string& path, const ExportOptions& o,
 Volume parse_raw(const std::string& sidecar_text, const std::vector<uint8_t>& bytes, const std::string& name,
                  const std::vector<uint8_t>* occupancy_bytes, uint64_t max_bytes) {
   const std::string side = printable(sidecar_of(name)), raw = printable(name);
-  json j = json::parse(sidecar_text, nullptr, false);
-  if (j.is_discarded()) throw InputError(side + ": the sidecar is not valid JSON");
+  const json j = parse_json_checked(sidecar_text, side);
   if (!j.is_object() || !j.contains("format") || !j.contains("size"))
     throw InputError(side + ": not a cloudgen texture sidecar (no \"format\"/\"size\"; a `cloudgen noise` cube is a "
                             "single float channel, not a cloud texture)");

@@ -1,0 +1,135 @@
+// Helpers shared by the test files: temporary folders, running the cloudgen binary with
+// controlled environment, limits and signals, reading files.
+#pragma once
+
+#include <fcntl.h>
+#include <algorithm>
+#include <cerrno>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace testutil {
+
+namespace fs = std::filesystem;
+
+inline const std::string kPresets = std::string(CLOUD_SOURCE_DIR) + "/presets/";
+inline const std::string kCli = std::string(CLOUD_BINARY_DIR) + "/bin/cloudgen";
+
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    char tmpl[] = "/tmp/cloudgen-test-XXXXXX";
+    path = ::mkdtemp(tmpl);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::permissions(path, fs::perms::owner_all, fs::perm_options::add, ec);
+    fs::remove_all(path, ec);
+  }
+  std::string operator/(const std::string& f) const { return (path / f).string(); }
+};
+
+/// Runs `cmd` through the shell with stderr folded into the output; returns the exit code.
+inline int run_shell(const std::string& cmd, std::string* out = nullptr) {
+  FILE* p = ::popen((cmd + " 2>&1").c_str(), "r");
+  std::string s;
+  char buf[4096];
+  while (size_t n = std::fread(buf, 1, sizeof buf, p)) s.append(buf, n);
+  const int st = ::pclose(p);
+  if (out) *out = s;
+  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+/// `cloudgen ARGS` (shell words) with stderr folded into the output.
+inline int run_cli(const std::string& args, std::string* out = nullptr) { return run_shell(kCli + " " + args, out); }
+
+/// One run of the cloudgen binary with full control, no shell in between.
+struct Process {
+  std::vector<std::string> args;  ///< after the program name
+  std::vector<std::string> env;   ///< extra "KEY=VALUE"
+  long long fsize_limit = -1;     ///< RLIMIT_FSIZE in bytes (a small "disk")
+  std::string signal_on;          ///< send `sig` once the output contains this text
+  int sig = SIGINT;
+  std::string cwd;
+  size_t max_output = 1 << 20;    ///< stop collecting (and kill) beyond this many bytes
+
+  struct Result {
+    int code = -1;        ///< exit status, or -1 if killed by a signal
+    int term_signal = 0;  ///< the signal that ended it, if any
+    std::string out;      ///< stdout + stderr
+    bool signalled = false;
+  };
+
+  Result run() const {
+    int fds[2];
+    if (::pipe(fds) != 0) return {};
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+      ::dup2(fds[1], 1);
+      ::dup2(fds[1], 2);
+      ::close(fds[0]);
+      ::close(fds[1]);
+      for (const std::string& e : env) ::putenv(const_cast<char*>(e.c_str()));
+      if (fsize_limit >= 0) {
+        struct rlimit rl{rlim_t(fsize_limit), rlim_t(fsize_limit)};
+        ::setrlimit(RLIMIT_FSIZE, &rl);
+      }
+      if (!cwd.empty() && ::chdir(cwd.c_str()) != 0) ::_exit(98);
+      std::vector<char*> argv{const_cast<char*>(kCli.c_str())};
+      for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+      argv.push_back(nullptr);
+      ::execv(kCli.c_str(), argv.data());
+      ::_exit(99);
+    }
+    ::close(fds[1]);
+    Result r;
+    char buf[4096];
+    for (ssize_t n; (n = ::read(fds[0], buf, sizeof buf)) != 0;) {
+      if (n < 0) {
+        if (errno == EINTR) continue;
+        break;
+      }
+      if (r.out.size() < max_output) r.out.append(buf, size_t(n));
+      else ::kill(pid, SIGKILL);
+      if (!r.signalled && !signal_on.empty() && r.out.find(signal_on) != std::string::npos) {
+        ::kill(pid, sig);
+        r.signalled = true;
+      }
+    }
+    ::close(fds[0]);
+    int st = 0;
+    ::waitpid(pid, &st, 0);
+    if (WIFEXITED(st)) r.code = WEXITSTATUS(st);
+    if (WIFSIGNALED(st)) r.term_signal = WTERMSIG(st);
+    return r;
+  }
+};
+
+inline std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+inline void write_text(const std::string& path, const std::string& s) { std::ofstream(path, std::ios::binary) << s; }
+
+/// The names in a folder, sorted.
+inline std::vector<std::string> list_dir(const fs::path& d) {
+  std::vector<std::string> v;
+  for (auto& e : fs::directory_iterator(d)) v.push_back(e.path().filename().string());
+  std::sort(v.begin(), v.end());
+  return v;
+}
+
+}  // namespace testutil
