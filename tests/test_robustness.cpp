@@ -494,3 +494,71 @@ TEST(StressTable, EveryPresetKeyAtAndBeyondTheEndsOfItsRange) {
   EXPECT_GT(generated, 50u);  // sanity: the table has ~60 numeric keys
   EXPECT_GT(refused, 50u);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Readers keep what writers wrote (issue 7)
+
+TEST(RoundTrip, RawReadsTheOccupancyFileItWroteAndRefusesADamagedOne) {
+  TempDir dir;
+  Preset p = load_preset(kPresets + "tiny.json");
+  Volume v = generate(p);
+  ASSERT_FALSE(v.occupancy.empty());
+  write_raw(v, dir / "t.raw", ExportOptions{});
+  const std::string occ_path = dir / "t.occupancy.raw";
+  std::string occ = read_text(occ_path);
+  ASSERT_EQ(occ.size(), v.occupancy.size());
+  EXPECT_EQ(std::vector<uint8_t>(occ.begin(), occ.end()), v.occupancy) << "the file holds the written grid";
+  // Marking an empty cell occupied keeps the grid conservative: the reader must return the file's
+  // grid as it is (it reads the file rather than rebuilding).
+  const size_t empty = occ.find('\0');
+  ASSERT_NE(empty, std::string::npos);
+  occ[empty] = 1;
+  write_text(occ_path, occ);
+  Volume r = read_raw(dir / "t.raw");
+  EXPECT_EQ(r.occupancy[empty], 1);
+  EXPECT_EQ(r.occupancy_cell, v.occupancy_cell);
+  EXPECT_EQ(r.occupancy_padding, v.occupancy_padding);
+  // Clearing an occupied cell would hide cloud from the marcher: refused, naming the cell.
+  std::string bad(occ.size(), '\0');
+  write_text(occ_path, bad);
+  const std::string e = error_of([&] { read_raw(dir / "t.raw"); });
+  EXPECT_NE(e.find("marks cell"), std::string::npos) << e;
+  // Without the file the grid is rebuilt from the density.
+  fs::remove(occ_path);
+  EXPECT_EQ(read_raw(dir / "t.raw").occupancy, v.occupancy);
+}
+
+TEST(RoundTrip, EveryVolumeFieldSurvivesRawAndKtx2) {
+  Volume v;
+  v.dims = {{5, 3, 4}};
+  v.voxel_size = 7.25;
+  v.origin = {{-1000.5, 2500, 12}};
+  v.tiles_xz = true;
+  v.density.resize(v.voxel_count());
+  for (size_t i = 0; i < v.density.size(); ++i) v.density[i] = float(i % 7) / 6.0f;
+  v.detail[0].assign(v.voxel_count(), 0.25f);
+  v.detail[1].assign(v.voxel_count(), 0.75f);
+  v.detail_names = {{"erosion", "wisps", "detail_a"}};
+  v.metadata = {{"preset", "unit test"}, {"seed", "42"}};
+  build_occupancy(v);
+  TempDir dir;
+  ExportOptions o;
+  o.texel = Texel::Rgba32f;
+  for (const char* name : {"v.raw", "v.ktx2"}) {
+    SCOPED_TRACE(name);
+    write_volume(v, dir / name, format_from_path(name), o);
+    Volume r = read_volume(dir / name);
+    EXPECT_EQ(r.dims, v.dims);
+    EXPECT_EQ(r.voxel_size, v.voxel_size);
+    EXPECT_EQ(r.origin, v.origin);
+    EXPECT_EQ(r.tiles_xz, v.tiles_xz);
+    EXPECT_EQ(r.density, v.density);
+    EXPECT_EQ(r.detail[0], v.detail[0]);
+    EXPECT_EQ(r.detail[1], v.detail[1]);
+    EXPECT_TRUE(r.detail[2].empty()) << "a channel that was not written stays absent";
+    EXPECT_EQ(r.detail_names[0], "erosion");
+    EXPECT_EQ(r.detail_names[1], "wisps");
+    EXPECT_EQ(r.metadata, v.metadata);
+    EXPECT_EQ(r.occupancy, v.occupancy);
+  }
+}
