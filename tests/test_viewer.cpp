@@ -3,6 +3,7 @@
 // transmittance through a uniform slab, shader error reporting and bad inputs.
 // A failure to create the EGL context is a failure, not a skip: CI runs on this kind of machine.
 #include <cmath>
+#include <cstddef>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -406,27 +407,27 @@ TEST(ViewerErrors, ShaderCompileErrorNamesFileLineAndLog) {
   for (const std::string& name : embedded_shader_names()) {
     std::ofstream(dir / name) << ShaderSource().load(name);
   }
-  // Break line 40 of the shared header (included by every pass).
-  std::string text = ShaderSource().load("cloud_functions.glsl");
+  // Break line 40 of a shared header (included by the ground and cloud passes).
+  std::string text = ShaderSource().load("medium.glsl");
   std::istringstream in(text);
   std::string line, broken;
   for (int n = 1; std::getline(in, line); ++n) broken += (n == 40 ? "this is not glsl;" : line) + "\n";
-  std::ofstream(dir / "cloud_functions.glsl") << broken;
+  std::ofstream(dir / "medium.glsl") << broken;
   context();
   try {
     GlRenderer r{ShaderSource(dir.string())};
     FAIL() << "a broken shader compiled";
   } catch (const ShaderError& e) {
-    EXPECT_EQ(e.file(), "cloud_functions.glsl");
+    EXPECT_EQ(e.file(), "medium.glsl");
     EXPECT_EQ(e.line(), 40);
     std::string what = e.what();
-    EXPECT_NE(what.find("cloud_functions.glsl:40"), std::string::npos) << what;
+    EXPECT_NE(what.find("medium.glsl:40"), std::string::npos) << what;
     EXPECT_NE(what.find("error"), std::string::npos) << what;  // the driver's log is included
   }
   std::string err;
   EXPECT_EQ(run({"synthetic:sphere", "--headless", "--size", "32x18", "--shader-dir", dir.string(), "--out",
                  (output_dir() / "never.png").string()}, &err), 2);
-  EXPECT_NE(err.find("cloud_functions.glsl:40"), std::string::npos) << err;
+  EXPECT_NE(err.find("medium.glsl:40"), std::string::npos) << err;
 }
 
 TEST(ViewerErrors, BadInputsGiveAClearMessageAndNonZeroExit) {
@@ -632,5 +633,65 @@ TEST(ViewerCloudgen, NonCloudVdbAndTruncatedTextureAreClearErrors) {
   EXPECT_EQ(run({raw.string(), "--headless", "--size", "32x18", "--out", png}, &err), 1) << err;
   EXPECT_NE(err.find("short.raw"), std::string::npos) << err;
   std::cout << "messages:\n" << err;
+}
+#endif
+
+// ------------------------------------------------------------------ shared definitions
+
+// The std140 layout the driver gives CloudBlock is the C++ struct's layout: the size and the offset
+// of every group's first member and of members that follow a vec3 (where std140 padding would
+// bite first).
+TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
+  context();
+  GlRenderer r{ShaderSource()};
+  EXPECT_EQ(r.cloud_block_size(), int(sizeof(gpu::CloudParams)));
+#define CV_EXPECT_OFFSET(m) EXPECT_EQ(r.cloud_block_offset(#m), int(offsetof(gpu::CloudParams, m))) << #m
+  CV_EXPECT_OFFSET(volume_min_m);
+  CV_EXPECT_OFFSET(voxel_size_m);
+  CV_EXPECT_OFFSET(tiles_xz);
+  CV_EXPECT_OFFSET(occ_cell_voxels);
+  CV_EXPECT_OFFSET(sun_dir);
+  CV_EXPECT_OFFSET(albedo);
+  CV_EXPECT_OFFSET(sigma_t_per_m);
+  CV_EXPECT_OFFSET(step_m);
+  CV_EXPECT_OFFSET(occupancy_skip);
+  CV_EXPECT_OFFSET(light_mode);
+  CV_EXPECT_OFFSET(powder_strength);
+  CV_EXPECT_OFFSET(output_mode);
+  CV_EXPECT_OFFSET(ground_half_extent_m);
+  CV_EXPECT_OFFSET(camera_world_mod_m);
+  CV_EXPECT_OFFSET(shadow_samples);
+  CV_EXPECT_OFFSET(sun_disc_scale);
+  CV_EXPECT_OFFSET(earth_radius_m);
+  CV_EXPECT_OFFSET(coverage_period_m);
+  CV_EXPECT_OFFSET(camera_coverage_z_m);
+  CV_EXPECT_OFFSET(cloud_type);
+#undef CV_EXPECT_OFFSET
+  EXPECT_EQ(r.pass_names().front(), "ground");
+  EXPECT_EQ(r.pass_names().back(), "tonemap");
+}
+
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+#include "cloudgen/generate.h"
+
+// One cloud-type gradient: what cloudgen bakes for each height profile is, bit for bit, what the
+// viewer's layer mode applies for that cloud type (the two had different breakpoints before).
+TEST(ViewerCloudgen, CloudTypeGradientIsCloudgensHeightProfile) {
+  struct Case { const char* profile; double type; };
+  for (Case c : {Case{"stratus", 0.0}, Case{"cumulus", 0.5}, Case{"cumulonimbus", 1.0}}) {
+    cloudgen::Preset p;
+    p.height_profile = c.profile;
+    double peak = 0;
+    for (int i = 0; i <= 1000; ++i) {
+      double h = i / 1000.0;
+      double baked = cloudgen::height_profile(p, h);
+      ASSERT_EQ(baked, reference_cloud_type_gradient(h, c.type)) << c.profile << " h " << h;
+      peak = std::max(peak, baked);
+    }
+    EXPECT_GT(peak, 0.99) << c.profile;  // a real profile, not zero everywhere
+  }
+  // The types differ where they should: at h = 0.5 only the cumulonimbus is still dense.
+  EXPECT_EQ(reference_cloud_type_gradient(0.5, 0.0), 0.0);
+  EXPECT_GT(reference_cloud_type_gradient(0.5, 1.0), 0.99);
 }
 #endif

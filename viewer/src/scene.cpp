@@ -12,6 +12,7 @@
 
 #include "noise3d/noise3d.h"
 
+#include "cloudviewer/constants.h"
 #include "cloudviewer/errors.h"
 
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
@@ -460,45 +461,75 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   int k = std::max(1, int(std::floor(0.999 * (cell_m - 0.5 * min_voxel) / dt)));
   double diag = glm::length(size);
   ref::CloudParams& p = f.params;
-  glm::dvec3 rel_min = vol.origin - cam.eye;
-  p.volume_min = glm::dvec4(rel_min, vol.voxel_size);
-  p.volume_size = glm::dvec4(size, vol.tiles ? 1.0 : 0.0);  // box mode only, except w
-  p.volume_dims = glm::dvec4(vol.dims[0], vol.dims[1], vol.dims[2], vol.has_detail ? 1.0 : 0.0);
-  p.occ_dims = glm::dvec4(vol.occ_dims[0], vol.occ_dims[1], vol.occ_dims[2], vol.occ_cell);
-  p.sun_dir = glm::dvec4(sun.direction(), s.sun_intensity);
-  p.sun_color = glm::dvec4(1.0, 0.96, 0.9, s.ambient);
-  p.ambient_color = glm::dvec4(0.30, 0.38, 0.52, s.albedo);
+  p = ref::CloudParams{};  // zero: layer fields stay 0 in box mode
+  p.volume_min_m = vol.origin - cam.eye;
+  p.voxel_size_m = vol.voxel_size;
+  p.volume_size_m = size;  // box mode only
+  p.tiles_xz = vol.tiles || layer ? 1.0 : 0.0;
+  p.volume_dims = glm::dvec3(vol.dims[0], vol.dims[1], vol.dims[2]);
+  p.has_detail = vol.has_detail ? 1.0 : 0.0;
+  p.occ_dims = glm::dvec3(vol.occ_dims[0], vol.occ_dims[1], vol.occ_dims[2]);
+  p.occ_cell_voxels = vol.occ_cell;
+  p.sun_dir = sun.direction();
+  p.sun_radiance = s.sun_intensity;
+  p.sun_color = glm::dvec3(1.0, 0.96, 0.9);
+  p.ambient_scale = s.ambient;
+  p.ambient_color = glm::dvec3(0.30, 0.38, 0.52);
+  p.albedo = s.albedo;
   // Auto values follow the voxel size, not the box, so a VDB cropped to its active voxels renders
   // like the dense texture it came from.
-  double sigma = s.sigma_t > 0 ? s.sigma_t : 0.5 / min_voxel;
-  p.medium = glm::dvec4(sigma, s.erosion, s.density, s.powder_c);
+  p.sigma_t_per_m = s.sigma_t > 0 ? s.sigma_t : 0.5 / min_voxel;
+  p.erosion = s.erosion;
+  p.density_scale = s.density;
+  p.powder_c = s.powder_c;
+  p.step_m = dt;
+  p.large_step_count = k;
+  p.max_distance_m = s.max_distance;
   // Layer rays can run to the horizon: cap the loop (use render.adaptive=true there).
-  double max_iter = layer ? 2048.0 + 8.0 * s.steps : 4.0 * std::ceil(diag / dt) + 64.0;
-  p.march = glm::dvec4(dt, k, s.max_distance, max_iter);
-  double a_start = s.adaptive_start > 0 ? s.adaptive_start : 0.25 * max_extent;
-  double a_growth = s.adaptive_growth > 0 ? s.adaptive_growth : 4.0 / max_extent;
-  p.march2 = glm::dvec4(s.adaptive ? 1 : 0, a_start, a_growth, s.occupancy ? 1 : 0);
-  double light_step = s.light_step > 0 ? s.light_step : 2.5 * min_voxel;
-  double light_mode = !s.light_march ? 0.0 : (s.occupancy && s.occupancy_light ? 2.0 : 1.0);
-  p.light = glm::dvec4(light_mode, s.light_samples, light_step, s.light_growth);
-  p.phase = glm::dvec4(double(int(s.phase)), s.g, double(mie_phase_table().size()), s.powder);
-  p.control = glm::dvec4(s.jitter ? 1 : 0, s.frame, s.exact_filter ? 1 : 0, double(int(s.output)));
+  p.max_iterations = layer ? 2048.0 + 8.0 * s.steps : 4.0 * std::ceil(diag / dt) + 64.0;
+  p.adaptive = s.adaptive ? 1 : 0;
+  p.adaptive_start_m = s.adaptive_start > 0 ? s.adaptive_start : 0.25 * max_extent;
+  p.adaptive_growth_per_m = s.adaptive_growth > 0 ? s.adaptive_growth : 4.0 / max_extent;
+  p.occupancy_skip = s.occupancy ? 1 : 0;
+  p.light_mode = !s.light_march ? CV_LIGHT_OFF : (s.occupancy && s.occupancy_light ? CV_LIGHT_MARCH_SKIP_EMPTY : CV_LIGHT_MARCH);
+  p.light_samples = s.light_samples;
+  p.light_step_m = s.light_step > 0 ? s.light_step : 2.5 * min_voxel;
+  p.light_growth = s.light_growth;
+  p.phase_mode = double(int(s.phase));
+  p.hg_g = s.g;
+  p.mie_table_size = double(mie_phase_table().size());
+  p.powder_strength = s.powder;
+  p.jitter = s.jitter ? 1 : 0;
+  p.frame_index = s.frame;
+  p.exact_filter = s.exact_filter ? 1 : 0;
+  p.output_mode = double(int(s.output));
   double gh = ground_height(vol, s);
   f.ground_half_extent = layer ? 2e5 : 5e4;
-  p.ground = glm::dvec4(gh - cam.eye.y, s.ground_albedo, s.ground ? 1 : 0, f.ground_half_extent);
-  glm::dvec3 cw = glm::mod(cam.eye, glm::dvec3(1024.0));
-  p.camera_world = glm::dvec4(cw, s.shadow_samples);
-  p.sky = glm::dvec4(0.12, 0.24, 0.55, 40.0);
+  p.ground_y_m = gh - cam.eye.y;
+  p.ground_albedo = s.ground_albedo;
+  p.ground_on = s.ground ? 1 : 0;
+  p.ground_half_extent_m = f.ground_half_extent;
+  p.camera_world_mod_m = glm::mod(cam.eye, glm::dvec3(1024.0));
+  p.shadow_samples = s.shadow_samples;
+  p.sky_zenith = glm::dvec3(0.12, 0.24, 0.55);
+  p.sun_disc_scale = 40.0;
+  p.earth_radius_m = s.earth_radius;
+  p.sky_mode = CV_SKY_ANALYTIC;
   if (layer) {
     double period = size.x * s.coverage_tiles;
-    p.layer = glm::dvec4(1.0, alt.x, alt.y, s.earth_radius);
-    p.layer2 = glm::dvec4(cam.eye.y - gh, glm::mod(cam.eye.x, size.x), glm::mod(cam.eye.z, size.z), 0.0);
-    p.layer3 = glm::dvec4(size.x, 0.0, size.z, period);
-    p.layer4 = glm::dvec4(glm::mod(cam.eye.x, period), glm::mod(cam.eye.z, period), s.coverage, s.cloud_type);
-    p.volume_size.w = 1.0;
-  } else {
-    p.layer = p.layer2 = p.layer3 = p.layer4 = glm::dvec4(0.0);
-    p.layer.w = s.earth_radius;
+    p.layer_on = 1.0;
+    p.layer_bottom_m = alt.x;
+    p.layer_top_m = alt.y;
+    p.camera_altitude_m = cam.eye.y - gh;
+    p.camera_tile_x_m = glm::mod(cam.eye.x, size.x);
+    p.camera_tile_z_m = glm::mod(cam.eye.z, size.z);
+    p.coverage_period_m = period;
+    p.tile_x_m = size.x;
+    p.tile_z_m = size.z;
+    p.camera_coverage_x_m = glm::mod(cam.eye.x, period);
+    p.camera_coverage_z_m = glm::mod(cam.eye.z, period);
+    p.coverage_bias = s.coverage;
+    p.cloud_type = s.cloud_type;
   }
   f.params = rounded_to_float(p);
   f.view_proj = view_projection(cam, width, height);

@@ -5,11 +5,18 @@
 #include <string>
 #include <vector>
 
+#include "cloudviewer/constants.h"
+
 namespace cloudviewer {
 
-enum class PhaseMode { None = 0, HenyeyGreenstein = 1, Mie = 2 };
-enum class ToneMap { Reinhard = 0, Aces = 1, Clamp = 2 };
-enum class OutputMode { Radiance = 0, Transmittance = 1, Iterations = 2 };
+// Codes stored in the shader parameters come from shaders/constants.glsl, which GLSL reads too.
+enum class PhaseMode { None = CV_PHASE_NONE, HenyeyGreenstein = CV_PHASE_HG, Mie = CV_PHASE_MIE };
+enum class ToneMap { Reinhard = CV_TONEMAP_REINHARD, Aces = CV_TONEMAP_ACES, Clamp = CV_TONEMAP_CLAMP };
+enum class OutputMode {
+  Radiance = CV_OUTPUT_RADIANCE,
+  Transmittance = CV_OUTPUT_TRANSMITTANCE,
+  Iterations = CV_OUTPUT_ITERATIONS
+};
 enum class PlaceMode { Box = 0, Layer = 1 };
 
 struct RenderSettings {
