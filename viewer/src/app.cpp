@@ -127,8 +127,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
       throw InputError("--out " + o.out + ": unknown image type (allowed: .png, .exr)");
   }
   auto t0 = std::chrono::steady_clock::now();
-  cloudgen::Volume volume = load_volume(o.input);
-  PreparedVolume vol = prepare_volume(volume, o.settings.occupancy_cell, o.settings.occupancy_padding);
+  PreparedVolume vol = open_input(o.input, o.settings);
   auto t1 = std::chrono::steady_clock::now();
   out << "volume " << vol.dims[0] << "x" << vol.dims[1] << "x" << vol.dims[2] << " voxels of "
       << vol.voxel_size << " m" << (vol.tiles ? " (tiles in x,z)" : "") << ", occupancy "
@@ -174,17 +173,23 @@ Camera resolve_camera(const Options& o, const PreparedVolume& vol, int width, in
 
 Sun resolve_sun(const Options& o, const Camera& cam) { return o.sun ? *o.sun : default_sun(cam); }
 
+int exit_code(const std::exception& e) {
+  if (dynamic_cast<const InputError*>(&e)) return 1;
+  if (dynamic_cast<const IoError*>(&e) || dynamic_cast<const GlError*>(&e)) return 2;
+  return 3;
+}
+
 int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   try {
     return run(args, out, err);
-  } catch (const InputError& e) {
-    err << "cloudviewer: error: " << e.what() << "\n";
-    return 1;
-  } catch (const GlError& e) {
-    err << "cloudviewer: OpenGL error: " << e.what() << "\n";
-    return 2;
   } catch (const std::exception& e) {
-    err << "cloudviewer: error: " << e.what() << "\n";
+    const int code = exit_code(e);
+    const char* kind = code == 1 ? "error" : dynamic_cast<const GlError*>(&e) ? "OpenGL error"
+                     : code == 2 ? "I/O error" : "internal error";
+    err << "cloudviewer: " << kind << ": " << e.what() << "\n";
+    return code;
+  } catch (...) {
+    err << "cloudviewer: internal error: unknown exception\n";
     return 3;
   }
 }

@@ -147,9 +147,8 @@ void on_scroll(GLFWwindow* w, double, double dy) {
 
 int run_window(const Options& o, std::ostream& out, std::ostream& err) {
   // Load first, so a bad input fails before a window opens.
-  cloudgen::Volume volume = load_volume(o.input);
   RenderSettings settings = o.settings;
-  PreparedVolume vol = prepare_volume(volume, settings.occupancy_cell, settings.occupancy_padding);
+  PreparedVolume vol = open_input(o.input, settings);
   if (!glfwInit()) throw GlError("GLFW could not initialise (no display? use --headless, or run under xvfb-run)");
   struct Terminate {
     ~Terminate() { glfwTerminate(); }
@@ -239,7 +238,7 @@ int run_window(const Options& o, std::ostream& out, std::ostream& err) {
       if (watch_input && (mtime_of(o.input) != input_time || view.reload_requested)) {
         input_time = mtime_of(o.input);
         try {
-          vol = prepare_volume(load_volume(o.input), settings.occupancy_cell, settings.occupancy_padding);
+          vol = open_input(o.input, settings);
           renderer.set_volume(vol);
           out << "reloaded " << o.input << "\n";
         } catch (const Error& e) {
