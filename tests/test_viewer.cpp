@@ -695,3 +695,139 @@ TEST(ViewerCloudgen, CloudTypeGradientIsCloudgensHeightProfile) {
   EXPECT_GT(reference_cloud_type_gradient(0.5, 1.0), 0.99);
 }
 #endif
+
+// ------------------------------------------------------------------ exit codes and hostile inputs
+
+#include <csignal>
+#include <sys/resource.h>
+
+// One rule for both programs: 1 input, 2 I/O and environment, 3 internal. cloudgen's and the
+// viewer's exceptions are one hierarchy, and the viewer does not rewrap cloudgen's IoError.
+TEST(ViewerErrors, ExitCodesFollowTheToolkitRule) {
+  EXPECT_EQ(exit_code(InputError("x")), 1);
+  EXPECT_EQ(exit_code(cloudgen::InputError("x")), 1);
+  EXPECT_EQ(exit_code(IoError("x")), 2);
+  EXPECT_EQ(exit_code(cloudgen::IoError("x")), 2);
+  EXPECT_EQ(exit_code(GlError("x")), 2);
+  EXPECT_EQ(exit_code(ShaderError("x", "f.glsl", 1)), 2);
+  EXPECT_EQ(exit_code(cloudgen::Error("x")), 3);
+  EXPECT_EQ(exit_code(std::runtime_error("x")), 3);
+  EXPECT_EQ(exit_code(std::bad_alloc()), 3);
+  // An output that cannot be written (its folder is a regular file) is an I/O error, exit 2.
+  fs::path blocker = output_dir() / "not_a_folder";
+  std::ofstream(blocker) << "x";
+  std::string err;
+  EXPECT_EQ(run({"synthetic:slab", "--headless", "--size", "16x9", "--out", (blocker / "x.png").string()}, &err), 2) << err;
+  EXPECT_NE(err.find("not_a_folder"), std::string::npos) << err;
+}
+
+// Every number that enters the viewer is finite and in range, or the run stops with exit 1 and a
+// message naming the flag or field, before anything renders.
+TEST(ViewerErrors, NonFiniteAndOutOfRangeNumbersAreRefused) {
+  std::string png = (output_dir() / "never.png").string();
+  struct Case { std::vector<std::string> args; const char* named; };
+  std::vector<Case> cases = {
+      {{"--fov", "nan"}, "--fov"},
+      {{"--fov", "0"}, "--fov"},
+      {{"--fov", "inf"}, "--fov"},
+      {{"--camera", "1e308,0,0:0,0,0"}, "--camera"},
+      {{"--camera", "0,0,-100:nan,0,0"}, "--camera"},
+      {{"--sun", "nan,30"}, "--sun"},
+      {{"--sun", "1e300,30"}, "--sun"},
+      {{"--set", "render.density=inf"}, "render.density"},
+  };
+  for (const Case& c : cases) {
+    std::vector<std::string> args = {"synthetic:slab", "--headless", "--size", "16x9", "--out", png};
+    args.insert(args.end(), c.args.begin(), c.args.end());
+    std::string err;
+    EXPECT_EQ(run(args, &err), 1) << c.args[1] << ": " << err;
+    EXPECT_NE(err.find(c.named), std::string::npos) << err;
+  }
+  // A bench track with fov 0, and one with an eye at 1e308 m.
+  for (const char* body : {R"({"fov": 0, "keys": [{"eye": [0.5, 0.5, -1], "target": [0.5, 0.5, 0.5]}]})",
+                           R"({"space": "world", "keys": [{"eye": [1e308, 0, 0], "target": [0, 0, 0]}]})"}) {
+    fs::path track = output_dir() / "bad_track.json";
+    std::ofstream(track) << body;
+    std::string err;
+    EXPECT_EQ(run({"synthetic:slab", "--headless", "--size", "16x9", "--bench", track.string()}, &err), 1) << err;
+    EXPECT_NE(err.find("bad_track.json"), std::string::npos) << err;
+    EXPECT_NE(err.find("out of range"), std::string::npos) << err;
+  }
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+  // A raw texture whose sidecar claims 1e308 m voxels.
+  cloudgen::Volume v = synthetic_volume("slab");
+  fs::path raw = output_dir() / "huge_voxels.raw";
+  cloudgen::ExportOptions eo;
+  cloudgen::write_volume(v, raw.string(), cloudgen::Format::Raw, eo);
+  fs::path side = output_dir() / "huge_voxels.json";
+  std::string text;
+  {
+    std::ifstream in(side);
+    text.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  size_t at = text.find("\"voxel_size\"");
+  ASSERT_NE(at, std::string::npos);
+  size_t colon = text.find(':', at), end = text.find_first_of(",\n}", colon);
+  text.replace(colon + 1, end - colon - 1, " 1e308");
+  std::ofstream(side) << text;
+  std::string err;
+  EXPECT_EQ(run({raw.string(), "--headless", "--size", "16x9", "--out", png}, &err), 1) << err;
+  EXPECT_NE(err.find("voxel"), std::string::npos) << err;
+#endif
+}
+
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+// A 4096^3 preset would need terabytes: refused up front with the estimate, not bad_alloc.
+TEST(ViewerErrors, HugeInputIsRefusedWithTheMemoryEstimate) {
+  std::string text;
+  {
+    std::ifstream in(std::string(CLOUD_SOURCE_DIR) + "/presets/tiny.json");
+    text.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  size_t at = text.find("[32, 32, 32]");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 12, "[4096, 4096, 4096]");
+  fs::path preset = output_dir() / "huge_preset.json";
+  std::ofstream(preset) << text;
+  std::string err;
+  EXPECT_EQ(run({preset.string(), "--headless", "--size", "16x9", "--out", (output_dir() / "never.png").string()}, &err), 1)
+      << err;
+  EXPECT_NE(err.find("huge_preset.json"), std::string::npos) << err;
+  EXPECT_NE(err.find("GiB of memory"), std::string::npos) << err;
+  EXPECT_NE(err.find("4096x4096x4096"), std::string::npos) << err;
+}
+#endif
+
+// --out goes through a temporary file renamed into place: a write that fails half-way (here the
+// file-size limit, as a full disk would) leaves the existing PNG byte for byte, and exits 2.
+TEST(ViewerCli, FailedWriteLeavesTheExistingPngByteForByte) {
+  fs::path p = output_dir() / "keep.png";
+  std::string err;
+  ASSERT_EQ(run({"synthetic:sphere", "--headless", "--size", "32x18", "--set", "render.steps=16", "--out", p.string()}, &err), 0) << err;
+  std::string before;
+  {
+    std::ifstream in(p, std::ios::binary);
+    before.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  ASSERT_GT(before.size(), 0u);
+  struct rlimit old_limit;
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old_limit), 0);
+  auto old_handler = std::signal(SIGXFSZ, SIG_IGN);  // writes past the limit fail with EFBIG instead
+  struct rlimit small = old_limit;
+  small.rlim_cur = 512;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  int code = run({"synthetic:sphere", "--headless", "--size", "160x90", "--out", p.string()}, &err);
+  setrlimit(RLIMIT_FSIZE, &old_limit);
+  std::signal(SIGXFSZ, old_handler);
+  EXPECT_EQ(code, 2) << err;
+  EXPECT_NE(err.find("keep.png"), std::string::npos) << err;
+  EXPECT_EQ(err.find("Success"), std::string::npos) << err;  // the system's reason, not errno 0
+  std::string after;
+  {
+    std::ifstream in(p, std::ios::binary);
+    after.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  EXPECT_TRUE(after == before) << "the existing PNG changed (" << before.size() << " -> " << after.size() << " bytes)";
+  for (const auto& e : fs::directory_iterator(output_dir()))
+    EXPECT_EQ(e.path().filename().string().find(".keep.png.tmp"), std::string::npos) << "temporary file left: " << e.path();
+}

@@ -13,7 +13,18 @@
 namespace cloudviewer {
 namespace {
 
-std::vector<double> parse_numbers(const std::string& flag, const std::string& text, size_t count) {
+std::string format_number(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+// Every number entering from the command line is finite and inside its range; the message names
+// the flag, the value and the range.
+constexpr double kMaxCoordinate = 1e8;  // m: camera and target positions (100,000 km)
+
+std::vector<double> parse_numbers(const std::string& flag, const std::string& text, size_t count, double lo,
+                                  double hi) {
   std::vector<double> v;
   std::stringstream ss(text);
   std::string item;
@@ -26,7 +37,10 @@ std::vector<double> parse_numbers(const std::string& flag, const std::string& te
       used = 0;
     }
     if (used == 0 || used != item.size() || !std::isfinite(d))
-      throw InputError(flag + " " + text + ": '" + item + "' is not a number");
+      throw InputError(flag + " " + text + ": '" + item + "' is not a finite number");
+    if (d < lo || d > hi)
+      throw InputError(flag + " " + text + ": " + item + " is out of range [" + format_number(lo) + ", " +
+                       format_number(hi) + "]");
     v.push_back(d);
   }
   if (v.size() != count)
@@ -37,8 +51,8 @@ std::vector<double> parse_numbers(const std::string& flag, const std::string& te
 Camera parse_camera(const std::string& text, double fov) {
   auto colon = text.find(':');
   if (colon == std::string::npos) throw InputError("--camera " + text + ": expected EX,EY,EZ:TX,TY,TZ");
-  auto e = parse_numbers("--camera", text.substr(0, colon), 3);
-  auto t = parse_numbers("--camera", text.substr(colon + 1), 3);
+  auto e = parse_numbers("--camera", text.substr(0, colon), 3, -kMaxCoordinate, kMaxCoordinate);
+  auto t = parse_numbers("--camera", text.substr(colon + 1), 3, -kMaxCoordinate, kMaxCoordinate);
   Camera c;
   c.eye = glm::dvec3(e[0], e[1], e[2]);
   c.target = glm::dvec3(t[0], t[1], t[2]);
@@ -82,7 +96,8 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   app.add_flag("--headless", o.headless, "render without a display through EGL and exit");
   app.add_option("--size", size_text, "image size WIDTHxHEIGHT (default 320x180 headless, 1280x720 window)");
   app.add_option("--camera", camera_text, "camera EX,EY,EZ:TX,TY,TZ in world metres (default: frames the volume)");
-  app.add_option("--fov", o.fov, "vertical field of view in degrees")->check(CLI::Range(1.0, 170.0));
+  std::string fov_text;
+  app.add_option("--fov", fov_text, "vertical field of view in degrees, 1..170 (default 60)");
   app.add_option("--sun", sun_text, "sun AZIMUTH,ELEVATION in degrees (azimuth clockwise from -z; default behind the viewer)");
   app.add_option("--set", o.sets, "render.KEY=VALUE (see --help-params)")->take_all();
   app.add_option("--out", o.out, "headless output image (.png tone-mapped sRGB, .exr linear HDR)");
@@ -107,6 +122,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
     return 0;
   }
   if (o.input.empty()) throw InputError("no INPUT given (try --help)");
+  if (!fov_text.empty()) o.fov = parse_numbers("--fov", fov_text, 1, 1, 170)[0];
   for (const std::string& s : o.sets) apply_setting(o.settings, s);
   if (!o.mie_table.empty()) load_mie_table(o.mie_table);
   if (!size_text.empty()) parse_size(size_text, o.width, o.height);
@@ -114,7 +130,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   else o.width = 1280, o.height = 720;
   if (!camera_text.empty()) o.camera = parse_camera(camera_text, o.fov);
   if (!sun_text.empty()) {
-    auto v = parse_numbers("--sun", sun_text, 2);
+    auto v = parse_numbers("--sun", sun_text, 2, -360, 360);
     if (v[1] < -90 || v[1] > 90) throw InputError("--sun " + sun_text + ": elevation must be in [-90, 90]");
     o.sun = Sun{v[0], v[1]};
   }

@@ -14,6 +14,12 @@
 namespace cloudviewer {
 namespace {
 
+std::string number(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
 std::string gib(uint64_t bytes) {
   std::ostringstream os;
   os.precision(3);
@@ -79,10 +85,10 @@ PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_p
     throw InputError("volume density has " + std::to_string(v.density.size()) + " values, dims say " +
                      std::to_string(n));
   if (!(v.voxel_size > 0) || !std::isfinite(v.voxel_size) || v.voxel_size > 1e5)
-    throw InputError("volume voxel size " + std::to_string(v.voxel_size) + " m: must be a finite number in (0, 1e5] metres");
+    throw InputError("volume voxel size " + number(v.voxel_size) + " m: must be a finite number in (0, 1e5] metres");
   for (int i = 0; i < 3; ++i)
     if (!std::isfinite(v.origin[size_t(i)]) || std::abs(v.origin[size_t(i)]) > 1e8)
-      throw InputError("volume origin " + std::to_string(v.origin[size_t(i)]) + " m: must be finite, |x| <= 1e8 m");
+      throw InputError("volume origin " + number(v.origin[size_t(i)]) + " m: must be finite, |x| <= 1e8 m");
   check_memory("volume " + std::to_string(v.dims[0]) + "x" + std::to_string(v.dims[1]) + "x" + std::to_string(v.dims[2]),
                prepared_bytes(n));
   p.voxel_size = v.voxel_size;
