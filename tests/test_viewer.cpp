@@ -831,3 +831,76 @@ TEST(ViewerCli, FailedWriteLeavesTheExistingPngByteForByte) {
   for (const auto& e : fs::directory_iterator(output_dir()))
     EXPECT_EQ(e.path().filename().string().find(".keep.png.tmp"), std::string::npos) << "temporary file left: " << e.path();
 }
+
+// ------------------------------------------------------------------ surfaces from the table
+
+// The on-screen panel offers exactly the table's keys, in its order, each with the control its
+// type calls for, the table's range and default.
+TEST(ViewerPanel, OffersExactlyTheParameterTablesKeys) {
+  std::vector<PanelWidget> widgets = panel_widgets();
+  const std::vector<ParamDef>& table = render_params();
+  ASSERT_EQ(widgets.size(), table.size());
+  RenderSettings d;
+  for (size_t i = 0; i < table.size(); ++i) {
+    const PanelWidget& w = widgets[i];
+    const ParamDef& p = table[i];
+    EXPECT_EQ(w.key, p.key);
+    PanelWidget::Kind expected = p.type == "bool" ? PanelWidget::Kind::Checkbox
+                                 : p.type == "int" ? PanelWidget::Kind::SliderInt
+                                 : p.type == "enum" ? PanelWidget::Kind::Combo
+                                 : p.key == "ground_height" ? PanelWidget::Kind::SliderFloatOrAuto
+                                                            : PanelWidget::Kind::SliderFloat;
+    EXPECT_EQ(int(w.kind), int(expected)) << p.key;
+    EXPECT_EQ(w.default_value, p.get(d)) << p.key;
+    EXPECT_NE(w.tooltip.find(p.doc), std::string::npos) << p.key;
+    if (p.type == "int" || p.type == "float") {
+      EXPECT_LT(w.lo, w.hi) << p.key;
+      // The slider's ends are values the table accepts, and just past them it refuses.
+      RenderSettings s;
+      EXPECT_NO_THROW(p.set(s, std::to_string(w.lo))) << p.key;
+      EXPECT_NO_THROW(p.set(s, std::to_string(w.hi))) << p.key;
+      EXPECT_THROW(p.set(s, std::to_string(w.hi + std::max(1.0, std::abs(w.hi)))), InputError) << p.key;
+    }
+    if (p.type == "enum") {
+      EXPECT_FALSE(w.choices.empty()) << p.key;
+      for (const std::string& c : w.choices) EXPECT_NE(p.range.find(c), std::string::npos) << p.key;
+    }
+  }
+}
+
+// Key bindings take their limits and defaults from the table: [ and ] stop at 1 and 8192 steps,
+// 3 / 4 at g = -0.99 / 0.99, B switches bloom between 0 and the table's default.
+TEST(ViewerPanel, KeyBindingsUseTheTablesLimitsAndDefaults) {
+  auto binding = [](const std::string& keys) {
+    for (const KeyBinding& b : key_bindings())
+      if (b.keys == keys) return b;
+    ADD_FAILURE() << "no binding " << keys;
+    return KeyBinding{};
+  };
+  RenderSettings s;
+  for (int i = 0; i < 20; ++i) apply_binding(s, binding("]"));
+  EXPECT_EQ(s.steps, 8192);
+  for (int i = 0; i < 20; ++i) apply_binding(s, binding("["));
+  EXPECT_EQ(s.steps, 1);
+  for (int i = 0; i < 60; ++i) apply_binding(s, binding("4"));
+  EXPECT_DOUBLE_EQ(s.g, 0.99);
+  for (int i = 0; i < 60; ++i) apply_binding(s, binding("3"));
+  EXPECT_DOUBLE_EQ(s.g, -0.99);
+  apply_binding(s, binding("B"));
+  EXPECT_EQ(s.bloom, 0.0);
+  apply_binding(s, binding("B"));
+  EXPECT_EQ(s.bloom, RenderSettings{}.bloom);
+  PhaseMode p0 = s.phase;
+  for (int i = 0; i < 3; ++i) apply_binding(s, binding("P"));
+  EXPECT_EQ(s.phase, p0);  // three phases, a full cycle
+  for (const KeyBinding& b : key_bindings()) EXPECT_NO_THROW(render_param(b.param)) << b.param;
+}
+
+// docs/viewer.md holds the generated parameter table and key list (regenerate with scripts/gen_docs.sh).
+TEST(ViewerPanel, DocsParameterListIsCurrent) {
+  std::ifstream in(std::string(CLOUD_SOURCE_DIR) + "/docs/viewer.md");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  EXPECT_NE(ss.str().find(params_markdown()), std::string::npos) << "docs/viewer.md's parameter table is out of date";
+  EXPECT_NE(ss.str().find(key_help_markdown()), std::string::npos) << "docs/viewer.md's key list is out of date";
+}

@@ -89,7 +89,7 @@ std::string params_help() {
 int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   Options o;
   std::string size_text, camera_text, sun_text;
-  bool help_params = false;
+  bool help_params = false, params_md = false, keys_md = false;
   CLI::App app{"cloudviewer: real-time volumetric cloud ray marcher (OpenGL 4.5) with a CPU reference"};
   app.add_option("input", o.input,
                  "volume to view: .vdb, .raw/.json, .ktx2 (cloudgen), a preset .json, or synthetic:sphere|slab|blob|noise");
@@ -109,6 +109,8 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   app.add_option("--bench-reference", o.bench_reference, "also render each track frame with the CPU reference at this step count and report RMSE");
   app.add_option("--bench-repeat", o.bench_repeat, "timing rounds over all configurations and frames (best of N per frame)")->check(CLI::Range(1, 100));
   app.add_flag("--help-params", help_params, "list every render.KEY with type, range, default and meaning");
+  app.add_flag("--params-markdown", params_md, "the render.KEY table as Markdown (docs/viewer.md)");
+  app.add_flag("--keys-markdown", keys_md, "the window's parameter key bindings as Markdown (docs/viewer.md)");
   std::vector<std::string> argv_rest(args.begin() + (args.empty() ? 0 : 1), args.end());
   std::reverse(argv_rest.begin(), argv_rest.end());
   try {
@@ -119,6 +121,10 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   }
   if (help_params) {
     out << params_help();
+    return 0;
+  }
+  if (params_md || keys_md) {
+    out << (params_md ? params_markdown() : key_help_markdown());
     return 0;
   }
   if (o.input.empty()) throw InputError("no INPUT given (try --help)");
