@@ -904,3 +904,51 @@ TEST(ViewerPanel, DocsParameterListIsCurrent) {
   EXPECT_NE(ss.str().find(params_markdown()), std::string::npos) << "docs/viewer.md's parameter table is out of date";
   EXPECT_NE(ss.str().find(key_help_markdown()), std::string::npos) << "docs/viewer.md's key list is out of date";
 }
+
+// ------------------------------------------------------------------ phase direction
+
+// The normalisation test cannot see a flipped scattering angle; this one can. With g > 0 (forward
+// scattering) a back-lit cloud, camera looking toward the sun, is brighter at its thin edges than
+// the same cloud with the sun behind the camera; with g < 0 the order reverses. Ground off and
+// the sun out of view, so the background (T * sky) is the same in both renders and the difference
+// is the clouds' in-scattered light.
+TEST(ViewerMath, ForwardScatteringBrightensTheThinEdgesOfABackLitCloud) {
+  const PreparedVolume& vol = volume("sphere");
+  Camera cam = default_camera(vol, 60, 96.0 / 54.0);
+  Sun behind = default_sun(cam);  // behind the viewer, 35 degrees up
+  Sun ahead = behind;
+  ahead.azimuth_deg += 180;       // in front of the viewer: the camera looks toward it
+  for (double g : {0.6, -0.6}) {
+    for (bool gl : {false, true}) {
+      RenderSettings s = with({"render.ground=false", "render.bloom=0", "render.jitter=false", "render.steps=64"});
+      s.g = g;
+      RenderSettings st = s;
+      st.output = OutputMode::Transmittance;
+      auto render = [&](const RenderSettings& rs, const Sun& sun) {
+        FrameSetup f = make_frame(vol, rs, cam, sun, 96, 54);
+        return gl ? render_gl(vol, f).linear : render_cpu(vol, f).linear;
+      };
+      Image t = render(st, behind);
+      Image lit_behind = render(s, behind), lit_ahead = render(s, ahead);
+      double sum_behind = 0, sum_ahead = 0;
+      int thin = 0;
+      for (int y = 0; y < 54; ++y)
+        for (int x = 0; x < 96; ++x) {
+          double tr = t.at(x, y)[0];
+          if (tr < 0.3 || tr > 0.9) continue;  // thin edges only
+          ++thin;
+          sum_behind += lit_behind.at(x, y)[1];
+          sum_ahead += lit_ahead.at(x, y)[1];
+        }
+      std::string what = std::string(gl ? "GL" : "CPU") + " g " + std::to_string(g);
+      std::cout << what << ": " << thin << " thin-edge pixels, mean radiance sun ahead " << sum_ahead / thin
+                << ", sun behind " << sum_behind / thin << "\n";
+      ASSERT_GT(thin, 20) << what;
+      if (g > 0) {
+        EXPECT_GT(sum_ahead, 1.5 * sum_behind) << what;
+      } else {
+        EXPECT_GT(sum_behind, 1.5 * sum_ahead) << what;
+      }
+    }
+  }
+}
