@@ -3,6 +3,7 @@
 // transmittance through a uniform slab, shader error reporting and bad inputs.
 // A failure to create the EGL context is a failure, not a skip: CI runs on this kind of machine.
 #include <cmath>
+#include <cstddef>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -406,27 +407,27 @@ TEST(ViewerErrors, ShaderCompileErrorNamesFileLineAndLog) {
   for (const std::string& name : embedded_shader_names()) {
     std::ofstream(dir / name) << ShaderSource().load(name);
   }
-  // Break line 40 of the shared header (included by every pass).
-  std::string text = ShaderSource().load("cloud_functions.glsl");
+  // Break line 40 of a shared header (included by the ground and cloud passes).
+  std::string text = ShaderSource().load("medium.glsl");
   std::istringstream in(text);
   std::string line, broken;
   for (int n = 1; std::getline(in, line); ++n) broken += (n == 40 ? "this is not glsl;" : line) + "\n";
-  std::ofstream(dir / "cloud_functions.glsl") << broken;
+  std::ofstream(dir / "medium.glsl") << broken;
   context();
   try {
     GlRenderer r{ShaderSource(dir.string())};
     FAIL() << "a broken shader compiled";
   } catch (const ShaderError& e) {
-    EXPECT_EQ(e.file(), "cloud_functions.glsl");
+    EXPECT_EQ(e.file(), "medium.glsl");
     EXPECT_EQ(e.line(), 40);
     std::string what = e.what();
-    EXPECT_NE(what.find("cloud_functions.glsl:40"), std::string::npos) << what;
+    EXPECT_NE(what.find("medium.glsl:40"), std::string::npos) << what;
     EXPECT_NE(what.find("error"), std::string::npos) << what;  // the driver's log is included
   }
   std::string err;
   EXPECT_EQ(run({"synthetic:sphere", "--headless", "--size", "32x18", "--shader-dir", dir.string(), "--out",
                  (output_dir() / "never.png").string()}, &err), 2);
-  EXPECT_NE(err.find("cloud_functions.glsl:40"), std::string::npos) << err;
+  EXPECT_NE(err.find("medium.glsl:40"), std::string::npos) << err;
 }
 
 TEST(ViewerErrors, BadInputsGiveAClearMessageAndNonZeroExit) {
@@ -634,3 +635,320 @@ TEST(ViewerCloudgen, NonCloudVdbAndTruncatedTextureAreClearErrors) {
   std::cout << "messages:\n" << err;
 }
 #endif
+
+// ------------------------------------------------------------------ shared definitions
+
+// The std140 layout the driver gives CloudBlock is the C++ struct's layout: the size and the offset
+// of every group's first member and of members that follow a vec3 (where std140 padding would
+// bite first).
+TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
+  context();
+  GlRenderer r{ShaderSource()};
+  EXPECT_EQ(r.cloud_block_size(), int(sizeof(gpu::CloudParams)));
+#define CV_EXPECT_OFFSET(m) EXPECT_EQ(r.cloud_block_offset(#m), int(offsetof(gpu::CloudParams, m))) << #m
+  CV_EXPECT_OFFSET(volume_min_m);
+  CV_EXPECT_OFFSET(voxel_size_m);
+  CV_EXPECT_OFFSET(tiles_xz);
+  CV_EXPECT_OFFSET(occ_cell_voxels);
+  CV_EXPECT_OFFSET(sun_dir);
+  CV_EXPECT_OFFSET(albedo);
+  CV_EXPECT_OFFSET(sigma_t_per_m);
+  CV_EXPECT_OFFSET(step_m);
+  CV_EXPECT_OFFSET(occupancy_skip);
+  CV_EXPECT_OFFSET(light_mode);
+  CV_EXPECT_OFFSET(powder_strength);
+  CV_EXPECT_OFFSET(output_mode);
+  CV_EXPECT_OFFSET(ground_half_extent_m);
+  CV_EXPECT_OFFSET(camera_world_mod_m);
+  CV_EXPECT_OFFSET(shadow_samples);
+  CV_EXPECT_OFFSET(sun_disc_scale);
+  CV_EXPECT_OFFSET(earth_radius_m);
+  CV_EXPECT_OFFSET(coverage_period_m);
+  CV_EXPECT_OFFSET(camera_coverage_z_m);
+  CV_EXPECT_OFFSET(cloud_type);
+#undef CV_EXPECT_OFFSET
+  EXPECT_EQ(r.pass_names().front(), "ground");
+  EXPECT_EQ(r.pass_names().back(), "tonemap");
+}
+
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+#include "cloudgen/generate.h"
+
+// One cloud-type gradient: what cloudgen bakes for each height profile is, bit for bit, what the
+// viewer's layer mode applies for that cloud type (the two had different breakpoints before).
+TEST(ViewerCloudgen, CloudTypeGradientIsCloudgensHeightProfile) {
+  struct Case { const char* profile; double type; };
+  for (Case c : {Case{"stratus", 0.0}, Case{"cumulus", 0.5}, Case{"cumulonimbus", 1.0}}) {
+    cloudgen::Preset p;
+    p.height_profile = c.profile;
+    double peak = 0;
+    for (int i = 0; i <= 1000; ++i) {
+      double h = i / 1000.0;
+      double baked = cloudgen::height_profile(p, h);
+      ASSERT_EQ(baked, reference_cloud_type_gradient(h, c.type)) << c.profile << " h " << h;
+      peak = std::max(peak, baked);
+    }
+    EXPECT_GT(peak, 0.99) << c.profile;  // a real profile, not zero everywhere
+  }
+  // The types differ where they should: at h = 0.5 only the cumulonimbus is still dense.
+  EXPECT_EQ(reference_cloud_type_gradient(0.5, 0.0), 0.0);
+  EXPECT_GT(reference_cloud_type_gradient(0.5, 1.0), 0.99);
+}
+#endif
+
+// ------------------------------------------------------------------ exit codes and hostile inputs
+
+#include <csignal>
+#include <sys/resource.h>
+
+// One rule for both programs: 1 input, 2 I/O and environment, 3 internal. cloudgen's and the
+// viewer's exceptions are one hierarchy, and the viewer does not rewrap cloudgen's IoError.
+TEST(ViewerErrors, ExitCodesFollowTheToolkitRule) {
+  EXPECT_EQ(exit_code(InputError("x")), 1);
+  EXPECT_EQ(exit_code(cloudgen::InputError("x")), 1);
+  EXPECT_EQ(exit_code(IoError("x")), 2);
+  EXPECT_EQ(exit_code(cloudgen::IoError("x")), 2);
+  EXPECT_EQ(exit_code(GlError("x")), 2);
+  EXPECT_EQ(exit_code(ShaderError("x", "f.glsl", 1)), 2);
+  EXPECT_EQ(exit_code(cloudgen::Error("x")), 3);
+  EXPECT_EQ(exit_code(std::runtime_error("x")), 3);
+  EXPECT_EQ(exit_code(std::bad_alloc()), 3);
+  // An output that cannot be written (its folder is a regular file) is an I/O error, exit 2.
+  fs::path blocker = output_dir() / "not_a_folder";
+  std::ofstream(blocker) << "x";
+  std::string err;
+  EXPECT_EQ(run({"synthetic:slab", "--headless", "--size", "16x9", "--out", (blocker / "x.png").string()}, &err), 2) << err;
+  EXPECT_NE(err.find("not_a_folder"), std::string::npos) << err;
+}
+
+// Every number that enters the viewer is finite and in range, or the run stops with exit 1 and a
+// message naming the flag or field, before anything renders.
+TEST(ViewerErrors, NonFiniteAndOutOfRangeNumbersAreRefused) {
+  std::string png = (output_dir() / "never.png").string();
+  struct Case { std::vector<std::string> args; const char* named; };
+  std::vector<Case> cases = {
+      {{"--fov", "nan"}, "--fov"},
+      {{"--fov", "0"}, "--fov"},
+      {{"--fov", "inf"}, "--fov"},
+      {{"--camera", "1e308,0,0:0,0,0"}, "--camera"},
+      {{"--camera", "0,0,-100:nan,0,0"}, "--camera"},
+      {{"--sun", "nan,30"}, "--sun"},
+      {{"--sun", "1e300,30"}, "--sun"},
+      {{"--set", "render.density=inf"}, "render.density"},
+  };
+  for (const Case& c : cases) {
+    std::vector<std::string> args = {"synthetic:slab", "--headless", "--size", "16x9", "--out", png};
+    args.insert(args.end(), c.args.begin(), c.args.end());
+    std::string err;
+    EXPECT_EQ(run(args, &err), 1) << c.args[1] << ": " << err;
+    EXPECT_NE(err.find(c.named), std::string::npos) << err;
+  }
+  // A bench track with fov 0, and one with an eye at 1e308 m.
+  for (const char* body : {R"({"fov": 0, "keys": [{"eye": [0.5, 0.5, -1], "target": [0.5, 0.5, 0.5]}]})",
+                           R"({"space": "world", "keys": [{"eye": [1e308, 0, 0], "target": [0, 0, 0]}]})"}) {
+    fs::path track = output_dir() / "bad_track.json";
+    std::ofstream(track) << body;
+    std::string err;
+    EXPECT_EQ(run({"synthetic:slab", "--headless", "--size", "16x9", "--bench", track.string()}, &err), 1) << err;
+    EXPECT_NE(err.find("bad_track.json"), std::string::npos) << err;
+    EXPECT_NE(err.find("out of range"), std::string::npos) << err;
+  }
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+  // A raw texture whose sidecar claims 1e308 m voxels.
+  cloudgen::Volume v = synthetic_volume("slab");
+  fs::path raw = output_dir() / "huge_voxels.raw";
+  cloudgen::ExportOptions eo;
+  cloudgen::write_volume(v, raw.string(), cloudgen::Format::Raw, eo);
+  fs::path side = output_dir() / "huge_voxels.json";
+  std::string text;
+  {
+    std::ifstream in(side);
+    text.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  size_t at = text.find("\"voxel_size\"");
+  ASSERT_NE(at, std::string::npos);
+  size_t colon = text.find(':', at), end = text.find_first_of(",\n}", colon);
+  text.replace(colon + 1, end - colon - 1, " 1e308");
+  std::ofstream(side) << text;
+  std::string err;
+  EXPECT_EQ(run({raw.string(), "--headless", "--size", "16x9", "--out", png}, &err), 1) << err;
+  EXPECT_NE(err.find("voxel"), std::string::npos) << err;
+#endif
+}
+
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+// A 4096^3 preset would need terabytes: refused up front with the estimate, not bad_alloc.
+TEST(ViewerErrors, HugeInputIsRefusedWithTheMemoryEstimate) {
+  std::string text;
+  {
+    std::ifstream in(std::string(CLOUD_SOURCE_DIR) + "/presets/tiny.json");
+    text.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  size_t at = text.find("[32, 32, 32]");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 12, "[4096, 4096, 4096]");
+  fs::path preset = output_dir() / "huge_preset.json";
+  std::ofstream(preset) << text;
+  std::string err;
+  EXPECT_EQ(run({preset.string(), "--headless", "--size", "16x9", "--out", (output_dir() / "never.png").string()}, &err), 1)
+      << err;
+  EXPECT_NE(err.find("huge_preset.json"), std::string::npos) << err;
+  EXPECT_NE(err.find("GiB of memory"), std::string::npos) << err;
+  EXPECT_NE(err.find("4096x4096x4096"), std::string::npos) << err;
+}
+#endif
+
+// --out goes through a temporary file renamed into place: a write that fails half-way (here the
+// file-size limit, as a full disk would) leaves the existing PNG byte for byte, and exits 2.
+TEST(ViewerCli, FailedWriteLeavesTheExistingPngByteForByte) {
+  fs::path p = output_dir() / "keep.png";
+  std::string err;
+  ASSERT_EQ(run({"synthetic:sphere", "--headless", "--size", "32x18", "--set", "render.steps=16", "--out", p.string()}, &err), 0) << err;
+  std::string before;
+  {
+    std::ifstream in(p, std::ios::binary);
+    before.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  ASSERT_GT(before.size(), 0u);
+  struct rlimit old_limit;
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old_limit), 0);
+  auto old_handler = std::signal(SIGXFSZ, SIG_IGN);  // writes past the limit fail with EFBIG instead
+  struct rlimit small = old_limit;
+  small.rlim_cur = 512;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  int code = run({"synthetic:sphere", "--headless", "--size", "160x90", "--out", p.string()}, &err);
+  setrlimit(RLIMIT_FSIZE, &old_limit);
+  std::signal(SIGXFSZ, old_handler);
+  EXPECT_EQ(code, 2) << err;
+  EXPECT_NE(err.find("keep.png"), std::string::npos) << err;
+  EXPECT_EQ(err.find("Success"), std::string::npos) << err;  // the system's reason, not errno 0
+  std::string after;
+  {
+    std::ifstream in(p, std::ios::binary);
+    after.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  EXPECT_TRUE(after == before) << "the existing PNG changed (" << before.size() << " -> " << after.size() << " bytes)";
+  for (const auto& e : fs::directory_iterator(output_dir()))
+    EXPECT_EQ(e.path().filename().string().find(".keep.png.tmp"), std::string::npos) << "temporary file left: " << e.path();
+}
+
+// ------------------------------------------------------------------ surfaces from the table
+
+// The on-screen panel offers exactly the table's keys, in its order, each with the control its
+// type calls for, the table's range and default.
+TEST(ViewerPanel, OffersExactlyTheParameterTablesKeys) {
+  std::vector<PanelWidget> widgets = panel_widgets();
+  const std::vector<ParamDef>& table = render_params();
+  ASSERT_EQ(widgets.size(), table.size());
+  RenderSettings d;
+  for (size_t i = 0; i < table.size(); ++i) {
+    const PanelWidget& w = widgets[i];
+    const ParamDef& p = table[i];
+    EXPECT_EQ(w.key, p.key);
+    PanelWidget::Kind expected = p.type == "bool" ? PanelWidget::Kind::Checkbox
+                                 : p.type == "int" ? PanelWidget::Kind::SliderInt
+                                 : p.type == "enum" ? PanelWidget::Kind::Combo
+                                 : p.key == "ground_height" ? PanelWidget::Kind::SliderFloatOrAuto
+                                                            : PanelWidget::Kind::SliderFloat;
+    EXPECT_EQ(int(w.kind), int(expected)) << p.key;
+    EXPECT_EQ(w.default_value, p.get(d)) << p.key;
+    EXPECT_NE(w.tooltip.find(p.doc), std::string::npos) << p.key;
+    if (p.type == "int" || p.type == "float") {
+      EXPECT_LT(w.lo, w.hi) << p.key;
+      // The slider's ends are values the table accepts, and just past them it refuses.
+      RenderSettings s;
+      EXPECT_NO_THROW(p.set(s, std::to_string(w.lo))) << p.key;
+      EXPECT_NO_THROW(p.set(s, std::to_string(w.hi))) << p.key;
+      EXPECT_THROW(p.set(s, std::to_string(w.hi + std::max(1.0, std::abs(w.hi)))), InputError) << p.key;
+    }
+    if (p.type == "enum") {
+      EXPECT_FALSE(w.choices.empty()) << p.key;
+      for (const std::string& c : w.choices) EXPECT_NE(p.range.find(c), std::string::npos) << p.key;
+    }
+  }
+}
+
+// Key bindings take their limits and defaults from the table: [ and ] stop at 1 and 8192 steps,
+// 3 / 4 at g = -0.99 / 0.99, B switches bloom between 0 and the table's default.
+TEST(ViewerPanel, KeyBindingsUseTheTablesLimitsAndDefaults) {
+  auto binding = [](const std::string& keys) {
+    for (const KeyBinding& b : key_bindings())
+      if (b.keys == keys) return b;
+    ADD_FAILURE() << "no binding " << keys;
+    return KeyBinding{};
+  };
+  RenderSettings s;
+  for (int i = 0; i < 20; ++i) apply_binding(s, binding("]"));
+  EXPECT_EQ(s.steps, 8192);
+  for (int i = 0; i < 20; ++i) apply_binding(s, binding("["));
+  EXPECT_EQ(s.steps, 1);
+  for (int i = 0; i < 60; ++i) apply_binding(s, binding("4"));
+  EXPECT_DOUBLE_EQ(s.g, 0.99);
+  for (int i = 0; i < 60; ++i) apply_binding(s, binding("3"));
+  EXPECT_DOUBLE_EQ(s.g, -0.99);
+  apply_binding(s, binding("B"));
+  EXPECT_EQ(s.bloom, 0.0);
+  apply_binding(s, binding("B"));
+  EXPECT_EQ(s.bloom, RenderSettings{}.bloom);
+  PhaseMode p0 = s.phase;
+  for (int i = 0; i < 3; ++i) apply_binding(s, binding("P"));
+  EXPECT_EQ(s.phase, p0);  // three phases, a full cycle
+  for (const KeyBinding& b : key_bindings()) EXPECT_NO_THROW(render_param(b.param)) << b.param;
+}
+
+// docs/viewer.md holds the generated parameter table and key list (regenerate with scripts/gen_docs.sh).
+TEST(ViewerPanel, DocsParameterListIsCurrent) {
+  std::ifstream in(std::string(CLOUD_SOURCE_DIR) + "/docs/viewer.md");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  EXPECT_NE(ss.str().find(params_markdown()), std::string::npos) << "docs/viewer.md's parameter table is out of date";
+  EXPECT_NE(ss.str().find(key_help_markdown()), std::string::npos) << "docs/viewer.md's key list is out of date";
+}
+
+// ------------------------------------------------------------------ phase direction
+
+// The normalisation test cannot see a flipped scattering angle; this one can. With g > 0 (forward
+// scattering) a back-lit cloud, camera looking toward the sun, is brighter at its thin edges than
+// the same cloud with the sun behind the camera; with g < 0 the order reverses. Ground off and
+// the sun out of view, so the background (T * sky) is the same in both renders and the difference
+// is the clouds' in-scattered light.
+TEST(ViewerMath, ForwardScatteringBrightensTheThinEdgesOfABackLitCloud) {
+  const PreparedVolume& vol = volume("sphere");
+  Camera cam = default_camera(vol, 60, 96.0 / 54.0);
+  Sun behind = default_sun(cam);  // behind the viewer, 35 degrees up
+  Sun ahead = behind;
+  ahead.azimuth_deg += 180;       // in front of the viewer: the camera looks toward it
+  for (double g : {0.6, -0.6}) {
+    for (bool gl : {false, true}) {
+      RenderSettings s = with({"render.ground=false", "render.bloom=0", "render.jitter=false", "render.steps=64"});
+      s.g = g;
+      RenderSettings st = s;
+      st.output = OutputMode::Transmittance;
+      auto render = [&](const RenderSettings& rs, const Sun& sun) {
+        FrameSetup f = make_frame(vol, rs, cam, sun, 96, 54);
+        return gl ? render_gl(vol, f).linear : render_cpu(vol, f).linear;
+      };
+      Image t = render(st, behind);
+      Image lit_behind = render(s, behind), lit_ahead = render(s, ahead);
+      double sum_behind = 0, sum_ahead = 0;
+      int thin = 0;
+      for (int y = 0; y < 54; ++y)
+        for (int x = 0; x < 96; ++x) {
+          double tr = t.at(x, y)[0];
+          if (tr < 0.3 || tr > 0.9) continue;  // thin edges only
+          ++thin;
+          sum_behind += lit_behind.at(x, y)[1];
+          sum_ahead += lit_ahead.at(x, y)[1];
+        }
+      std::string what = std::string(gl ? "GL" : "CPU") + " g " + std::to_string(g);
+      std::cout << what << ": " << thin << " thin-edge pixels, mean radiance sun ahead " << sum_ahead / thin
+                << ", sun behind " << sum_behind / thin << "\n";
+      ASSERT_GT(thin, 20) << what;
+      if (g > 0) {
+        EXPECT_GT(sum_ahead, 1.5 * sum_behind) << what;
+      } else {
+        EXPECT_GT(sum_behind, 1.5 * sum_ahead) << what;
+      }
+    }
+  }
+}

@@ -6,6 +6,8 @@
 // evaluated. Skipped and unskipped runs therefore give the same bytes (tested).
 #include "cloudgen/generate.h"
 
+#include "cloudgen/cloud_type.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -64,11 +66,11 @@ double height_profile(const Preset& p, double h) {
     const double hs = std::log(1 + p.height_a / p.height_b) / p.height_a;
     return hd(h) / hd(hs);
   }
-  // Horizon-Zero-Dawn-style cloud-type gradients: rise over [b0, b1], fall over [t0, t1].
-  double b0 = 0, b1 = 0.1, t0 = 0.4, t1 = 0.75;
-  if (p.height_profile == HeightProfile::Stratus) b0 = 0.0, b1 = 0.08, t0 = 0.15, t1 = 0.3;
-  if (p.height_profile == HeightProfile::Cumulonimbus) b0 = 0.0, b1 = 0.08, t0 = 0.7, t1 = 1.0;
-  return smoothstep(b0, b1, h) * (1 - smoothstep(t0, t1, h));
+  // Horizon-Zero-Dawn-style cloud-type gradients, defined once in cloud_type.glsl (the viewer's
+  // layer mode evaluates the same text).
+  if (p.height_profile == HeightProfile::Stratus) return cloud_type::stratus_gradient(h);
+  if (p.height_profile == HeightProfile::Cumulonimbus) return cloud_type::cumulonimbus_gradient(h);
+  return cloud_type::cumulus_gradient(h);
 }
 
 std::vector<Tower> resolve_towers(const Preset& p) {

@@ -2,11 +2,11 @@
 // Bloom step 1 (thesis 2.7): downsample the HDR frame to half resolution and keep what is brighter
 // than the threshold.
 #include "prelude_glsl.glsl"
-#include "cloud_params.glsl"
-#include "bindings.glsl"
-#include "cloud_functions.glsl"
-#include "post_common.glsl"
-layout(binding = 3) uniform sampler2D s_hdr;
+#include "constants.glsl"
+#include "frame_block.glsl"
+#include "post.glsl"
+#include "post_sampling.glsl"
+layout(binding = CV_UNIT_PASS_INPUT0) uniform sampler2D s_hdr;
 layout(location = 0) out vec4 o_color;
 void main() {
   vec3 c = bilinear_fetch(s_hdr, gl_FragCoord.xy / u_viewport.zw);

@@ -1,29 +1,73 @@
 // CloudParams: the std140 uniform block of the cloud, ground and shadow passes, shared with C++.
-// Every member is a vec4, so the std140 layout is the tight C++ layout: the C++ side includes this
-// file twice (float for the GPU block, double for the CPU reference) and static_asserts the size
-// (filament UibStructs.h pattern; see include/cloudviewer/params.h). Positions are relative to the
-// camera (metres), so a camera kilometres from the origin does not lose float precision.
+// The C++ side includes this file twice (Number = float for the GPU block, double for the CPU
+// reference; see include/cloudviewer/params.h, which static_asserts both sizes, and the test that
+// compares every member's offset with the driver's std140 offsets). Layout rule that makes std140
+// and the tight C++ layout agree: members come in groups of 16 bytes, either a vec3 followed by one
+// scalar or four scalars (a vec3 must never follow a vec3, nor a vec2 a single scalar). Counts,
+// flags and mode codes are stored as Number too (exact up to 2^24). Positions are relative to the
+// camera, in metres, so a camera kilometres from the origin keeps float precision. Units are in
+// the names: _m metres, _per_m per metre.
 struct CloudParams {
-  vec4 volume_min;     // xyz: volume min corner relative to the camera (m); w: voxel size (m)
-  vec4 volume_size;    // xyz: volume extent (m); w: 1 when x and z wrap (tileable texture)
-  vec4 volume_dims;    // xyz: voxel counts; w: 1 when G/B/A detail channels are present
-  vec4 occ_dims;       // xyz: coarse occupancy cells; w: coarse cell edge (voxels)
-  vec4 sun_dir;        // xyz: unit vector toward the sun; w: sun radiance scale
-  vec4 sun_color;      // rgb: sun colour; w: ambient scale
-  vec4 ambient_color;  // rgb: ambient (sky) radiance colour; w: single-scattering albedo
-  vec4 medium;         // x: sigma_t per metre at density 1; y: detail erosion [0,1]; z: density multiplier; w: powder c
-  vec4 march;          // x: small step (m); y: small steps per large step (integer); z: max distance (m); w: max iterations
-  vec4 march2;         // x: adaptive on; y: adaptive start distance (m); z: adaptive growth (1/m); w: occupancy skipping on
-  vec4 light;          // x: 0 off, 1 light march, 2 light march skipping empty cells; y: samples; z: first step (m); w: step growth
-  vec4 phase;          // x: 0 isotropic ("none"), 1 Henyey-Greenstein, 2 Mie table; y: HG g; z: Mie table size; w: powder strength
-  vec4 control;        // x: jitter on; y: frame index; z: exact (texelFetch) trilinear filtering; w: output 0 radiance, 1 transmittance
-  vec4 ground;         // x: ground height relative to camera (m); y: ground albedo; z: ground on; w: ground half-extent (m)
-  vec4 camera_world;   // xyz: camera world position modulo 1024 m (ground pattern phase); w: shadow march samples
-  vec4 sky;            // rgb: zenith sky radiance; w: sun disc radiance scale
+  // The volume (box mode; layer mode uses the counts, the flags and occ_*).
+  vec3 volume_min_m;  Number voxel_size_m;     // min corner relative to the camera
+  vec3 volume_size_m; Number tiles_xz;         // extent; tiles_xz: 1 when x and z wrap
+  vec3 volume_dims;   Number has_detail;       // voxel counts; 1 when G/B/A detail is present
+  vec3 occ_dims;      Number occ_cell_voxels;  // coarse occupancy cells; cell edge in voxels
+  // Light.
+  vec3 sun_dir;       Number sun_radiance;     // unit vector toward the sun; sun radiance scale
+  vec3 sun_color;     Number ambient_scale;    // sun colour; ambient radiance scale
+  vec3 ambient_color; Number albedo;           // ambient (sky) colour; single-scattering albedo
+  // Medium.
+  Number sigma_t_per_m;     // extinction at density 1
+  Number erosion;           // detail erosion strength [0, 1]
+  Number density_scale;     // density multiplier
+  Number powder_c;          // c of the powder term 1 - exp(-c tau)
+  // Primary march.
+  Number step_m;            // small step
+  Number large_step_count;  // small steps per large (occupancy) step, an integer >= 1
+  Number max_distance_m;
+  Number max_iterations;
+  Number adaptive;          // 1: step grows with distance
+  Number adaptive_start_m;
+  Number adaptive_growth_per_m;
+  Number occupancy_skip;    // 1: large steps through empty coarse cells
+  // Light march and phase.
+  Number light_mode;        // CV_LIGHT_*
+  Number light_samples;
+  Number light_step_m;      // first light step
+  Number light_growth;      // each light step is this many times the previous
+  Number phase_mode;        // CV_PHASE_*
+  Number hg_g;              // Henyey-Greenstein asymmetry
+  Number mie_table_size;    // entries of the Mie table
+  Number powder_strength;   // [0, 1]
+  // Control.
+  Number jitter;            // 1: jittered sample inside each step
+  Number frame_index;       // jitter pattern
+  Number exact_filter;      // 1: trilinear by hand from texelFetch
+  Number output_mode;       // CV_OUTPUT_*
+  // Ground and sky.
+  Number ground_y_m;        // ground height relative to the camera
+  Number ground_albedo;
+  Number ground_on;
+  Number ground_half_extent_m;
+  vec3 camera_world_mod_m;  Number shadow_samples;   // camera position modulo 1024 m (ground pattern phase)
+  vec3 sky_zenith;          Number sun_disc_scale;   // zenith sky radiance; sun disc radiance scale
   // Layer mode (the tileable texture repeated over a spherical shell; parabolic Earth, see
-  // layer_altitude): all distances in metres, horizontal offsets already reduced modulo their period.
-  vec4 layer;          // x: 1 in layer mode; y: layer bottom altitude; z: layer top altitude; w: Earth radius
-  vec4 layer2;         // x: camera altitude above the ground; y, z: camera x, z modulo the tile; w: unused
-  vec4 layer3;         // x, z: tile size in x and z; y: unused; w: coverage map period (m)
-  vec4 layer4;         // x, y: camera x, z modulo the coverage period; z: coverage bias; w: cloud type (-1 = map)
+  // layer_altitude): horizontal offsets already reduced modulo their period.
+  Number layer_on;
+  Number layer_bottom_m;    // altitudes above the ground
+  Number layer_top_m;
+  Number earth_radius_m;
+  Number camera_altitude_m; // camera altitude above the ground
+  Number camera_tile_x_m;   // camera x, z modulo the tile
+  Number camera_tile_z_m;
+  Number coverage_period_m; // the coverage map repeats over this distance
+  Number tile_x_m;          // tile size in x and z
+  Number tile_z_m;
+  Number camera_coverage_x_m;  // camera x, z modulo the coverage period
+  Number camera_coverage_z_m;
+  Number coverage_bias;     // added to the coverage map
+  Number cloud_type;        // 0 stratus .. 1 cumulonimbus; -1 = from the map
+  Number sky_mode;          // CV_SKY_*
+  Number unused0;
 };

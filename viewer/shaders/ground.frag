@@ -1,9 +1,6 @@
 #version 450 core
 // Ground pass: HDR radiance and the distance from the camera (the depth the cloud pass stops at).
-#include "prelude_glsl.glsl"
-#include "cloud_params.glsl"
-#include "bindings.glsl"
-#include "cloud_functions.glsl"
+#include "cloud_headers.glsl"
 in vec3 v_position;
 layout(location = 0) out vec4 o_color;
 layout(location = 1) out vec4 o_distance;

@@ -13,7 +13,18 @@
 namespace cloudviewer {
 namespace {
 
-std::vector<double> parse_numbers(const std::string& flag, const std::string& text, size_t count) {
+std::string format_number(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+// Every number entering from the command line is finite and inside its range; the message names
+// the flag, the value and the range.
+constexpr double kMaxCoordinate = 1e8;  // m: camera and target positions (100,000 km)
+
+std::vector<double> parse_numbers(const std::string& flag, const std::string& text, size_t count, double lo,
+                                  double hi) {
   std::vector<double> v;
   std::stringstream ss(text);
   std::string item;
@@ -26,7 +37,10 @@ std::vector<double> parse_numbers(const std::string& flag, const std::string& te
       used = 0;
     }
     if (used == 0 || used != item.size() || !std::isfinite(d))
-      throw InputError(flag + " " + text + ": '" + item + "' is not a number");
+      throw InputError(flag + " " + text + ": '" + item + "' is not a finite number");
+    if (d < lo || d > hi)
+      throw InputError(flag + " " + text + ": " + item + " is out of range [" + format_number(lo) + ", " +
+                       format_number(hi) + "]");
     v.push_back(d);
   }
   if (v.size() != count)
@@ -37,8 +51,8 @@ std::vector<double> parse_numbers(const std::string& flag, const std::string& te
 Camera parse_camera(const std::string& text, double fov) {
   auto colon = text.find(':');
   if (colon == std::string::npos) throw InputError("--camera " + text + ": expected EX,EY,EZ:TX,TY,TZ");
-  auto e = parse_numbers("--camera", text.substr(0, colon), 3);
-  auto t = parse_numbers("--camera", text.substr(colon + 1), 3);
+  auto e = parse_numbers("--camera", text.substr(0, colon), 3, -kMaxCoordinate, kMaxCoordinate);
+  auto t = parse_numbers("--camera", text.substr(colon + 1), 3, -kMaxCoordinate, kMaxCoordinate);
   Camera c;
   c.eye = glm::dvec3(e[0], e[1], e[2]);
   c.target = glm::dvec3(t[0], t[1], t[2]);
@@ -75,14 +89,15 @@ std::string params_help() {
 int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   Options o;
   std::string size_text, camera_text, sun_text;
-  bool help_params = false;
+  bool help_params = false, params_md = false, keys_md = false;
   CLI::App app{"cloudviewer: real-time volumetric cloud ray marcher (OpenGL 4.5) with a CPU reference"};
   app.add_option("input", o.input,
                  "volume to view: .vdb, .raw/.json, .ktx2 (cloudgen), a preset .json, or synthetic:sphere|slab|blob|noise");
   app.add_flag("--headless", o.headless, "render without a display through EGL and exit");
   app.add_option("--size", size_text, "image size WIDTHxHEIGHT (default 320x180 headless, 1280x720 window)");
   app.add_option("--camera", camera_text, "camera EX,EY,EZ:TX,TY,TZ in world metres (default: frames the volume)");
-  app.add_option("--fov", o.fov, "vertical field of view in degrees")->check(CLI::Range(1.0, 170.0));
+  std::string fov_text;
+  app.add_option("--fov", fov_text, "vertical field of view in degrees, 1..170 (default 60)");
   app.add_option("--sun", sun_text, "sun AZIMUTH,ELEVATION in degrees (azimuth clockwise from -z; default behind the viewer)");
   app.add_option("--set", o.sets, "render.KEY=VALUE (see --help-params)")->take_all();
   app.add_option("--out", o.out, "headless output image (.png tone-mapped sRGB, .exr linear HDR)");
@@ -94,6 +109,8 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   app.add_option("--bench-reference", o.bench_reference, "also render each track frame with the CPU reference at this step count and report RMSE");
   app.add_option("--bench-repeat", o.bench_repeat, "timing rounds over all configurations and frames (best of N per frame)")->check(CLI::Range(1, 100));
   app.add_flag("--help-params", help_params, "list every render.KEY with type, range, default and meaning");
+  app.add_flag("--params-markdown", params_md, "the render.KEY table as Markdown (docs/viewer.md)");
+  app.add_flag("--keys-markdown", keys_md, "the window's parameter key bindings as Markdown (docs/viewer.md)");
   std::vector<std::string> argv_rest(args.begin() + (args.empty() ? 0 : 1), args.end());
   std::reverse(argv_rest.begin(), argv_rest.end());
   try {
@@ -106,7 +123,12 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
     out << params_help();
     return 0;
   }
+  if (params_md || keys_md) {
+    out << (params_md ? params_markdown() : key_help_markdown());
+    return 0;
+  }
   if (o.input.empty()) throw InputError("no INPUT given (try --help)");
+  if (!fov_text.empty()) o.fov = parse_numbers("--fov", fov_text, 1, 1, 170)[0];
   for (const std::string& s : o.sets) apply_setting(o.settings, s);
   if (!o.mie_table.empty()) load_mie_table(o.mie_table);
   if (!size_text.empty()) parse_size(size_text, o.width, o.height);
@@ -114,7 +136,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   else o.width = 1280, o.height = 720;
   if (!camera_text.empty()) o.camera = parse_camera(camera_text, o.fov);
   if (!sun_text.empty()) {
-    auto v = parse_numbers("--sun", sun_text, 2);
+    auto v = parse_numbers("--sun", sun_text, 2, -360, 360);
     if (v[1] < -90 || v[1] > 90) throw InputError("--sun " + sun_text + ": elevation must be in [-90, 90]");
     o.sun = Sun{v[0], v[1]};
   }
@@ -127,8 +149,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
       throw InputError("--out " + o.out + ": unknown image type (allowed: .png, .exr)");
   }
   auto t0 = std::chrono::steady_clock::now();
-  cloudgen::Volume volume = load_volume(o.input);
-  PreparedVolume vol = prepare_volume(volume, o.settings.occupancy_cell, o.settings.occupancy_padding);
+  PreparedVolume vol = open_input(o.input, o.settings);
   auto t1 = std::chrono::steady_clock::now();
   out << "volume " << vol.dims[0] << "x" << vol.dims[1] << "x" << vol.dims[2] << " voxels of "
       << vol.voxel_size << " m" << (vol.tiles ? " (tiles in x,z)" : "") << ", occupancy "
@@ -174,17 +195,23 @@ Camera resolve_camera(const Options& o, const PreparedVolume& vol, int width, in
 
 Sun resolve_sun(const Options& o, const Camera& cam) { return o.sun ? *o.sun : default_sun(cam); }
 
+int exit_code(const std::exception& e) {
+  if (dynamic_cast<const InputError*>(&e)) return 1;
+  if (dynamic_cast<const IoError*>(&e) || dynamic_cast<const GlError*>(&e)) return 2;
+  return 3;
+}
+
 int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   try {
     return run(args, out, err);
-  } catch (const InputError& e) {
-    err << "cloudviewer: error: " << e.what() << "\n";
-    return 1;
-  } catch (const GlError& e) {
-    err << "cloudviewer: OpenGL error: " << e.what() << "\n";
-    return 2;
   } catch (const std::exception& e) {
-    err << "cloudviewer: error: " << e.what() << "\n";
+    const int code = exit_code(e);
+    const char* kind = code == 1 ? "error" : dynamic_cast<const GlError*>(&e) ? "OpenGL error"
+                     : code == 2 ? "I/O error" : "internal error";
+    err << "cloudviewer: " << kind << ": " << e.what() << "\n";
+    return code;
+  } catch (...) {
+    err << "cloudviewer: internal error: unknown exception\n";
     return 3;
   }
 }

@@ -7,6 +7,7 @@
 #include <iomanip>
 #include <map>
 #include <ostream>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -25,10 +26,29 @@ struct Config {
   std::vector<std::string> sets;
 };
 
-glm::dvec3 vec_from(const nlohmann::json& j, const std::string& where) {
-  if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() || !j[2].is_number())
-    throw InputError(where + ": expected [x, y, z] numbers");
-  return glm::dvec3(j[0].get<double>(), j[1].get<double>(), j[2].get<double>());
+// A number from the track: present, a number, finite and in [lo, hi]; else InputError naming the
+// JSON pointer, the value and the range.
+double number_from(const nlohmann::json& j, const std::string& where, double lo, double hi) {
+  if (!j.is_number()) throw InputError(where + ": expected a number, got " + j.dump());
+  double d = j.get<double>();
+  if (!std::isfinite(d) || d < lo || d > hi) {
+    std::ostringstream os;
+    os << where << ": " << j.dump() << " is out of range [" << lo << ", " << hi << "]";
+    throw InputError(os.str());
+  }
+  return d;
+}
+
+glm::dvec3 vec_from(const nlohmann::json& j, const std::string& where, double limit) {
+  if (!j.is_array() || j.size() != 3) throw InputError(where + ": expected [x, y, z] numbers");
+  return glm::dvec3(number_from(j[0], where + "/0", -limit, limit), number_from(j[1], where + "/1", -limit, limit),
+                    number_from(j[2], where + "/2", -limit, limit));
+}
+
+std::string string_from(const nlohmann::json& obj, const char* key, const std::string& fallback, const std::string& where) {
+  if (!obj.contains(key)) return fallback;
+  if (!obj[key].is_string()) throw InputError(where + "/" + key + ": expected a string, got " + obj[key].dump());
+  return obj[key].get<std::string>();
 }
 
 std::vector<Config> default_configs() {
@@ -54,12 +74,17 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
     throw InputError("--bench " + o.bench + ": invalid JSON: " + e.what());
   }
   const std::string where = o.bench;
-  std::string space = track.value("space", "volume");
+  if (!track.is_object()) throw InputError(where + ": expected a JSON object");
+  std::string space = string_from(track, "space", "volume", where);
   if (space != "volume" && space != "world")
     throw InputError(where + ": /space must be \"volume\" (positions in the volume's unit box) or \"world\" (metres)");
-  double fov = track.value("fov", o.fov);
-  int per_segment = track.value("frames_per_segment", 1);
-  if (per_segment < 1 || per_segment > 1000) throw InputError(where + ": /frames_per_segment must be 1..1000");
+  double fov = track.contains("fov") ? number_from(track["fov"], where + ": /fov", 1, 170) : o.fov;
+  double per_segment_d = track.contains("frames_per_segment")
+                             ? number_from(track["frames_per_segment"], where + ": /frames_per_segment", 1, 1000) : 1;
+  if (per_segment_d != std::floor(per_segment_d)) throw InputError(where + ": /frames_per_segment must be an integer 1..1000");
+  int per_segment = int(per_segment_d);
+  // Volume space counts unit boxes (tiles in layer mode); world space is metres.
+  const double limit = space == "volume" ? 1e5 : 1e8;
   auto to_world = [&](const glm::dvec3& p) { return space == "volume" ? volume_space_to_world(vol, o.settings, p) : p; };
   if (!track.contains("keys") || !track["keys"].is_array() || track["keys"].empty())
     throw InputError(where + ": /keys must be a non-empty array of {name, view, eye, target}");
@@ -68,10 +93,12 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
     const auto& k = track["keys"][i];
     std::string p = where + ": /keys/" + std::to_string(i);
     TrackFrame f;
-    f.name = k.value("name", "key" + std::to_string(i));
-    f.view = k.value("view", f.name);
-    f.camera.eye = to_world(vec_from(k.value("eye", nlohmann::json()), p + "/eye"));
-    f.camera.target = to_world(vec_from(k.value("target", nlohmann::json()), p + "/target"));
+    if (!k.is_object()) throw InputError(p + ": expected {name, view, eye, target}");
+    f.name = string_from(k, "name", "key" + std::to_string(i), p);
+    f.view = string_from(k, "view", f.name, p);
+    f.camera.eye = to_world(vec_from(k.value("eye", nlohmann::json()), p + "/eye", limit));
+    f.camera.target = to_world(vec_from(k.value("target", nlohmann::json()), p + "/target", limit));
+    if (glm::length(f.camera.target - f.camera.eye) < 1e-6) throw InputError(p + ": eye and target coincide");
     f.camera.fov_y_deg = fov;
     keys.push_back(f);
   }
@@ -92,9 +119,18 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
   }
   std::vector<Config> configs;
   if (track.contains("configs")) {
-    for (const auto& c : track["configs"]) {
-      Config cfg{c.value("name", "config"), {}};
-      for (const auto& s : c.value("set", nlohmann::json::array())) cfg.sets.push_back(s.get<std::string>());
+    if (!track["configs"].is_array()) throw InputError(where + ": /configs must be an array of {name, set}");
+    for (size_t ci = 0; ci < track["configs"].size(); ++ci) {
+      const auto& c = track["configs"][ci];
+      std::string p = where + ": /configs/" + std::to_string(ci);
+      if (!c.is_object()) throw InputError(p + ": expected {name, set}");
+      Config cfg{string_from(c, "name", "config", p), {}};
+      nlohmann::json sets = c.value("set", nlohmann::json::array());
+      if (!sets.is_array()) throw InputError(p + "/set: expected an array of \"render.KEY=VALUE\" strings");
+      for (size_t si = 0; si < sets.size(); ++si) {
+        if (!sets[si].is_string()) throw InputError(p + "/set/" + std::to_string(si) + ": expected a string");
+        cfg.sets.push_back(sets[si].get<std::string>());
+      }
       configs.push_back(cfg);
     }
   } else {
@@ -106,7 +142,7 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
     glm::dvec3 s(0.0);
     const auto& j = track["sun"];
     if (!j.is_array() || j.size() != 2) throw InputError(where + ": /sun must be [azimuth, elevation]");
-    fixed_sun = Sun{j[0].get<double>(), j[1].get<double>()};
+    fixed_sun = Sun{number_from(j[0], where + ": /sun/0", -360, 360), number_from(j[1], where + ": /sun/1", -90, 90)};
   }
   if (o.sun) fixed_sun = *o.sun, has_sun = true;
 

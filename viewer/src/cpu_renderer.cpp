@@ -1,14 +1,16 @@
-// CPU reference renderer: the shared GLSL math (shaders/cloud_functions.glsl) compiled as C++ in
-// double precision inside a class (Bruneton's reference/functions.cc pattern), TBB over pixels.
-// Where the GPU may legitimately differ: float vs double arithmetic everywhere, the texture unit's
-// trilinear weights (llvmpipe and GPUs quantise them; `render.exact_filter=true` filters by hand on
-// the GPU too) and pixels at the ground quad's far edge. Everything else is the same formula.
+// CPU reference renderer: the shared GLSL headers (shaders/*.glsl, listed in march.glsl) compiled
+// as C++ in double precision inside a class (Bruneton's reference/functions.cc pattern), TBB over
+// pixels. Where the GPU may legitimately differ: float vs double arithmetic everywhere, the texture
+// unit's trilinear weights (llvmpipe and GPUs quantise them; `render.exact_filter=true` filters by
+// hand on the GPU too) and pixels at the ground quad's far edge. Everything else is the same
+// formula: the per-pixel compose, the bloom taps, the bilinear taps and the tone map included.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 
 #include <tbb/parallel_for.h>
 
+#include "cloudviewer/constants.h"
 #include "cloudviewer/renderer.h"
 
 namespace cloudviewer {
@@ -21,6 +23,7 @@ struct CpuShader {
   using vec2 = glm::dvec2;
   using vec3 = glm::dvec3;
   using vec4 = glm::dvec4;
+  using mat4 = glm::dmat4;
   using ivec2 = glm::ivec2;
   using ivec3 = glm::ivec3;
   using uint = uint32_t;
@@ -42,15 +45,24 @@ struct CpuShader {
   }
   Number mie_table_value(int i) const { return mie[size_t(i)]; }
   vec2 coverage_texel(ivec2 t) const {
-    const float* c = &coverage_map()[(size_t(t.y) * 256 + size_t(t.x)) * 2];
+    const float* c = &coverage_map()[(size_t(t.y) * CV_COVERAGE_MAP_SIZE + size_t(t.x)) * 2];
     return vec2(c[0], c[1]);
   }
-  ivec2 coverage_size() const { return ivec2(256, 256); }
+  ivec2 coverage_size() const { return ivec2(CV_COVERAGE_MAP_SIZE, CV_COVERAGE_MAP_SIZE); }
 
 #define IN(x) const x&
 #define OUT(x) x&
 #define INOUT(x) x&
-#include "../shaders/cloud_functions.glsl"
+// The list and order of shaders/cloud_headers.glsl (after its GLSL-only bindings), plus post.glsl.
+#include "../shaders/common.glsl"
+#include "../shaders/phase.glsl"
+#include "cloudgen/cloud_type.glsl"
+#include "../shaders/medium.glsl"
+#include "../shaders/lighting.glsl"
+#include "../shaders/march.glsl"
+#include "../shaders/sky.glsl"
+#include "../shaders/compose.glsl"
+#include "../shaders/post.glsl"
 #undef IN
 #undef OUT
 #undef INOUT
@@ -62,32 +74,51 @@ struct Buffer {
   Buffer(int w_, int h_) : w(w_), h(h_), px(size_t(w_) * h_, dvec3(0.0)) {}
   dvec3& at(int x, int y) { return px[size_t(y) * w + x]; }
   const dvec3& at(int x, int y) const { return px[size_t(y) * w + x]; }
+  ivec2 size() const { return ivec2(w, h); }
 };
 
-// Same arithmetic as bilinear_fetch in shaders/post_common.glsl.
-dvec3 bilinear(const Buffer& b, dvec2 uv) {
-  dvec2 x = uv * dvec2(b.w, b.h) - 0.5;
-  dvec2 fl = floor(x);
-  dvec2 f = x - fl;
-  ivec2 i0 = ivec2(fl);
+// post.glsl's bilinear taps over a buffer (post_sampling.glsl's bilinear_fetch on the GPU).
+dvec3 bilinear(CpuShader& sh, const Buffer& b, dvec2 uv) {
   dvec3 acc(0.0);
   for (int k = 0; k < 4; ++k) {
-    ivec2 o(k & 1, k >> 1);
-    ivec2 i = clamp(i0 + o, ivec2(0), ivec2(b.w - 1, b.h - 1));
-    dvec2 wt = mix(dvec2(1.0) - f, f, dvec2(o));
-    acc += (wt.x * wt.y) * b.at(i.x, i.y);
+    ivec2 texel;
+    double w = sh.bilinear_tap(uv, b.size(), k, texel);
+    acc += w * b.at(texel.x, texel.y);
   }
   return acc;
+}
+
+// One direction of the separable bloom blur (bloom_blur.frag).
+void blur(CpuShader& sh, const Buffer& src, Buffer& dst, ivec2 direction) {
+  for (int y = 0; y < src.h; ++y)
+    for (int x = 0; x < src.w; ++x) {
+      dvec3 acc(0.0);
+      for (int i = -CV_BLOOM_RADIUS; i <= CV_BLOOM_RADIUS; ++i) {
+        ivec2 q;
+        double w = sh.bloom_tap(ivec2(x, y), direction, i, src.size(), q);
+        acc += w * src.at(q.x, q.y);
+      }
+      dst.at(x, y) = acc;
+    }
 }
 
 }  // namespace
 
 double reference_phase(PhaseMode mode, double g, double cos_theta) {
   ref::CloudParams p{};
-  p.phase = dvec4(double(int(mode)), g, double(mie_phase_table().size()), 0.0);
+  p.phase_mode = double(int(mode));
+  p.hg_g = g;
+  p.mie_table_size = double(mie_phase_table().size());
   PreparedVolume empty;
   CpuShader sh(p, empty, mie_phase_table());
   return sh.phase_function(cos_theta);
+}
+
+double reference_cloud_type_gradient(double h, double type) {
+  ref::CloudParams p{};
+  PreparedVolume empty;
+  CpuShader sh(p, empty, mie_phase_table());
+  return sh.cloud_type_gradient(h, type);
 }
 
 FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
@@ -95,48 +126,35 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
   const std::vector<float>& mie = mie_phase_table();
   const ref::CloudParams& P = frame.params;
   Buffer hdr(w, h);
-  std::vector<double> transmittance(size_t(w) * h, 1.0);
-  const int output = int(P.control.w);
   tbb::parallel_for(0, h, [&](int y) {
     CpuShader sh(P, vol, mie);
     for (int x = 0; x < w; ++x) {
-      dvec2 ndc((x + 0.5) / w * 2.0 - 1.0, (y + 0.5) / h * 2.0 - 1.0);
-      dvec4 near_point = frame.inv_view_proj * dvec4(ndc, -1.0, 1.0);
-      dvec3 rd = normalize(dvec3(near_point) / near_point.w);
-      double t_scene = 1e30;
-      dvec3 background(0.0);
-      // The GL ground quad is visible from both sides; so is this plane. In layer mode the ground
-      // is the parabolic Earth (altitude 0), tessellated finely on the GPU.
+      dvec3 rd = sh.pixel_ray(frame.inv_view_proj, dvec2(x + 0.5, y + 0.5), dvec2(w, h));
+      double t_scene = CV_NO_HIT;
+      dvec3 scene_color(0.0);
+      // The GPU rasterises the ground mesh (ground.vert); here the same surface is intersected. The
+      // GL ground quad is visible from both sides; so is this plane. In layer mode the ground is the
+      // parabolic Earth (altitude 0), tessellated finely on the GPU.
       double t = -1;
-      if (P.ground.z > 0.5 && P.layer.x > 0.5) {
-        dvec2 r = sh.parabola_roots((1.0 - rd.y * rd.y) / (2.0 * P.layer.w), rd.y, -P.ground.x);
+      if (P.ground_on > 0.5 && P.layer_on > 0.5) {
+        dvec2 r = sh.parabola_roots((1.0 - rd.y * rd.y) / (2.0 * P.earth_radius_m), rd.y, -P.ground_y_m);
         if (r.x <= r.y) t = r.x > 0 ? r.x : r.y;
-      } else if (P.ground.z > 0.5 && rd.y != 0.0 && P.ground.x / rd.y > 0.0) {
-        t = P.ground.x / rd.y;
+      } else if (P.ground_on > 0.5 && rd.y != 0.0 && P.ground_y_m / rd.y > 0.0) {
+        t = P.ground_y_m / rd.y;
       }
       if (t > 0) {
         dvec3 p = rd * t;
-        if (std::abs(p.x) <= P.ground.w && std::abs(p.z) <= P.ground.w) {
+        if (std::abs(p.x) <= P.ground_half_extent_m && std::abs(p.z) <= P.ground_half_extent_m) {
           t_scene = t;
-          background = sh.ground_radiance(p);
+          scene_color = sh.ground_radiance(p);
         }
       }
-      if (t_scene >= 1e29) background = sh.sky_radiance(rd);
-      double jitter = P.control.x > 0.5 ? sh.jitter_offset(ivec2(x, y), int(P.control.y)) : 0.5;
-      int iterations = 0;
-      double t_mean = 0;
-      dvec4 m = sh.march_clouds(rd, t_scene, jitter, iterations, t_mean);
-      m = sh.aerial_perspective(m, t_mean, rd);
-      dvec3 c;
-      if (output == 1) c = dvec3(m.w);
-      else if (output == 2) c = dvec3(iterations, m.w, 0.0);
-      else c = dvec3(m) + m.w * background;
-      hdr.at(x, y) = c;
+      hdr.at(x, y) = sh.compose_pixel(rd, ivec2(x, y), t_scene, scene_color);
     }
   });
 
   // Bloom: half-resolution bright pass, separable Gaussian, added before tone mapping
-  // (the same passes and arithmetic as bloom_bright.frag, bloom_blur.frag, tonemap.frag).
+  // (the same passes and taps as bloom_bright.frag, bloom_blur.frag, tonemap.frag).
   const double exposure = frame.settings.exposure, strength = frame.settings.bloom;
   const double threshold = frame.settings.bloom_threshold;
   const int op = int(frame.settings.tonemap);
@@ -144,32 +162,18 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
   Buffer bright(bw, bh), blur_h(bw, bh), blur_v(bw, bh);
   CpuShader sh(P, vol, mie);
   if (strength > 0) {
-    const int radius = 6;
-    const double sigma = 3.0;
-    std::vector<double> wts;
-    for (int i = -radius; i <= radius; ++i) wts.push_back(sh.gaussian_weight(i, radius, sigma));
     for (int y = 0; y < bh; ++y)
       for (int x = 0; x < bw; ++x)
-        bright.at(x, y) = sh.bloom_bright(bilinear(hdr, dvec2((x + 0.5) / bw, (y + 0.5) / bh)), threshold);
-    for (int y = 0; y < bh; ++y)
-      for (int x = 0; x < bw; ++x) {
-        dvec3 acc(0.0);
-        for (int i = -radius; i <= radius; ++i) acc += wts[size_t(i + radius)] * bright.at(std::clamp(x + i, 0, bw - 1), y);
-        blur_h.at(x, y) = acc;
-      }
-    for (int y = 0; y < bh; ++y)
-      for (int x = 0; x < bw; ++x) {
-        dvec3 acc(0.0);
-        for (int i = -radius; i <= radius; ++i) acc += wts[size_t(i + radius)] * blur_h.at(x, std::clamp(y + i, 0, bh - 1));
-        blur_v.at(x, y) = acc;
-      }
+        bright.at(x, y) = sh.bloom_bright(bilinear(sh, hdr, dvec2((x + 0.5) / bw, (y + 0.5) / bh)), threshold);
+    blur(sh, bright, blur_h, ivec2(1, 0));
+    blur(sh, blur_h, blur_v, ivec2(0, 1));
   }
   FrameImages out{Image(w, h), Image(w, h)};
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       dvec3 c = hdr.at(x, y);
-      if (strength > 0) c += strength * bilinear(blur_v, dvec2((x + 0.5) / w, (y + 0.5) / h));
-      dvec3 d = sh.srgb_encode(sh.tone_map(c, exposure, op));
+      if (strength > 0) c += strength * bilinear(sh, blur_v, dvec2((x + 0.5) / w, (y + 0.5) / h));
+      dvec3 d = sh.display_encode(c, exposure, op);
       float* pd = out.display.at(x, y);
       float* pl = out.linear.at(x, y);
       for (int k = 0; k < 3; ++k) {

@@ -1,11 +1,16 @@
 // OpenGL 4.5 deferred renderer: ground pass (HDR + distance), full-screen cloud pass, bloom
-// (half resolution, separable Gaussian), tone map + sRGB. GPU timer queries around every pass.
+// (half resolution, separable Gaussian), tone map + sRGB, declared as a table of targets and passes.
+// GPU timer queries around every pass.
+#include <algorithm>
 #include <array>
-#include <vector>
 #include <cstring>
+#include <functional>
+#include <string>
+#include <vector>
 
 #include <epoxy/gl.h>
 
+#include "cloudviewer/constants.h"
 #include "cloudviewer/errors.h"
 #include "cloudviewer/renderer.h"
 
@@ -55,94 +60,222 @@ GLuint link_program(const ShaderSource& src, const std::string& vs, const std::s
   return p;
 }
 
-constexpr int kGroundGrid = 96;  // ground cells per side in layer mode (curved Earth)
+// Render targets and passes are declared in two tables (make_targets, make_passes); resize() and
+// render() walk them. A new pass (a sky LUT precompute, a temporal resolve) is one more entry:
+//  - a Target sized by the viewport (divisor 1 or 2) or fixed (a LUT: `fixed_w`/`fixed_h`), with
+//    `history` to keep last frame's copy readable as "NAME@prev" (swapped after every frame);
+//  - a Pass naming its program, the target it writes, the attachments it reads (bound in order to
+//    CV_UNIT_PASS_INPUT0, 1, ...), when it runs, and its timing group.
+struct Target {
+  std::string name;
+  std::vector<GLenum> colors;  // internal format of each colour attachment
+  bool depth = false;
+  int divisor = 1;             // viewport / divisor (at least 1 pixel)
+  int fixed_w = 0, fixed_h = 0;  // > 0: a fixed size (LUTs), independent of the viewport
+  bool history = false;        // keep the previous frame's copy ("NAME@prev")
+  // GL objects: [0] the current frame, [1] the previous one when `history`.
+  int w = 0, h = 0;
+  GLuint fbo[2] = {0, 0};
+  std::vector<GLuint> tex[2];
+  GLuint depth_tex[2] = {0, 0};
+};
+
+enum class Group { Ground, Clouds, Post };
+
+struct Pass {
+  std::string name;
+  std::string vs, fs;
+  std::string target;
+  std::vector<std::pair<std::string, int>> inputs;  // (target, attachment) -> CV_UNIT_PASS_INPUT0 + i
+  Group group = Group::Post;
+  bool mesh = false;                                 // the ground mesh instead of a full-screen triangle
+  std::vector<std::array<float, 4>> clear;           // per colour attachment; empty = no clear
+  std::function<bool(const FrameSetup&)> enabled;    // null = always
+  std::function<void(GLuint program)> uniforms;      // per-pass uniforms, null = none
+  GLuint program = 0;
+};
+
+std::vector<Target> make_targets() {
+  std::vector<Target> t(5);
+  t[0].name = "scene", t[0].colors = {GL_RGBA32F, GL_R32F}, t[0].depth = true;  // ground radiance, distance
+  t[1].name = "hdr", t[1].colors = {GL_RGBA32F};                                 // clouds over the scene
+  t[2].name = "bloom_a", t[2].colors = {GL_RGBA32F}, t[2].divisor = 2;
+  t[3].name = "bloom_b", t[3].colors = {GL_RGBA32F}, t[3].divisor = 2;
+  t[4].name = "final", t[4].colors = {GL_RGBA32F, GL_RGBA32F};                 // display, linear
+  return t;
+}
+
+std::vector<Pass> make_passes() {
+  auto bloom_on = [](const FrameSetup& f) { return f.settings.bloom > 0; };
+  std::vector<Pass> p;
+  Pass ground;
+  ground.name = "ground", ground.vs = "ground.vert", ground.fs = "ground.frag", ground.target = "scene";
+  ground.group = Group::Ground, ground.mesh = true;
+  ground.clear = {{0.f, 0.f, 0.f, 0.f}, {float(CV_NO_HIT), 0.f, 0.f, 0.f}};
+  ground.enabled = [](const FrameSetup& f) { return f.params.ground_on > 0.5; };
+  p.push_back(ground);
+  Pass clouds;
+  clouds.name = "clouds", clouds.vs = "fullscreen.vert", clouds.fs = "cloud.frag", clouds.target = "hdr";
+  clouds.inputs = {{"scene", 0}, {"scene", 1}}, clouds.group = Group::Clouds;
+  p.push_back(clouds);
+  Pass bright;
+  bright.name = "bloom_bright", bright.vs = "fullscreen.vert", bright.fs = "bloom_bright.frag";
+  bright.target = "bloom_a", bright.inputs = {{"hdr", 0}}, bright.enabled = bloom_on;
+  p.push_back(bright);
+  for (int axis = 0; axis < 2; ++axis) {
+    Pass blur;
+    blur.name = axis == 0 ? "bloom_blur_x" : "bloom_blur_y";
+    blur.vs = "fullscreen.vert", blur.fs = "bloom_blur.frag";
+    blur.target = axis == 0 ? "bloom_b" : "bloom_a";
+    blur.inputs = {{axis == 0 ? "bloom_a" : "bloom_b", 0}};
+    blur.enabled = bloom_on;
+    blur.uniforms = [axis](GLuint prog) { glProgramUniform2i(prog, 0, axis == 0 ? 1 : 0, axis == 0 ? 0 : 1); };
+    p.push_back(blur);
+  }
+  Pass tonemap;
+  tonemap.name = "tonemap", tonemap.vs = "fullscreen.vert", tonemap.fs = "tonemap.frag", tonemap.target = "final";
+  tonemap.inputs = {{"hdr", 0}, {"bloom_a", 0}};
+  p.push_back(tonemap);
+  return p;
+}
+
+// The ground mesh in units of the ground's half extent (ground.vert scales and bends it): a quad
+// for box mode, then a CV_GROUND_GRID^2 grid for the curved Earth of layer mode. Uploaded once.
+std::vector<float> ground_mesh(GLint& quad_first, GLsizei& quad_count, GLint& grid_first, GLsizei& grid_count) {
+  std::vector<float> v = {-1, -1, 1, -1, 1, 1, -1, -1, 1, 1, -1, 1};
+  quad_first = 0, quad_count = 6;
+  const int n = CV_GROUND_GRID;
+  auto vertex = [&](int i, int j) { v.insert(v.end(), {float(-1.0 + 2.0 * i / n), float(-1.0 + 2.0 * j / n)}); };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      vertex(i, j), vertex(i + 1, j), vertex(i + 1, j + 1);
+      vertex(i, j), vertex(i + 1, j + 1), vertex(i, j + 1);
+    }
+  grid_first = 6, grid_count = GLsizei(v.size() / 2) - 6;
+  return v;
+}
 
 }  // namespace
 
 struct GlRenderer::Impl {
   ShaderSource shaders;
-  GLuint prog_ground = 0, prog_cloud = 0, prog_bright = 0, prog_blur = 0, prog_tonemap = 0;
+  std::vector<Target> targets = make_targets();
+  std::vector<Pass> passes = make_passes();
   GLuint tex_volume = 0, tex_occ = 0, tex_mie = 0, tex_coverage = 0;
-  GLsizei ground_vertices = 0;
   GLuint ubo_cloud = 0, ubo_frame = 0;
   GLuint vao_empty = 0, vao_ground = 0, vbo_ground = 0;
-  int w = 0, h = 0, bw = 0, bh = 0;
-  GLuint fbo_scene = 0, tex_scene_color = 0, tex_scene_distance = 0, tex_scene_depth = 0;
-  GLuint fbo_hdr = 0, tex_hdr = 0;
-  GLuint fbo_bloom[2] = {0, 0}, tex_bloom[2] = {0, 0};
-  GLuint fbo_final = 0, tex_display = 0, tex_linear = 0;
-  std::array<GLuint, 5> queries{};
+  GLint quad_first = 0, grid_first = 0;
+  GLsizei quad_count = 0, grid_count = 0;
+  int w = 0, h = 0;
+  std::vector<GLuint> queries;  // one timestamp before the passes and one after each
   bool have_volume = false;
 
+  Target& target(const std::string& name) {
+    for (Target& t : targets)
+      if (t.name == name) return t;
+    throw GlError("render pass refers to an undeclared target '" + name + "'");
+  }
+  // Passes sharing a program share one GL object: delete each object once.
   void delete_programs() {
-    for (GLuint* p : {&prog_ground, &prog_cloud, &prog_bright, &prog_blur, &prog_tonemap})
-      if (*p) glDeleteProgram(*p), *p = 0;
+    std::vector<GLuint> done;
+    for (Pass& p : passes) {
+      if (p.program && std::find(done.begin(), done.end(), p.program) == done.end()) {
+        glDeleteProgram(p.program);
+        done.push_back(p.program);
+      }
+      p.program = 0;
+    }
   }
   void build_programs() {
-    GLuint g = 0, c = 0, b = 0, bl = 0, t = 0;
+    // Link every distinct (vertex, fragment) pair once; nothing changes unless all succeed.
+    std::vector<std::pair<std::pair<std::string, std::string>, GLuint>> built;
     try {
-      g = link_program(shaders, "ground.vert", "ground.frag");
-      c = link_program(shaders, "fullscreen.vert", "cloud.frag");
-      b = link_program(shaders, "fullscreen.vert", "bloom_bright.frag");
-      bl = link_program(shaders, "fullscreen.vert", "bloom_blur.frag");
-      t = link_program(shaders, "fullscreen.vert", "tonemap.frag");
+      for (const Pass& p : passes) {
+        auto key = std::make_pair(p.vs, p.fs);
+        bool have = false;
+        for (auto& b : built) have = have || b.first == key;
+        if (!have) built.push_back({key, link_program(shaders, p.vs, p.fs)});
+      }
     } catch (...) {
-      for (GLuint p : {g, c, b, bl, t})
-        if (p) glDeleteProgram(p);
+      for (auto& b : built) glDeleteProgram(b.second);
       throw;
     }
     delete_programs();
-    prog_ground = g, prog_cloud = c, prog_bright = b, prog_blur = bl, prog_tonemap = t;
+    for (Pass& p : passes)
+      for (auto& b : built)
+        if (b.first == std::make_pair(p.vs, p.fs)) p.program = b.second;
   }
   void delete_targets() {
-    GLuint fbos[] = {fbo_scene, fbo_hdr, fbo_bloom[0], fbo_bloom[1], fbo_final};
-    GLuint texs[] = {tex_scene_color, tex_scene_distance, tex_scene_depth, tex_hdr, tex_bloom[0], tex_bloom[1], tex_display, tex_linear};
-    for (GLuint f : fbos)
-      if (f) glDeleteFramebuffers(1, &f);
-    for (GLuint t : texs)
-      if (t) glDeleteTextures(1, &t);
-    fbo_scene = fbo_hdr = fbo_bloom[0] = fbo_bloom[1] = fbo_final = 0;
-    tex_scene_color = tex_scene_distance = tex_scene_depth = tex_hdr = tex_bloom[0] = tex_bloom[1] = tex_display = tex_linear = 0;
+    for (Target& t : targets)
+      for (int c = 0; c < 2; ++c) {
+        if (t.fbo[c]) glDeleteFramebuffers(1, &t.fbo[c]);
+        for (GLuint x : t.tex[c]) glDeleteTextures(1, &x);
+        if (t.depth_tex[c]) glDeleteTextures(1, &t.depth_tex[c]);
+        t.fbo[c] = t.depth_tex[c] = 0;
+        t.tex[c].clear();
+      }
   }
   void resize(int width, int height) {
     if (width == w && height == h) return;
     delete_targets();
     w = width, h = height;
-    bw = std::max(1, w / 2), bh = std::max(1, h / 2);
-    tex_scene_color = make_texture_2d(GL_RGBA32F, w, h);
-    tex_scene_distance = make_texture_2d(GL_R32F, w, h);
-    tex_scene_depth = make_texture_2d(GL_DEPTH_COMPONENT32F, w, h);
-    glCreateFramebuffers(1, &fbo_scene);
-    glNamedFramebufferTexture(fbo_scene, GL_COLOR_ATTACHMENT0, tex_scene_color, 0);
-    glNamedFramebufferTexture(fbo_scene, GL_COLOR_ATTACHMENT1, tex_scene_distance, 0);
-    glNamedFramebufferTexture(fbo_scene, GL_DEPTH_ATTACHMENT, tex_scene_depth, 0);
-    GLenum two[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
-    glNamedFramebufferDrawBuffers(fbo_scene, 2, two);
-    check_fbo(fbo_scene, "scene");
-    tex_hdr = make_texture_2d(GL_RGBA32F, w, h);
-    glCreateFramebuffers(1, &fbo_hdr);
-    glNamedFramebufferTexture(fbo_hdr, GL_COLOR_ATTACHMENT0, tex_hdr, 0);
-    check_fbo(fbo_hdr, "hdr");
-    for (int i = 0; i < 2; ++i) {
-      tex_bloom[i] = make_texture_2d(GL_RGBA32F, bw, bh);
-      glCreateFramebuffers(1, &fbo_bloom[i]);
-      glNamedFramebufferTexture(fbo_bloom[i], GL_COLOR_ATTACHMENT0, tex_bloom[i], 0);
-      check_fbo(fbo_bloom[i], "bloom");
+    for (Target& t : targets) {
+      t.w = t.fixed_w > 0 ? t.fixed_w : std::max(1, w / t.divisor);
+      t.h = t.fixed_h > 0 ? t.fixed_h : std::max(1, h / t.divisor);
+      for (int c = 0; c < (t.history ? 2 : 1); ++c) {
+        glCreateFramebuffers(1, &t.fbo[c]);
+        std::vector<GLenum> draw;
+        for (size_t i = 0; i < t.colors.size(); ++i) {
+          t.tex[c].push_back(make_texture_2d(t.colors[i], t.w, t.h));
+          glNamedFramebufferTexture(t.fbo[c], GLenum(GL_COLOR_ATTACHMENT0 + i), t.tex[c].back(), 0);
+          draw.push_back(GLenum(GL_COLOR_ATTACHMENT0 + i));
+        }
+        if (t.depth) {
+          t.depth_tex[c] = make_texture_2d(GL_DEPTH_COMPONENT32F, t.w, t.h);
+          glNamedFramebufferTexture(t.fbo[c], GL_DEPTH_ATTACHMENT, t.depth_tex[c], 0);
+        }
+        glNamedFramebufferDrawBuffers(t.fbo[c], GLsizei(draw.size()), draw.data());
+        check_fbo(t.fbo[c], t.name.c_str());
+      }
     }
-    tex_display = make_texture_2d(GL_RGBA32F, w, h);
-    tex_linear = make_texture_2d(GL_RGBA32F, w, h);
-    glCreateFramebuffers(1, &fbo_final);
-    glNamedFramebufferTexture(fbo_final, GL_COLOR_ATTACHMENT0, tex_display, 0);
-    glNamedFramebufferTexture(fbo_final, GL_COLOR_ATTACHMENT1, tex_linear, 0);
-    glNamedFramebufferDrawBuffers(fbo_final, 2, two);
-    check_fbo(fbo_final, "final");
   }
-  void fullscreen(GLuint prog, GLuint fbo, int vw, int vh) {
-    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-    glViewport(0, 0, vw, vh);
-    glUseProgram(prog);
-    glBindVertexArray(vao_empty);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
+  void run(Pass& p, const FrameSetup& f) {
+    Target& t = target(p.target);
+    for (size_t i = 0; i < p.clear.size(); ++i) glClearNamedFramebufferfv(t.fbo[0], GL_COLOR, GLint(i), p.clear[i].data());
+    if (t.depth) {
+      const float one = 1.0f;
+      glClearNamedFramebufferfv(t.fbo[0], GL_DEPTH, 0, &one);
+    }
+    if (p.enabled && !p.enabled(f)) return;
+    for (size_t i = 0; i < p.inputs.size(); ++i) {
+      const std::string& name = p.inputs[i].first;
+      bool prev = name.size() > 5 && name.compare(name.size() - 5, 5, "@prev") == 0;
+      Target& in = target(prev ? name.substr(0, name.size() - 5) : name);
+      glBindTextureUnit(GLuint(CV_UNIT_PASS_INPUT0 + i), in.tex[prev ? 1 : 0][size_t(p.inputs[i].second)]);
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, t.fbo[0]);
+    glViewport(0, 0, t.w, t.h);
+    glUseProgram(p.program);
+    if (p.uniforms) p.uniforms(p.program);
+    if (p.mesh) {
+      bool layer = f.params.layer_on > 0.5;
+      glEnable(GL_DEPTH_TEST);
+      glDepthFunc(GL_LESS);
+      glBindVertexArray(vao_ground);
+      glDrawArrays(GL_TRIANGLES, layer ? grid_first : quad_first, layer ? grid_count : quad_count);
+      glDisable(GL_DEPTH_TEST);
+    } else {
+      glBindVertexArray(vao_empty);
+      glDrawArrays(GL_TRIANGLES, 0, 3);
+    }
+  }
+  void swap_history() {
+    for (Target& t : targets)
+      if (t.history) {
+        std::swap(t.fbo[0], t.fbo[1]);
+        std::swap(t.tex[0], t.tex[1]);
+        std::swap(t.depth_tex[0], t.depth_tex[1]);
+      }
   }
 };
 
@@ -157,11 +290,13 @@ GlRenderer::GlRenderer(ShaderSource shaders) : impl_(std::make_unique<Impl>()) {
   glCreateVertexArrays(1, &m.vao_empty);
   glCreateVertexArrays(1, &m.vao_ground);
   glCreateBuffers(1, &m.vbo_ground);
-  glNamedBufferStorage(m.vbo_ground, sizeof(float) * 3 * 6 * kGroundGrid * kGroundGrid, nullptr, GL_DYNAMIC_STORAGE_BIT);
-  glVertexArrayVertexBuffer(m.vao_ground, 0, m.vbo_ground, 0, sizeof(float) * 3);
+  std::vector<float> mesh = ground_mesh(m.quad_first, m.quad_count, m.grid_first, m.grid_count);
+  glNamedBufferStorage(m.vbo_ground, GLsizeiptr(mesh.size() * sizeof(float)), mesh.data(), 0);
+  glVertexArrayVertexBuffer(m.vao_ground, 0, m.vbo_ground, 0, sizeof(float) * 2);
   glEnableVertexArrayAttrib(m.vao_ground, 0);
-  glVertexArrayAttribFormat(m.vao_ground, 0, 3, GL_FLOAT, GL_FALSE, 0);
+  glVertexArrayAttribFormat(m.vao_ground, 0, 2, GL_FLOAT, GL_FALSE, 0);
   glVertexArrayAttribBinding(m.vao_ground, 0, 0);
+  m.queries.resize(m.passes.size() + 1);
   glCreateQueries(GL_TIMESTAMP, GLsizei(m.queries.size()), m.queries.data());
   // Mie table (1D float texture, fetched by index and interpolated by hand).
   const std::vector<float>& mie = mie_phase_table();
@@ -171,9 +306,10 @@ GlRenderer::GlRenderer(ShaderSource shaders) : impl_(std::make_unique<Impl>()) {
   glTextureParameteri(m.tex_mie, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTextureParameteri(m.tex_mie, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   const std::vector<float>& cov = coverage_map();
+  const int n = CV_COVERAGE_MAP_SIZE;
   glCreateTextures(GL_TEXTURE_2D, 1, &m.tex_coverage);
-  glTextureStorage2D(m.tex_coverage, 1, GL_RG32F, 256, 256);
-  glTextureSubImage2D(m.tex_coverage, 0, 0, 0, 256, 256, GL_RG, GL_FLOAT, cov.data());
+  glTextureStorage2D(m.tex_coverage, 1, GL_RG32F, n, n);
+  glTextureSubImage2D(m.tex_coverage, 0, 0, 0, n, n, GL_RG, GL_FLOAT, cov.data());
   glTextureParameteri(m.tex_coverage, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTextureParameteri(m.tex_coverage, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
 }
@@ -237,101 +373,77 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   m.resize(f.width, f.height);
   gpu::CloudParams cp = to_gpu(f.params);
   glNamedBufferSubData(m.ubo_cloud, 0, sizeof(cp), &cp);
+  const Target& bloom = m.target("bloom_a");
   FrameBlock fb;
   fb.inv_view_proj = glm::mat4(f.inv_view_proj);
   fb.view_proj = glm::mat4(f.view_proj);
-  fb.viewport = glm::vec4(m.w, m.h, m.bw, m.bh);
+  fb.viewport = glm::vec4(m.w, m.h, bloom.w, bloom.h);
   fb.post = glm::vec4(float(f.settings.exposure), float(int(f.settings.tonemap)), float(f.settings.bloom),
                       float(f.settings.bloom_threshold));
   glNamedBufferSubData(m.ubo_frame, 0, sizeof(fb), &fb);
-  glBindBufferBase(GL_UNIFORM_BUFFER, 0, m.ubo_cloud);
-  glBindBufferBase(GL_UNIFORM_BUFFER, 1, m.ubo_frame);
-  glBindTextureUnit(0, m.tex_volume);
-  glBindTextureUnit(1, m.tex_occ);
-  glBindTextureUnit(2, m.tex_mie);
-  glBindTextureUnit(5, m.tex_coverage);
+  glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_CLOUD, m.ubo_cloud);
+  glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_FRAME, m.ubo_frame);
+  glBindTextureUnit(CV_UNIT_VOLUME, m.tex_volume);
+  glBindTextureUnit(CV_UNIT_OCCUPANCY, m.tex_occ);
+  glBindTextureUnit(CV_UNIT_MIE, m.tex_mie);
+  glBindTextureUnit(CV_UNIT_COVERAGE, m.tex_coverage);
   glDisable(GL_BLEND);
   glDisable(GL_CULL_FACE);
   glDisable(GL_FRAMEBUFFER_SRGB);
 
   glQueryCounter(m.queries[0], GL_TIMESTAMP);
-  // Ground pass: HDR radiance + distance, depth tested.
-  glBindFramebuffer(GL_FRAMEBUFFER, m.fbo_scene);
-  glViewport(0, 0, m.w, m.h);
-  const float zero[4] = {0, 0, 0, 0}, far_distance[4] = {1e30f, 0, 0, 0};
-  glClearNamedFramebufferfv(m.fbo_scene, GL_COLOR, 0, zero);
-  glClearNamedFramebufferfv(m.fbo_scene, GL_COLOR, 1, far_distance);
-  const float one = 1.0f;
-  glClearNamedFramebufferfv(m.fbo_scene, GL_DEPTH, 0, &one);
-  if (f.params.ground.z > 0.5) {
-    double y = f.params.ground.x, r = f.ground_half_extent;
-    std::vector<float> verts;
-    if (f.params.layer.x > 0.5) {
-      // Curved Earth: altitude 0 of the parabolic model, y = -h_cam - (x^2 + z^2) / 2R.
-      const int n = kGroundGrid;
-      auto vertex = [&](int i, int j) {
-        double x = -r + 2 * r * i / n, z = -r + 2 * r * j / n;
-        verts.insert(verts.end(), {float(x), float(y - (x * x + z * z) / (2 * f.params.layer.w)), float(z)});
-      };
-      for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) {
-          vertex(i, j), vertex(i + 1, j), vertex(i + 1, j + 1);
-          vertex(i, j), vertex(i + 1, j + 1), vertex(i, j + 1);
-        }
-    } else {
-      float fy = float(y), fr = float(r);
-      verts = {-fr, fy, -fr, fr, fy, -fr, fr, fy, fr, -fr, fy, -fr, fr, fy, fr, -fr, fy, fr};
-    }
-    m.ground_vertices = GLsizei(verts.size() / 3);
-    glNamedBufferSubData(m.vbo_ground, 0, GLsizeiptr(verts.size() * sizeof(float)), verts.data());
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    glUseProgram(m.prog_ground);
-    glBindVertexArray(m.vao_ground);
-    glDrawArrays(GL_TRIANGLES, 0, m.ground_vertices);
-    glDisable(GL_DEPTH_TEST);
+  for (size_t i = 0; i < m.passes.size(); ++i) {
+    m.run(m.passes[i], f);
+    glQueryCounter(m.queries[i + 1], GL_TIMESTAMP);
   }
-  glQueryCounter(m.queries[1], GL_TIMESTAMP);
-  // Cloud pass.
-  glBindTextureUnit(3, m.tex_scene_color);
-  glBindTextureUnit(4, m.tex_scene_distance);
-  m.fullscreen(m.prog_cloud, m.fbo_hdr, m.w, m.h);
-  glQueryCounter(m.queries[2], GL_TIMESTAMP);
-  // Bloom at half resolution.
-  if (f.settings.bloom > 0) {
-    glBindTextureUnit(3, m.tex_hdr);
-    m.fullscreen(m.prog_bright, m.fbo_bloom[0], m.bw, m.bh);
-    glUseProgram(m.prog_blur);
-    glProgramUniform2i(m.prog_blur, 0, 1, 0);
-    glBindTextureUnit(3, m.tex_bloom[0]);
-    m.fullscreen(m.prog_blur, m.fbo_bloom[1], m.bw, m.bh);
-    glProgramUniform2i(m.prog_blur, 0, 0, 1);
-    glBindTextureUnit(3, m.tex_bloom[1]);
-    m.fullscreen(m.prog_blur, m.fbo_bloom[0], m.bw, m.bh);
-  }
-  glQueryCounter(m.queries[3], GL_TIMESTAMP);
-  glBindTextureUnit(3, m.tex_hdr);
-  glBindTextureUnit(4, m.tex_bloom[0]);
-  m.fullscreen(m.prog_tonemap, m.fbo_final, m.w, m.h);
-  glQueryCounter(m.queries[4], GL_TIMESTAMP);
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  m.swap_history();
   GLenum err = glGetError();
   if (err != GL_NO_ERROR) throw GlError("OpenGL error 0x" + std::to_string(err) + " while rendering");
   if (timings) {
-    GLuint64 t[5];
-    for (int i = 0; i < 5; ++i) glGetQueryObjectui64v(m.queries[size_t(i)], GL_QUERY_RESULT, &t[i]);
-    timings->ground_ms = double(t[1] - t[0]) * 1e-6;
-    timings->cloud_ms = double(t[2] - t[1]) * 1e-6;
-    timings->post_ms = double(t[4] - t[2]) * 1e-6;
-    timings->total_ms = double(t[4] - t[0]) * 1e-6;
+    std::vector<GLuint64> t(m.queries.size());
+    for (size_t i = 0; i < t.size(); ++i) glGetQueryObjectui64v(m.queries[i], GL_QUERY_RESULT, &t[i]);
+    *timings = GpuTimings{};
+    for (size_t i = 0; i < m.passes.size(); ++i) {
+      double ms = double(t[i + 1] - t[i]) * 1e-6;
+      timings->passes.push_back({m.passes[i].name, ms});
+      Group g = m.passes[i].group;
+      (g == Group::Ground ? timings->ground_ms : g == Group::Clouds ? timings->cloud_ms : timings->post_ms) += ms;
+    }
+    timings->total_ms = double(t.back() - t.front()) * 1e-6;
   }
+}
+
+int GlRenderer::cloud_block_size() const {
+  const Pass& clouds = impl_->passes[1];
+  GLuint index = glGetUniformBlockIndex(clouds.program, "CloudBlock");
+  GLint size = 0;
+  glGetActiveUniformBlockiv(clouds.program, index, GL_UNIFORM_BLOCK_DATA_SIZE, &size);
+  return size;
+}
+
+int GlRenderer::cloud_block_offset(const std::string& member) const {
+  const Pass& clouds = impl_->passes[1];
+  std::string name = "u_cloud." + member;
+  GLuint index = glGetProgramResourceIndex(clouds.program, GL_UNIFORM, name.c_str());
+  if (index == GL_INVALID_INDEX) return -1;
+  const GLenum prop = GL_OFFSET;
+  GLint offset = -1;
+  glGetProgramResourceiv(clouds.program, GL_UNIFORM, index, 1, &prop, 1, nullptr, &offset);
+  return offset;
+}
+
+std::vector<std::string> GlRenderer::pass_names() const {
+  std::vector<std::string> names;
+  for (const Pass& p : impl_->passes) names.push_back(p.name);
+  return names;
 }
 
 FrameImages GlRenderer::read_back() {
   Impl& m = *impl_;
   FrameImages out{Image(m.w, m.h), Image(m.w, m.h)};
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glBindFramebuffer(GL_READ_FRAMEBUFFER, m.fbo_final);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, m.target("final").fbo[0]);
   glReadBuffer(GL_COLOR_ATTACHMENT0);
   glReadPixels(0, 0, m.w, m.h, GL_RGBA, GL_FLOAT, out.display.rgba.data());
   glReadBuffer(GL_COLOR_ATTACHMENT1);
@@ -342,7 +454,7 @@ FrameImages GlRenderer::read_back() {
 
 void GlRenderer::present(int ww, int wh) {
   Impl& m = *impl_;
-  glBindFramebuffer(GL_READ_FRAMEBUFFER, m.fbo_final);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, m.target("final").fbo[0]);
   glReadBuffer(GL_COLOR_ATTACHMENT0);
   glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
   glBlitFramebuffer(0, 0, m.w, m.h, 0, 0, ww, wh, GL_COLOR_BUFFER_BIT, GL_LINEAR);

@@ -1,27 +1,61 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cerrno>
 #include <cstring>
+#include <functional>
 #include <memory>
+
+#include <unistd.h>
 
 #include <ImfArray.h>
 #include <ImfRgbaFile.h>
 #include <png.h>
 
 #include "cloudviewer/errors.h"
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+#include "cloudgen/io.h"
+#endif
 #include "cloudviewer/image.h"
 
 namespace cloudviewer {
 
-void write_png(const std::string& path, const Image& img) {
+namespace {
+
+// Writes through a temporary file renamed into place only when complete (cloudgen::atomic_write),
+// so a failed write (full disk, no permission) leaves an existing file byte for byte.
+void write_atomically(const std::string& path, const std::function<void(const std::string&)>& fill) {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+  cloudgen::atomic_write(path, fill);
+#else
+  const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
+  try {
+    fill(tmp);
+  } catch (...) {
+    std::remove(tmp.c_str());
+    throw;
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::string why = std::strerror(errno);
+    std::remove(tmp.c_str());
+    throw IoError(path + ": cannot move the finished file into place: " + why);
+  }
+#endif
+}
+
+std::string system_reason(const char* fallback) { return errno ? std::strerror(errno) : fallback; }
+
+void write_png_file(const std::string& path, const std::string& shown, const Image& img) {
+  errno = 0;
   FILE* fp = std::fopen(path.c_str(), "wb");
-  if (!fp) throw InputError("cannot write '" + path + "'");
+  if (!fp) throw IoError("cannot write '" + shown + "': " + system_reason("cannot open"));
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   if (!png || !info || setjmp(png_jmpbuf(png))) {
+    std::string why = system_reason("libpng error");
     png_destroy_write_struct(&png, &info);
     std::fclose(fp);
-    throw Error("libpng failed writing '" + path + "'");
+    throw IoError("cannot write '" + shown + "': " + why);
   }
   png_init_io(png, fp);
   png_set_IHDR(png, info, png_uint_32(img.width), png_uint_32(img.height), 8, PNG_COLOR_TYPE_RGB,
@@ -40,7 +74,18 @@ void write_png(const std::string& path, const Image& img) {
   }
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
-  std::fclose(fp);
+  // Buffered data reaches the disk at fflush/fclose: a full disk shows up here.
+  errno = 0;
+  bool ok = std::fflush(fp) == 0 && !std::ferror(fp);
+  std::string why = system_reason("write error");
+  if (std::fclose(fp) != 0 && ok) ok = false, why = system_reason("close failed");
+  if (!ok) throw IoError("cannot write '" + shown + "': " + why);
+}
+
+}  // namespace
+
+void write_png(const std::string& path, const Image& img) {
+  write_atomically(path, [&](const std::string& tmp) { write_png_file(tmp, path, img); });
 }
 
 Image read_png(const std::string& path) {
@@ -60,19 +105,21 @@ Image read_png(const std::string& path) {
 }
 
 void write_exr(const std::string& path, const Image& img) {
-  try {
-    std::vector<Imf::Rgba> px(size_t(img.width) * img.height);
-    for (int y = 0; y < img.height; ++y)
-      for (int x = 0; x < img.width; ++x) {
-        const float* s = img.at(x, img.height - 1 - y);
-        px[size_t(y) * img.width + x] = Imf::Rgba(s[0], s[1], s[2], s[3]);
-      }
-    Imf::RgbaOutputFile file(path.c_str(), img.width, img.height, Imf::WRITE_RGBA);
-    file.setFrameBuffer(px.data(), 1, size_t(img.width));
-    file.writePixels(img.height);
-  } catch (const std::exception& e) {
-    throw Error("cannot write EXR '" + path + "': " + e.what());
-  }
+  write_atomically(path, [&](const std::string& tmp) {
+    try {
+      std::vector<Imf::Rgba> px(size_t(img.width) * img.height);
+      for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x) {
+          const float* s = img.at(x, img.height - 1 - y);
+          px[size_t(y) * img.width + x] = Imf::Rgba(s[0], s[1], s[2], s[3]);
+        }
+      Imf::RgbaOutputFile file(tmp.c_str(), img.width, img.height, Imf::WRITE_RGBA);
+      file.setFrameBuffer(px.data(), 1, size_t(img.width));
+      file.writePixels(img.height);
+    } catch (const std::exception& e) {
+      throw IoError("cannot write EXR '" + path + "': " + e.what());
+    }
+  });
 }
 
 Image read_exr(const std::string& path) {

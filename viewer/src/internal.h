@@ -1,5 +1,6 @@
 // Pieces of the command line shared by app.cpp, bench.cpp and window.cpp (not installed).
 #pragma once
+#include <cstdint>
 #include <iosfwd>
 #include <optional>
 #include <string>
@@ -29,6 +30,10 @@ struct Options {
   int bench_repeat = 3;
   RenderSettings settings;  ///< after --set
 };
+
+/// Tileable fBm in [0, 1] (libnoise3d Perlin fBm, mean 0.5, std ~0.13) for the synthetic volumes
+/// and the coverage map; `period` in lattice cells on every axis.
+double tileable_fbm(double x, double y, double z, int period, int octaves, uint32_t seed);
 
 /// Camera from --camera or the default framing; sun from --sun or behind the viewer.
 Camera resolve_camera(const Options& o, const PreparedVolume& vol, int width, int height);

@@ -1,5 +1,6 @@
 #include "cloudviewer/settings.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -46,17 +47,17 @@ int parse_int(const std::string& key, const std::string& v, int lo, int hi) {
 ParamDef boolean(const std::string& key, bool RenderSettings::*m, const std::string& doc) {
   return {key, "bool", "true|false", doc,
           [key, m](RenderSettings& s, const std::string& v) { s.*m = parse_bool(key, v); },
-          [m](const RenderSettings& s) { return std::string(s.*m ? "true" : "false"); }};
+          [m](const RenderSettings& s) { return std::string(s.*m ? "true" : "false"); }, ParamKind::Bool, 0, 1, {}};
 }
 ParamDef real(const std::string& key, double RenderSettings::*m, double lo, double hi, const std::string& doc) {
   return {key, "float", "[" + fmt(lo) + ", " + fmt(hi) + "]", doc,
           [key, m, lo, hi](RenderSettings& s, const std::string& v) { s.*m = parse_double(key, v, lo, hi); },
-          [m](const RenderSettings& s) { return fmt(s.*m); }};
+          [m](const RenderSettings& s) { return fmt(s.*m); }, ParamKind::Float, lo, hi, {}};
 }
 ParamDef integer(const std::string& key, int RenderSettings::*m, int lo, int hi, const std::string& doc) {
   return {key, "int", "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]", doc,
           [key, m, lo, hi](RenderSettings& s, const std::string& v) { s.*m = parse_int(key, v, lo, hi); },
-          [m](const RenderSettings& s) { return std::to_string(s.*m); }};
+          [m](const RenderSettings& s) { return std::to_string(s.*m); }, ParamKind::Int, double(lo), double(hi), {}};
 }
 template <class E>
 ParamDef enumeration(const std::string& key, E RenderSettings::*m, std::vector<std::string> names,
@@ -72,7 +73,8 @@ ParamDef enumeration(const std::string& key, E RenderSettings::*m, std::vector<s
               }
             bad(key, v, allowed);
           },
-          [m, names](const RenderSettings& s) { return names[size_t(int(s.*m))]; }};
+          [m, names](const RenderSettings& s) { return names[size_t(int(s.*m))]; }, ParamKind::Enum, 0,
+          double(names.size() - 1), names};
 }
 
 std::vector<ParamDef> build() {
@@ -110,7 +112,7 @@ std::vector<ParamDef> build() {
   t.push_back(real("sun_intensity", &RenderSettings::sun_intensity, 0, 1e6, "sun radiance scale"));
   t.push_back(real("ambient", &RenderSettings::ambient, 0, 1e6, "ambient sky radiance scale"));
   t.push_back(boolean("ground", &RenderSettings::ground, "draw the ground pass"));
-  t.push_back({"ground_height", "float", "number or auto", "ground plane height, m (auto = min(0, volume bottom); 0 in layer mode)",
+  t.push_back({"ground_height", "float", "[-1e+07, 1e+07] or auto", "ground plane height, m (auto = min(0, volume bottom); 0 in layer mode)",
                [](RenderSettings& s, const std::string& v) {
                  if (v == "auto") {
                    s.ground_height_auto = true;
@@ -119,7 +121,8 @@ std::vector<ParamDef> build() {
                  s.ground_height = parse_double("ground_height", v, -1e7, 1e7);
                  s.ground_height_auto = false;
                },
-               [](const RenderSettings& s) { return s.ground_height_auto ? std::string("auto") : fmt(s.ground_height); }});
+               [](const RenderSettings& s) { return s.ground_height_auto ? std::string("auto") : fmt(s.ground_height); },
+               ParamKind::FloatOrAuto, -1e7, 1e7, {}});
   t.push_back(real("ground_albedo", &RenderSettings::ground_albedo, 0, 1, "ground albedo"));
   t.push_back(integer("shadow_samples", &RenderSettings::shadow_samples, 1, 256, "samples of the cloud-shadow march from the ground"));
   t.push_back(real("exposure", &RenderSettings::exposure, 0, 1e6, "exposure multiplier before tone mapping"));
@@ -156,10 +159,136 @@ void apply_setting(RenderSettings& s, const std::string& assignment) {
   throw InputError("--set " + assignment + ": unknown key render." + key + " (known: " + known + ")");
 }
 
+const ParamDef& render_param(const std::string& key) {
+  for (const ParamDef& p : render_params())
+    if (p.key == key) return p;
+  std::string known;
+  for (const ParamDef& p : render_params()) known += (known.empty() ? "" : ", ") + p.key;
+  throw InputError("unknown key render." + key + " (known: " + known + ")");
+}
+
 std::string describe_settings(const RenderSettings& s) {
   std::string out;
   for (const ParamDef& p : render_params()) out += "render." + p.key + "=" + p.get(s) + "\n";
   return out;
+}
+
+}  // namespace cloudviewer
+
+namespace cloudviewer {
+
+std::string params_markdown() {
+  std::string md = "| key | type | range | default | meaning |\n|---|---|---|---|---|\n";
+  RenderSettings d;
+  for (const ParamDef& p : render_params()) {
+    std::string range = p.range;
+    for (size_t i = 0; (i = range.find('|', i)) != std::string::npos; i += 2) range.replace(i, 1, "\\|");
+    md += "| " + p.key + " | " + p.type + " | " + range + " | " + p.get(d) + " | " + p.doc + " |\n";
+  }
+  return md;
+}
+
+const std::vector<KeyBinding>& key_bindings() {
+  using A = KeyBinding::Action;
+  // GLFW key codes (GLFW/glfw3.h), spelled out so this file needs no GLFW header.
+  enum : int { kEqual = 61, kMinus = 45, kLeftBracket = 91, kRightBracket = 93 };
+  static const std::vector<KeyBinding> b = {
+      {"+", kEqual, "density", A::Scale, 1.25},
+      {"-", kMinus, "density", A::Scale, 1 / 1.25},
+      {"O", 'O', "occupancy", A::Toggle, 0},
+      {"J", 'J', "adaptive", A::Toggle, 0},
+      {"L", 'L', "light_march", A::Toggle, 0},
+      {"P", 'P', "phase", A::Cycle, 0},
+      {"T", 'T', "tonemap", A::Cycle, 0},
+      {"B", 'B', "bloom", A::OnOff, 0},
+      {"G", 'G', "ground", A::Toggle, 0},
+      {"I", 'I', "output", A::Cycle, 0},
+      {"X", 'X', "exact_filter", A::Toggle, 0},
+      {"N", 'N', "jitter", A::Toggle, 0},
+      {"[", kLeftBracket, "steps", A::Scale, 0.5},
+      {"]", kRightBracket, "steps", A::Scale, 2},
+      {"1", '1', "exposure", A::Scale, 1 / 1.25},
+      {"2", '2', "exposure", A::Scale, 1.25},
+      {"3", '3', "g", A::Add, -0.05},
+      {"4", '4', "g", A::Add, 0.05},
+  };
+  return b;
+}
+
+void apply_binding(RenderSettings& s, const KeyBinding& b) {
+  const ParamDef& p = render_param(b.param);
+  switch (b.action) {
+    case KeyBinding::Action::Toggle:
+      p.set(s, p.get(s) == "true" ? "false" : "true");
+      return;
+    case KeyBinding::Action::Cycle: {
+      size_t i = size_t(std::find(p.choices.begin(), p.choices.end(), p.get(s)) - p.choices.begin());
+      p.set(s, p.choices[(i + 1) % p.choices.size()]);
+      return;
+    }
+    case KeyBinding::Action::OnOff: {
+      double v = std::stod(p.get(s));
+      p.set(s, v > 0 ? fmt(std::max(p.lo, 0.0)) : p.get(RenderSettings{}));
+      return;
+    }
+    case KeyBinding::Action::Scale:
+    case KeyBinding::Action::Add: {
+      double v = std::stod(p.get(s));
+      v = b.action == KeyBinding::Action::Scale ? v * b.amount : v + b.amount;
+      if (p.kind == ParamKind::Int) v = std::round(v);
+      v = std::clamp(v, p.lo, p.hi);
+      std::ostringstream os;
+      os.precision(17);
+      os << v;
+      p.set(s, os.str());
+      return;
+    }
+  }
+}
+
+std::string key_help_markdown() {
+  std::string md = "| key | parameter | action |\n|---|---|---|\n";
+  RenderSettings d;
+  for (const KeyBinding& b : key_bindings()) {
+    const ParamDef& p = render_param(b.param);
+    std::string action;
+    switch (b.action) {
+      case KeyBinding::Action::Toggle: action = "toggle"; break;
+      case KeyBinding::Action::Cycle: action = "next of " + p.range; break;
+      case KeyBinding::Action::OnOff: action = "0 / default " + p.get(d); break;
+      case KeyBinding::Action::Scale: action = "x " + fmt(b.amount) + ", within " + p.range; break;
+      case KeyBinding::Action::Add: action = (b.amount > 0 ? "+ " : "- ") + fmt(std::abs(b.amount)) + ", within " + p.range; break;
+    }
+    for (size_t i = 0; (i = action.find('|', i)) != std::string::npos; i += 2) action.replace(i, 1, "\\|");
+    std::string keys = b.keys == "|" ? "\\|" : b.keys;
+    md += "| `" + keys + "` | render." + p.key + " | " + action + " |\n";
+  }
+  return md;
+}
+
+std::vector<PanelWidget> panel_widgets() {
+  std::vector<PanelWidget> w;
+  RenderSettings d;
+  for (const ParamDef& p : render_params()) {
+    PanelWidget x;
+    x.key = p.key;
+    x.lo = p.lo, x.hi = p.hi;
+    x.choices = p.choices;
+    x.default_value = p.get(d);
+    x.tooltip = p.doc + " (" + p.type + ", " + p.range + ", default " + x.default_value + ")";
+    switch (p.kind) {
+      case ParamKind::Bool: x.kind = PanelWidget::Kind::Checkbox; break;
+      case ParamKind::Int: x.kind = PanelWidget::Kind::SliderInt; break;
+      case ParamKind::Float: x.kind = PanelWidget::Kind::SliderFloat; break;
+      case ParamKind::Enum: x.kind = PanelWidget::Kind::Combo; break;
+      case ParamKind::FloatOrAuto: x.kind = PanelWidget::Kind::SliderFloatOrAuto; break;
+    }
+    // A linear slider over many decades cannot reach the small values.
+    double span_lo = std::max(std::abs(p.lo), 1e-3);
+    x.logarithmic = p.kind != ParamKind::Bool && p.kind != ParamKind::Enum && p.lo >= 0 && p.hi / span_lo > 1e3;
+    w.push_back(x);
+  }
+  return w;
 }
 
 }  // namespace cloudviewer

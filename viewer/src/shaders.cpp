@@ -23,14 +23,17 @@ std::vector<std::string> embedded_shader_names() {
 }
 
 std::string ShaderSource::load(const std::string& name) const {
+  auto it = embedded_shaders().find(name);
   if (!dir_.empty()) {
     std::ifstream in(dir_ + "/" + name, std::ios::binary);
+    // --shader-dir overrides the embedded copies file by file: a header that lives outside
+    // viewer/shaders (cloudgen's cloud_type.glsl) comes from the build unless the directory has it.
+    if (!in && it != embedded_shaders().end()) return it->second;
     if (!in) throw InputError("shader '" + name + "' not found in --shader-dir " + dir_);
     std::ostringstream ss;
     ss << in.rdbuf();
     return ss.str();
   }
-  auto it = embedded_shaders().find(name);
   if (it == embedded_shaders().end()) throw InputError("shader '" + name + "' is not embedded");
   return it->second;
 }

@@ -1,6 +1,7 @@
-// Window mode: GLFW, OpenGL 4.5 core through libepoxy, orbit/fly camera, keys for the sun, density
-// and every toggle, GPU frame time and toggle state in the title bar, F12 saves PNG + EXR, the
-// input preset regenerates when its file changes, shaders hot-reload from --shader-dir.
+// Window mode: GLFW, OpenGL 4.5 core through libepoxy, orbit/fly camera, an on-screen Dear ImGui
+// panel built from the parameter table (every render.* key, per-pass GPU times), keys for the sun
+// and the table's key bindings, GPU frame time in the title bar, F12 saves PNG + EXR, the input
+// preset regenerates when its file changes, shaders hot-reload from --shader-dir.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -14,6 +15,7 @@
 
 #include "cloudviewer/errors.h"
 #include "internal.h"
+#include "panel.h"
 
 namespace cloudviewer {
 namespace {
@@ -49,6 +51,7 @@ struct ViewState {
   RenderSettings* settings = nullptr;
   Sun* sun = nullptr;
   std::ostream* out = nullptr;
+  Panel* panel = nullptr;
 };
 
 glm::dvec3 forward_of(double yaw_deg, double pitch_deg) {
@@ -72,44 +75,43 @@ Camera camera_of(const ViewState& v, double fov) {
 const char* phase_name(PhaseMode p) { return p == PhaseMode::None ? "none" : p == PhaseMode::Mie ? "mie" : "hg"; }
 const char* tonemap_name(ToneMap t) { return t == ToneMap::Aces ? "aces" : t == ToneMap::Clamp ? "clamp" : "reinhard"; }
 
+// Keys that are not render parameters; the parameter keys are the table's (key_bindings()).
+const char* kWindowKeys =
+    "| key | action |\n|---|---|\n"
+    "| mouse drag, wheel | orbit (fly: look); zoom (fly: speed) |\n"
+    "| `F` | orbit / fly; fly: W A S D, Q E down/up, Shift fast |\n"
+    "| arrows | sun azimuth / elevation |\n"
+    "| `F1` | on-screen panel on / off |\n"
+    "| `R` | reload shaders (from `--shader-dir`) and the input |\n"
+    "| `F12` | save `cloudviewer_N.png` (tone-mapped) and `cloudviewer_N.exr` (linear HDR) |\n"
+    "| `H`, `Esc` | this list, quit |\n";
+
 void on_key(GLFWwindow* w, int key, int, int action, int mods) {
   if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
   auto* v = static_cast<ViewState*>(glfwGetWindowUserPointer(w));
+  if (v->panel && v->panel->visible && Panel::wants_keyboard()) return;  // typing into the panel
   RenderSettings& s = *v->settings;
   Sun& sun = *v->sun;
+  if (key == GLFW_KEY_KP_ADD) key = GLFW_KEY_EQUAL;
+  if (key == GLFW_KEY_KP_SUBTRACT) key = GLFW_KEY_MINUS;
+  for (const KeyBinding& b : key_bindings())
+    if (b.glfw_key == key) {
+      apply_binding(s, b);
+      return;
+    }
   switch (key) {
     case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(w, 1); break;
     case GLFW_KEY_LEFT: sun.azimuth_deg -= 5; break;
     case GLFW_KEY_RIGHT: sun.azimuth_deg += 5; break;
     case GLFW_KEY_UP: sun.elevation_deg = std::min(90.0, sun.elevation_deg + 2.5); break;
     case GLFW_KEY_DOWN: sun.elevation_deg = std::max(-10.0, sun.elevation_deg - 2.5); break;
-    case GLFW_KEY_EQUAL: case GLFW_KEY_KP_ADD: s.density *= 1.25; break;
-    case GLFW_KEY_MINUS: case GLFW_KEY_KP_SUBTRACT: s.density /= 1.25; break;
-    case GLFW_KEY_O: s.occupancy = !s.occupancy; break;
-    case GLFW_KEY_J: s.adaptive = !s.adaptive; break;
-    case GLFW_KEY_L: s.light_march = !s.light_march; break;
-    case GLFW_KEY_P: s.phase = PhaseMode((int(s.phase) + 1) % 3); break;
-    case GLFW_KEY_T: s.tonemap = ToneMap((int(s.tonemap) + 1) % 3); break;
-    case GLFW_KEY_B: s.bloom = s.bloom > 0 ? 0.0 : 0.05; break;
-    case GLFW_KEY_G: s.ground = !s.ground; break;
-    case GLFW_KEY_I: s.output = OutputMode((int(s.output) + 1) % 3); break;
-    case GLFW_KEY_X: s.exact_filter = !s.exact_filter; break;
-    case GLFW_KEY_N: s.jitter = !s.jitter; break;
-    case GLFW_KEY_LEFT_BRACKET: s.steps = std::max(4, s.steps / 2); break;
-    case GLFW_KEY_RIGHT_BRACKET: s.steps = std::min(4096, s.steps * 2); break;
-    case GLFW_KEY_1: s.exposure /= 1.25; break;
-    case GLFW_KEY_2: s.exposure *= 1.25; break;
-    case GLFW_KEY_3: s.g = std::max(-0.95, s.g - 0.05); break;
-    case GLFW_KEY_4: s.g = std::min(0.95, s.g + 0.05); break;
     case GLFW_KEY_F: v->fly = !v->fly; break;
     case GLFW_KEY_R: v->reload_requested = true; break;
-    case GLFW_KEY_F12: v->save_requested = true; break;
-    case GLFW_KEY_H:
-      *v->out << "keys: mouse drag orbit/look, wheel zoom, F fly (WASD QE, shift fast), arrows sun, +/- density,\n"
-                 "      O occupancy, J adaptive, L light march, P phase, T tone map, B bloom, G ground,\n"
-                 "      I debug view, X exact filter, N jitter, [ ] steps, 1/2 exposure, 3/4 HG g,\n"
-                 "      R reload shaders/preset, F12 save PNG+EXR, Esc quit\n";
+    case GLFW_KEY_F1:
+      if (v->panel) v->panel->visible = !v->panel->visible;
       break;
+    case GLFW_KEY_F12: v->save_requested = true; break;
+    case GLFW_KEY_H: *v->out << kWindowKeys << key_help_markdown(); break;
     default: break;
   }
   (void)mods;
@@ -117,6 +119,7 @@ void on_key(GLFWwindow* w, int key, int, int action, int mods) {
 
 void on_button(GLFWwindow* w, int button, int action, int) {
   auto* v = static_cast<ViewState*>(glfwGetWindowUserPointer(w));
+  if (action == GLFW_PRESS && v->panel && v->panel->visible && Panel::wants_mouse()) return;
   if (button == GLFW_MOUSE_BUTTON_LEFT || button == GLFW_MOUSE_BUTTON_RIGHT) {
     v->dragging = action == GLFW_PRESS;
     glfwGetCursorPos(w, &v->last_x, &v->last_y);
@@ -139,6 +142,7 @@ void on_cursor(GLFWwindow* w, double x, double y) {
 
 void on_scroll(GLFWwindow* w, double, double dy) {
   auto* v = static_cast<ViewState*>(glfwGetWindowUserPointer(w));
+  if (v->panel && v->panel->visible && Panel::wants_mouse()) return;
   if (v->fly) v->move_speed *= std::pow(1.2, dy);
   else v->distance *= std::pow(0.9, dy);
 }
@@ -147,9 +151,8 @@ void on_scroll(GLFWwindow* w, double, double dy) {
 
 int run_window(const Options& o, std::ostream& out, std::ostream& err) {
   // Load first, so a bad input fails before a window opens.
-  cloudgen::Volume volume = load_volume(o.input);
   RenderSettings settings = o.settings;
-  PreparedVolume vol = prepare_volume(volume, settings.occupancy_cell, settings.occupancy_padding);
+  PreparedVolume vol = open_input(o.input, settings);
   if (!glfwInit()) throw GlError("GLFW could not initialise (no display? use --headless, or run under xvfb-run)");
   struct Terminate {
     ~Terminate() { glfwTerminate(); }
@@ -197,7 +200,10 @@ int run_window(const Options& o, std::ostream& out, std::ostream& err) {
 
   GlRenderer renderer{ShaderSource(o.shader_dir)};
   renderer.set_volume(vol);
-  out << "window: " << renderer.renderer_string() << " (press H for keys)\n";
+  // After our callbacks: ImGui chains to them.
+  Panel panel(window);
+  view.panel = &panel;
+  out << "window: " << renderer.renderer_string() << " (press H for keys, F1 for the panel)\n";
 
   bool watch_input = o.input.rfind("synthetic:", 0) != 0;
   auto input_time = watch_input ? mtime_of(o.input) : fs::file_time_type{};
@@ -239,7 +245,7 @@ int run_window(const Options& o, std::ostream& out, std::ostream& err) {
       if (watch_input && (mtime_of(o.input) != input_time || view.reload_requested)) {
         input_time = mtime_of(o.input);
         try {
-          vol = prepare_volume(load_volume(o.input), settings.occupancy_cell, settings.occupancy_padding);
+          vol = open_input(o.input, settings);
           renderer.set_volume(vol);
           out << "reloaded " << o.input << "\n";
         } catch (const Error& e) {
@@ -257,6 +263,13 @@ int run_window(const Options& o, std::ostream& out, std::ostream& err) {
     GpuTimings t;
     renderer.render(fs, &t);
     renderer.present(fw, fh);
+    {
+      std::ostringstream hint;
+      hint.precision(3);
+      hint << "sun " << sun.azimuth_deg << ", " << sun.elevation_deg << (view.fly ? " | fly" : " | orbit")
+           << " | H keys, F1 hide";
+      panel.draw(settings, t, hint.str());
+    }
     bool auto_save = auto_frames > 0 && frame + 1 == auto_frames;
     if (auto_save) {  // what the window shows, read from its back buffer before the swap
       std::string shot = fs::path(o.out).replace_extension("").string() + ".window.png";

@@ -8,7 +8,8 @@
 namespace cloudviewer {
 
 /// Runs the viewer with argv-style arguments. Returns the process exit code: 0 success,
-/// 1 user-input error, 2 OpenGL/shader error, 3 other failure. Never throws. Messages go to `err`.
+/// 1 user-input error, 2 I/O or environment error (a file could not be read or written, OpenGL,
+/// shaders), 3 internal error (see exit_code in errors.h). Never throws. Messages go to `err`.
 int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
 }  // namespace cloudviewer

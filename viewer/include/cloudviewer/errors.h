@@ -1,19 +1,24 @@
-// Typed exceptions of the viewer library. Library code throws; only main() picks the exit code.
+// Typed exceptions of the viewer library: cloudgen's hierarchy (cloudgen/volume.h), one set of
+// types for both programs, plus the OpenGL failures only the viewer has. Library code throws; only
+// run_cli picks the exit code, by the toolkit's one rule (exit_code below):
+//   1  InputError                 a user-input problem (file, flag, value, what was allowed)
+//   2  IoError, GlError           reading/writing a file failed; no OpenGL context, a shader failed
+//                                  (I/O and environment)
+//   3  anything else              an internal error
 #pragma once
-#include <stdexcept>
+#include <exception>
 #include <string>
+
+#include "cloudgen/volume.h"
 
 namespace cloudviewer {
 
-class Error : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+using Error = cloudgen::Error;
 /// A user-input problem (file, flag, value, what was allowed) already in the message.
-class InputError : public Error {
- public:
-  using Error::Error;
-};
+using InputError = cloudgen::InputError;
+/// Reading or writing a file failed (the message names the path and the system's reason).
+using IoError = cloudgen::IoError;
+
 /// OpenGL / EGL / window-system failure (no context, incomplete framebuffer...).
 class GlError : public Error {
  public:
@@ -31,5 +36,8 @@ class ShaderError : public GlError {
   std::string file_;
   int line_;
 };
+
+/// The exit code of a failure, by the rule above.
+int exit_code(const std::exception& e);
 
 }  // namespace cloudviewer

@@ -3,6 +3,8 @@
 #pragma once
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "cloudviewer/image.h"
 #include "cloudviewer/scene.h"
@@ -16,6 +18,7 @@ struct FrameImages {
 
 struct GpuTimings {
   double ground_ms = 0, cloud_ms = 0, post_ms = 0, total_ms = 0;
+  std::vector<std::pair<std::string, double>> passes;  ///< every pass in order, ms
 };
 
 /// Where the GLSL comes from: the copies embedded at build time, or a directory (`--shader-dir`).
@@ -63,6 +66,12 @@ class GlRenderer {
   /// Reads the default framebuffer's back buffer (what present() drew), 8-bit display values.
   Image read_window(int window_width, int window_height);
   std::string renderer_string() const;
+  /// The passes in execution order (their names label GpuTimings::passes).
+  std::vector<std::string> pass_names() const;
+  /// The driver's std140 layout of the cloud block: its size in bytes, and a member's byte offset
+  /// ("volume_min_m"; -1 when the driver does not list it). For the layout test.
+  int cloud_block_size() const;
+  int cloud_block_offset(const std::string& member) const;
 
  private:
   struct Impl;
@@ -74,6 +83,9 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame);
 
 /// The shared header's phase function (1/sr) evaluated in double precision (for tests and docs).
 double reference_phase(PhaseMode mode, double g, double cos_theta);
+/// The shared cloud-type height gradient (cloudgen/cloud_type.glsl) as the CPU reference compiles
+/// it: normalised layer height h in [0, 1], type 0 stratus .. 0.5 cumulus .. 1 cumulonimbus.
+double reference_cloud_type_gradient(double h, double type);
 
 /// A headless OpenGL 4.5 core context: EGL device platform when a hardware device is present
 /// (NVIDIA), Mesa surfaceless otherwise (CLOUDVIEWER_EGL=device|surfaceless forces one). Throws

@@ -19,7 +19,8 @@ namespace cloudviewer {
 bool has_cloudgen();
 
 /// Loads INPUT: `synthetic:sphere|slab|blob|noise` or a file cloudgen reads / generates from.
-/// Throws InputError (missing file, unknown kind, not a cloud volume) with the path in the message.
+/// Throws InputError (missing file, unknown kind, not a cloud volume, too large for the memory) with
+/// the path in the message; cloudgen's IoError (the file could not be read) passes through.
 cloudgen::Volume load_volume(const std::string& input);
 
 /// Synthetic volumes for development and tests (no cloudgen needed):
@@ -45,13 +46,27 @@ struct PreparedVolume {
   glm::dvec3 center() const { return origin + 0.5 * size(); }
 };
 
-/// Validates the volume (non-empty density, finite values) and builds the occupancy grid:
-/// a cell is occupied when a voxel within `padding` cells (26-neighbourhood, wrapped in x/z when
-/// tiling) has density > 0. Built here, not taken from the file, because its conservativeness is
-/// what makes skipping image-neutral (trilinear reads reach half a voxel into the next cell).
+/// Validates the volume (size, memory, non-empty density, finite values) and takes its occupancy
+/// grid: the volume's own when it carries one for this cell and padding (cloudgen builds it with
+/// cloudgen::build_occupancy), else built with that same function. A cell is occupied when a voxel
+/// within `padding` cells (26-neighbourhood, wrapped in x/z when tiling) has density > 0; that
+/// conservativeness is what makes skipping image-neutral (trilinear reads reach half a voxel into
+/// the next cell).
 PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_padding = 2);
-/// Rebuilds only the occupancy grid with another cell size / padding.
+/// Rebuilds only the occupancy grid with another cell size / padding (cloudgen::build_occupancy).
 void build_occupancy(PreparedVolume& p, int occ_cell, int occ_padding);
+
+/// Bytes prepare_volume allocates for a volume of `voxels` voxels (RGBA floats, occupancy).
+uint64_t prepared_bytes(uint64_t voxels);
+/// Bytes of memory this process may still allocate (MemAvailable, or physical memory).
+uint64_t available_memory_bytes();
+/// Throws InputError naming `what`, the estimate and what is available when `bytes` will not fit.
+void check_memory(const std::string& what, uint64_t bytes);
+
+/// The viewer's input dispatch, everything before OpenGL in one call (what main, the window, the
+/// bench and a fuzz target use): load_volume then prepare_volume with the settings' occupancy grid.
+/// Throws InputError / IoError as those do; never allocates what check_memory refuses.
+PreparedVolume open_input(const std::string& input, const RenderSettings& s);
 
 struct Camera {
   glm::dvec3 eye{0.0, 0.0, -10.0};

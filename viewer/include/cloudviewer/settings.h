@@ -5,11 +5,18 @@
 #include <string>
 #include <vector>
 
+#include "cloudviewer/constants.h"
+
 namespace cloudviewer {
 
-enum class PhaseMode { None = 0, HenyeyGreenstein = 1, Mie = 2 };
-enum class ToneMap { Reinhard = 0, Aces = 1, Clamp = 2 };
-enum class OutputMode { Radiance = 0, Transmittance = 1, Iterations = 2 };
+// Codes stored in the shader parameters come from shaders/constants.glsl, which GLSL reads too.
+enum class PhaseMode { None = CV_PHASE_NONE, HenyeyGreenstein = CV_PHASE_HG, Mie = CV_PHASE_MIE };
+enum class ToneMap { Reinhard = CV_TONEMAP_REINHARD, Aces = CV_TONEMAP_ACES, Clamp = CV_TONEMAP_CLAMP };
+enum class OutputMode {
+  Radiance = CV_OUTPUT_RADIANCE,
+  Transmittance = CV_OUTPUT_TRANSMITTANCE,
+  Iterations = CV_OUTPUT_ITERATIONS
+};
 enum class PlaceMode { Box = 0, Layer = 1 };
 
 struct RenderSettings {
@@ -64,17 +71,24 @@ struct RenderSettings {
   int frame = 0;                   ///< frame index (jitter pattern)
 };
 
+enum class ParamKind { Bool, Int, Float, Enum, FloatOrAuto };
+
 struct ParamDef {
   std::string key;    ///< after "render."
   std::string type;   ///< bool, int, float, enum
-  std::string range;  ///< allowed values
+  std::string range;  ///< allowed values, as text
   std::string doc;
   std::function<void(RenderSettings&, const std::string&)> set;  ///< throws InputError
   std::function<std::string(const RenderSettings&)> get;
+  ParamKind kind = ParamKind::Float;
+  double lo = 0, hi = 0;              ///< Int, Float, FloatOrAuto: the allowed range
+  std::vector<std::string> choices;   ///< Enum: the names, in code order
 };
 
 /// The parameter table, in documentation order.
 const std::vector<ParamDef>& render_params();
+/// The entry for `key` (without "render."); throws InputError listing the known keys.
+const ParamDef& render_param(const std::string& key);
 
 /// Applies one `render.key=value` (the "render." prefix is optional). Throws InputError naming the
 /// key, the value and what is allowed.
@@ -82,5 +96,41 @@ void apply_setting(RenderSettings& s, const std::string& assignment);
 
 /// One line per parameter: "render.key=value".
 std::string describe_settings(const RenderSettings& s);
+
+/// The parameter list of docs/viewer.md (a Markdown table: key, type, range, default, meaning),
+/// generated from the table (`cloudviewer --params-markdown`; scripts/gen_docs.sh).
+std::string params_markdown();
+
+/// A window key that changes a render parameter, declared by parameter and action; limits and
+/// defaults come from the parameter table.
+struct KeyBinding {
+  enum class Action { Toggle, Cycle, Scale, Add, OnOff };
+  std::string keys;    ///< as shown in the help ("[", "+ / -")
+  int glfw_key = 0;    ///< GLFW_KEY_* code
+  std::string param;   ///< render.KEY (without "render.")
+  Action action = Action::Toggle;
+  double amount = 0;   ///< Scale: factor; Add: increment
+};
+/// Every parameter key binding of the window (the camera, sun and file keys are in window.cpp).
+const std::vector<KeyBinding>& key_bindings();
+/// Applies a binding: toggles, cycles, or scales/adds clamped to the parameter's range, rounding
+/// integers; OnOff switches a number between 0 and its table default.
+void apply_binding(RenderSettings& s, const KeyBinding& b);
+/// The key help (the H key and docs/viewer.md), generated from the bindings and the table.
+std::string key_help_markdown();
+
+/// One control of the on-screen panel, built from the parameter table: what panel.cpp draws with
+/// Dear ImGui for each render.* key (slider, checkbox, list) with its range, default and tooltip.
+struct PanelWidget {
+  enum class Kind { Checkbox, SliderInt, SliderFloat, Combo, SliderFloatOrAuto };
+  std::string key;
+  Kind kind = Kind::SliderFloat;
+  double lo = 0, hi = 0;
+  bool logarithmic = false;           ///< ranges spanning more than three decades
+  std::vector<std::string> choices;
+  std::string default_value, tooltip;
+};
+/// The widgets the panel builds, one per parameter, in table order.
+std::vector<PanelWidget> panel_widgets();
 
 }  // namespace cloudviewer

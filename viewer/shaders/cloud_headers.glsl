@@ -1,0 +1,15 @@
+// Everything a pass that marches the clouds needs, in dependency order (see march.glsl for what
+// each header holds). src/cpu_renderer.cpp includes the same list inside its C++ class.
+#include "prelude_glsl.glsl"
+#include "constants.glsl"
+#include "cloud_params.glsl"
+#include "frame_block.glsl"
+#include "cloud_bindings.glsl"
+#include "common.glsl"
+#include "phase.glsl"
+#include "cloud_type.glsl"
+#include "medium.glsl"
+#include "lighting.glsl"
+#include "march.glsl"
+#include "sky.glsl"
+#include "compose.glsl"

@@ -1,0 +1,20 @@
+// One pixel of the cloud pass (Olajos 2016, thesis 2.4: deferred shading and ray casting): march the
+// camera ray up to the scene distance, fade with aerial perspective, composite over the background
+// (L_cloud + T * L_scene), or write a debug output. cloud.frag calls it with the ground pass's
+// outputs, the CPU reference with its own ground intersection: one compose for both.
+// Needs every header up to sky.glsl.
+
+// `rd`: unit camera-relative ray; `pixel`: window pixel (jitter pattern); `t_scene`: distance to the
+// ground (>= CV_NO_HIT_TEST: none); `scene_color`: ground radiance there. Returns linear HDR.
+vec3 compose_pixel(vec3 rd, ivec2 pixel, Number t_scene, vec3 scene_color) {
+  Number jitter = u_cloud.jitter > 0.5 ? jitter_offset(pixel, int(u_cloud.frame_index)) : 0.5;
+  int iterations = 0;
+  Number t_mean = 0.0;
+  vec4 m = march_clouds(rd, t_scene, jitter, iterations, t_mean);
+  m = aerial_perspective(m, t_mean, rd);
+  int mode = int(u_cloud.output_mode);
+  if (mode == CV_OUTPUT_TRANSMITTANCE) return vec3(m.w, m.w, m.w);
+  if (mode == CV_OUTPUT_ITERATIONS) return vec3(Number(iterations), m.w, 0.0);
+  vec3 background = t_scene >= CV_NO_HIT_TEST ? sky_radiance(rd) : scene_color;
+  return vec3(m) + m.w * background;
+}

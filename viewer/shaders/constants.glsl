@@ -1,0 +1,52 @@
+// Constants shared by the GLSL passes and the C++ side (include/cloudviewer/constants.h includes
+// this file): mode codes stored in CloudParams, texture and buffer binding points, fixed sizes.
+// Macros, not globals, so the file works in GLSL, in C++ and inside the CPU reference's class body
+// (Bruneton's constants.h pattern). Every number the two languages must agree on lives here.
+#ifndef CV_CONSTANTS_GLSL
+#define CV_CONSTANTS_GLSL
+
+#define CV_PI 3.14159265358979323846
+
+// Phase function (CloudParams.phase_mode; render.phase).
+#define CV_PHASE_NONE 0
+#define CV_PHASE_HG 1
+#define CV_PHASE_MIE 2
+// Tone map operator (FrameBlock u_post.y; render.tonemap).
+#define CV_TONEMAP_REINHARD 0
+#define CV_TONEMAP_ACES 1
+#define CV_TONEMAP_CLAMP 2
+// What the cloud pass writes (CloudParams.output_mode; render.output).
+#define CV_OUTPUT_RADIANCE 0
+#define CV_OUTPUT_TRANSMITTANCE 1
+#define CV_OUTPUT_ITERATIONS 2
+// Light march (CloudParams.light_mode).
+#define CV_LIGHT_OFF 0
+#define CV_LIGHT_MARCH 1
+#define CV_LIGHT_MARCH_SKIP_EMPTY 2
+// Sky model (the only one today; the sky issue adds its atmosphere model beside it).
+#define CV_SKY_ANALYTIC 0
+
+// Uniform buffer binding points.
+#define CV_BINDING_CLOUD 0
+#define CV_BINDING_FRAME 1
+// Texture units. The two pass inputs are reused by every full-screen pass for its own sources.
+#define CV_UNIT_VOLUME 0
+#define CV_UNIT_OCCUPANCY 1
+#define CV_UNIT_MIE 2
+#define CV_UNIT_PASS_INPUT0 3
+#define CV_UNIT_PASS_INPUT1 4
+#define CV_UNIT_COVERAGE 5
+
+// Fixed sizes.
+#define CV_COVERAGE_MAP_SIZE 256   // layer-mode coverage map, texels per side
+#define CV_MIE_TABLE_SIZE 1801     // Mie phase table entries over theta = 0..180 degrees (0.1 degree)
+#define CV_GROUND_GRID 96          // ground cells per side in layer mode (curved Earth)
+#define CV_BLOOM_RADIUS 6          // separable Gaussian bloom: taps on each side (half-resolution texels)
+#define CV_BLOOM_SIGMA 3.0         // its standard deviation in texels
+
+// Marching.
+#define CV_TRANSMITTANCE_EPSILON 1e-3  // stop marching below this transmittance
+#define CV_NO_HIT 1e30                 // scene distance of a pixel that sees the sky
+#define CV_NO_HIT_TEST 1e29            // t >= this means "no hit" (robust to float rounding of CV_NO_HIT)
+
+#endif

@@ -1,0 +1,108 @@
+// The primary ray march. The cloud math is split by concern into headers written once in the
+// subset of GLSL that C++ also compiles (Bruneton & Neyret's functions.glsl / reference/functions.cc):
+//   constants.glsl  mode codes, binding points, fixed sizes (also include/cloudviewer/constants.h)
+//   common.glsl     hashing and jitter, index wrapping, ray intersections, pixel rays
+//   phase.glsl      phase functions
+//   cloud_type.glsl cloud-type height gradients (cloudgen/include/cloudgen, shared with cloudgen)
+//   medium.glsl     density, box and layer placement, occupancy
+//   lighting.glsl   Beer-Lambert, powder, step integration, light march, ground lighting
+//   march.glsl      this file
+//   sky.glsl        background sky and aerial perspective
+//   compose.glsl    one pixel of the cloud pass: march, fade, debug outputs, background
+//   post.glsl       tone mapping, sRGB, bloom taps and bilinear taps (the post passes need only this)
+// The GL passes include them, in this order, after prelude_glsl.glsl, cloud_params.glsl and
+// cloud_bindings.glsl; src/cpu_renderer.cpp includes the same files inside a C++ class with
+// double-precision glm types. The including side provides the types Number/vec2/vec3/vec4/ivec2/
+// ivec3/uint/mat4, the IN/OUT macros, `CloudParams u_cloud` and the lookups:
+//   vec4   volume_texel(ivec3 texel)     texel of the RGBA volume, texel inside the grid
+//   vec4   volume_filtered(vec3 uvw)     filtered lookup (the GPU's texture unit; exact on the CPU)
+//   Number occupancy_texel(ivec3 cell)   1 where the coarse cell may hold density, else 0
+//   Number mie_table_value(int i)        i-th entry of the Mie phase table over theta in [0, pi]
+//   vec2   coverage_texel(ivec2 texel)   layer coverage map: R coverage, G cloud type, in [0, 1]
+//   ivec2  coverage_size()               size of the coverage map in texels
+// Constants are macros, not globals, so that the files also work inside a C++ class body.
+//
+// Implements R. Hogfeldt, "Convincing Cloud Rendering", and R. Olajos, "Real-Time Rendering of
+// Volumetric Clouds", Lund University 2016 (seed 000): ray marching with a jittered start,
+// occupancy skipping (large steps through empty coarse cells, step back one large step on entering
+// an occupied cell, re-check after the small steps add up to one large step), adaptive step.
+
+// Marches the camera ray along unit `rd` (camera at the origin) up to `t_scene` metres (scene depth).
+// Returns (in-scattered radiance, transmittance). `iterations` counts loop trips (large or small);
+// `t_mean` is the distance of the cloud weighted by opacity (for aerial perspective), 0 if none.
+//
+// Segments lie on the lattice t0 + n*dt (fixed step); the sample of each segment is at its start plus
+// `jitter` times its length, so the jitter moves samples inside their segment and never changes the
+// covered length: a uniform slab gives exactly exp(-sigma*d) for every jitter and step.
+// Occupancy skipping moves by whole multiples of the small step (the large step is k small steps,
+// just under one coarse cell), so the samples it keeps are the very samples of the plain march and
+// the image does not change; it only skips samples whose density is zero.
+vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, OUT(Number) t_mean) {
+  iterations = 0;
+  t_mean = 0.0;
+  Number t_weighted = 0.0;
+  vec3 bmin = u_cloud.volume_min_m;
+  vec3 bmax = bmin + u_cloud.volume_size_m;
+  vec2 tb = layer_mode() ? shell_interval(vec3(0.0), rd) : ray_box(rd, bmin, bmax);
+  Number t0 = tb.x;
+  Number t1 = min(tb.y, min(t_scene, u_cloud.max_distance_m));
+  vec3 radiance = vec3(0.0);
+  Number transmittance = 1.0;
+  if (!(t1 > t0)) return vec4(radiance, transmittance);
+
+  Number dt = u_cloud.step_m;
+  int k = max(int(u_cloud.large_step_count), 1);
+  Number large = Number(k) * dt;
+  bool adaptive = u_cloud.adaptive > 0.5;
+  bool skipping = u_cloud.occupancy_skip > 0.5;
+  Number sigma_scale = u_cloud.sigma_t_per_m;
+  Number albedo = u_cloud.albedo;
+  Number phase = phase_function(dot(rd, u_cloud.sun_dir));
+  int max_iterations = int(u_cloud.max_iterations);
+
+  bool large_mode = skipping;
+  int n = 0;            // small-step index on the fixed lattice
+  Number t = t0;        // running distance for the adaptive march
+  int since_check = 0;  // small steps since the coarse grid was last read
+  for (int it = 0; it < max_iterations; ++it) {
+    if (!adaptive) t = t0 + Number(n) * dt;
+    if (t >= t1 || transmittance < CV_TRANSMITTANCE_EPSILON) break;
+    iterations += 1;
+    if (large_mode) {
+      if (occupied(rd * t)) {
+        // Entered an occupied coarse cell: step back one large step, continue with small steps.
+        large_mode = false;
+        since_check = 0;
+        if (adaptive) t = max(t - large, t0); else n = max(n - k, 0);
+      } else {
+        if (adaptive) t += large; else n += k;
+      }
+      continue;
+    }
+    Number step_len = dt;
+    if (adaptive) step_len = dt * (1.0 + u_cloud.adaptive_growth_per_m * max(t - u_cloud.adaptive_start_m, 0.0));
+    Number seg = min(step_len, t1 - t);
+    vec3 p = rd * (t + jitter * seg);
+    Number density = cloud_density(p);
+    if (density > 0.0) {
+      Number sigma_t = density * sigma_scale;
+      vec3 source = inscattered_radiance(p, phase);
+      radiance += transmittance * integrate_step(source, albedo * sigma_t, sigma_t, seg);
+      Number step_transmittance = exp(-sigma_t * seg);
+      t_weighted += transmittance * (1.0 - step_transmittance) * (t + jitter * seg);
+      transmittance *= step_transmittance;
+    }
+    if (adaptive) t += step_len; else n += 1;
+    if (skipping) {
+      since_check += 1;
+      if (since_check >= k) {
+        // The small steps add up to one large step: re-read the coarse grid.
+        since_check = 0;
+        Number t_next = adaptive ? t : t0 + Number(n) * dt;
+        if (!occupied(rd * t_next)) large_mode = true;
+      }
+    }
+  }
+  if (transmittance < 1.0) t_mean = t_weighted / (1.0 - transmittance);
+  return vec4(radiance, transmittance);
+}

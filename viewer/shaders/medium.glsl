@@ -1,0 +1,143 @@
+// The participating medium: the volume's density at a point, box or layer placement, and the
+// coarse occupancy grid. A. Schneider, "The Real-Time Volumetric Cloudscapes of Horizon Zero Dawn",
+// SIGGRAPH 2015 (seed 001): base shape R eroded by the G/B/A detail fBm with a remap; in layer mode
+// the tileable texture repeats over a cloud layer between two altitudes over a curved Earth, a 2D
+// coverage map says where clouds are and the cloud-type height gradient (cloudgen's
+// cloud_type.glsl, shared with cloudgen) shapes their profile.
+// Needs common.glsl, cloud_type.glsl, `u_cloud` and the lookups volume_texel, volume_filtered,
+// occupancy_texel, coverage_texel and coverage_size (see march.glsl).
+
+// Trilinear filter done by hand from texel fetches: texel centres at (i + 0.5) / n, x and z
+// wrapped for tileable volumes, clamped otherwise (GL_REPEAT / GL_CLAMP_TO_EDGE semantics).
+vec4 volume_trilinear(vec3 uvw) {
+  ivec3 n = ivec3(u_cloud.volume_dims);
+  bool tiles = u_cloud.tiles_xz > 0.5;
+  vec3 x = uvw * vec3(n) - 0.5;
+  vec3 fl = floor(x);
+  vec3 f = x - fl;
+  ivec3 i0 = ivec3(fl);
+  vec4 acc = vec4(0.0);
+  for (int k = 0; k < 8; ++k) {
+    ivec3 o = ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
+    ivec3 i = i0 + o;
+    i.x = tiles ? wrap_index(i.x, n.x) : clamp_index(i.x, n.x);
+    i.y = clamp_index(i.y, n.y);
+    i.z = tiles ? wrap_index(i.z, n.z) : clamp_index(i.z, n.z);
+    vec3 w = mix(vec3(1.0) - f, f, vec3(o));
+    acc += (w.x * w.y * w.z) * volume_texel(i);
+  }
+  return acc;
+}
+
+bool layer_mode() { return u_cloud.layer_on > 0.5; }
+
+// Altitude above the ground sphere of camera-relative p. Parabolic Earth: the exact
+// sqrt(r^2 + (R + h)^2) - R loses everything to float rounding at R = 6360 km, while
+// h + y + (x^2 + z^2) / 2R is exact to d^4/(8 R^3) (2 m at 200 km) and well conditioned.
+Number layer_altitude(vec3 p) {
+  return u_cloud.camera_altitude_m + p.y + (p.x * p.x + p.z * p.z) / (2.0 * u_cloud.earth_radius_m);
+}
+
+// The part [t0, t1] of the ray p + t d (t >= 0) inside the cloud layer, up to the first time it
+// leaves (empty when x >= y). Altitude along the ray is the convex parabola a0 + a1 t + a2 t^2.
+vec2 shell_interval(vec3 p, vec3 d) {
+  Number R = u_cloud.earth_radius_m;
+  Number bottom = u_cloud.layer_bottom_m;
+  Number top = u_cloud.layer_top_m;
+  Number a0 = layer_altitude(p);
+  Number a1 = d.y + (p.x * d.x + p.z * d.z) / R;
+  Number a2 = (d.x * d.x + d.z * d.z) / (2.0 * R);
+  vec2 up = parabola_roots(a2, a1, a0 - top);
+  vec2 down = parabola_roots(a2, a1, a0 - bottom);
+  bool hits_bottom = down.x <= down.y;
+  if (a0 < bottom) {  // below the layer: enter through its bottom, leave through its top
+    if (!hits_bottom) return vec2(1e30, -1e30);
+    return vec2(down.y, up.y);
+  }
+  if (a0 <= top) {  // inside: leave through the top, or the bottom when looking down
+    Number t1 = up.y;
+    if (hits_bottom && down.x > 0.0) t1 = min(t1, down.x);
+    return vec2(0.0, t1);
+  }
+  if (!(up.x <= up.y) || up.y < 0.0) return vec2(1e30, -1e30);  // above, never reaching down
+  Number t0 = max(up.x, 0.0);
+  Number t1 = up.y;
+  if (hits_bottom && down.x > t0) t1 = min(t1, down.x);
+  return vec2(t0, t1);
+}
+
+// Coverage (x) and cloud type (y) at camera-relative p: bilinear, wrapped (the map tiles).
+vec2 coverage_at(vec3 p) {
+  ivec2 n = coverage_size();
+  Number period = u_cloud.coverage_period_m;
+  vec2 x = vec2((u_cloud.camera_coverage_x_m + p.x) / period * Number(n.x) - 0.5,
+                (u_cloud.camera_coverage_z_m + p.z) / period * Number(n.y) - 0.5);
+  vec2 fl = floor(x);
+  vec2 f = x - fl;
+  ivec2 i0 = ivec2(fl);
+  vec2 acc = vec2(0.0);
+  for (int k = 0; k < 4; ++k) {
+    ivec2 o = ivec2(k & 1, k >> 1);
+    ivec2 i = ivec2(wrap_index(i0.x + o.x, n.x), wrap_index(i0.y + o.y, n.y));
+    vec2 w = mix(vec2(1.0) - f, f, vec2(o));
+    acc += (w.x * w.y) * coverage_texel(i);
+  }
+  return acc;
+}
+
+// Normalised volume coordinates of a camera-relative position: the box, or in layer mode the
+// repeating tile horizontally and the layer's height vertically.
+vec3 volume_uvw(vec3 p) {
+  if (layer_mode()) {
+    Number h = (layer_altitude(p) - u_cloud.layer_bottom_m) / (u_cloud.layer_top_m - u_cloud.layer_bottom_m);
+    return vec3((u_cloud.camera_tile_x_m + p.x) / u_cloud.tile_x_m, h,
+                (u_cloud.camera_tile_z_m + p.z) / u_cloud.tile_z_m);
+  }
+  return (p - u_cloud.volume_min_m) / u_cloud.volume_size_m;
+}
+
+// Cloud density (dimensionless, >= 0) at camera-relative position p: base shape R, eroded by the
+// G/B/A detail fBm (HZD remap), scaled by the density multiplier. Zero outside the box (x and z
+// repeat for tileable volumes). Erosion only lowers density, so the occupancy grid built from R
+// stays conservative.
+Number cloud_density(vec3 p) {
+  vec3 uvw = volume_uvw(p);
+  if (uvw.y < 0.0 || uvw.y > 1.0) return 0.0;
+  bool tiles = u_cloud.tiles_xz > 0.5;
+  if (!tiles && (uvw.x < 0.0 || uvw.x > 1.0 || uvw.z < 0.0 || uvw.z > 1.0)) return 0.0;
+  vec4 v = u_cloud.exact_filter > 0.5 ? volume_trilinear(uvw) : volume_filtered(uvw);
+  Number base = v.x;
+  if (layer_mode()) {
+    // Coverage remap (HZD): raise the threshold where coverage is low, then scale by coverage.
+    // Like erosion it only lowers density, so the texture's occupancy grid stays conservative.
+    vec2 cov = coverage_at(p);
+    Number c = clamp(cov.x + u_cloud.coverage_bias, 0.0, 1.0);
+    Number type = u_cloud.cloud_type >= 0.0 ? u_cloud.cloud_type : cov.y;
+    Number x = base * cloud_type_gradient(uvw.y, type);
+    base = clamp((x - (1.0 - c)) / max(c, 1e-4), 0.0, 1.0) * c;
+  }
+  Number erosion = u_cloud.erosion;
+  if (u_cloud.has_detail > 0.5 && erosion > 0.0 && base > 0.0) {
+    Number detail = dot(vec3(v.y, v.z, v.w), vec3(0.625, 0.25, 0.125));
+    // Wispy (inverted detail) near the cloud base, billowy higher up (Schneider 2015).
+    detail = mix(1.0 - detail, detail, clamp(uvw.y * 5.0, 0.0, 1.0));
+    Number e = erosion * detail;
+    base = clamp((base - e) / max(1.0 - e, 1e-4), 0.0, 1.0);
+  }
+  return max(base, 0.0) * u_cloud.density_scale;
+}
+
+// Occupancy of the coarse cell that holds camera-relative position p. The march only asks about
+// points inside the box, so indices are clamped (wrapped in x/z for tiling volumes): a ray entering
+// through a face must see that face's cell even when rounding puts the point a hair outside, or a
+// large step could skip a whole corner of a dense boundary cell.
+bool occupied(vec3 p) {
+  vec3 c = volume_uvw(p) * u_cloud.volume_dims / u_cloud.occ_cell_voxels;
+  ivec3 cell = ivec3(floor(c));
+  ivec3 n = ivec3(u_cloud.occ_dims);
+  bool tiles = u_cloud.tiles_xz > 0.5;
+  cell.x = tiles ? wrap_index(cell.x, n.x) : clamp_index(cell.x, n.x);
+  cell.y = clamp_index(cell.y, n.y);
+  cell.z = tiles ? wrap_index(cell.z, n.z) : clamp_index(cell.z, n.z);
+  return occupancy_texel(cell) > 0.5;
+}

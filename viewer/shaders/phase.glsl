@@ -1,0 +1,32 @@
+// Phase functions (1/sr), each integrating to 1 over the sphere: isotropic (the thesis's no-phase
+// baseline), Henyey-Greenstein, and a tabulated Mie phase function (R. Hogfeldt, "Convincing Cloud
+// Rendering", 2016). cos_theta is the cosine of the scattering angle between the light's direction
+// of travel and the direction toward the viewer, so cos_theta = 1 is forward scattering: the viewer
+// looking into the sun. Needs constants.glsl, `u_cloud` and mie_table_value(i).
+
+// Henyey-Greenstein; integrates to 1 over the sphere for |g| < 1.
+Number phase_hg(Number cos_theta, Number g) {
+  Number g2 = g * g;
+  Number denom = 1.0 + g2 - 2.0 * g * cos_theta;
+  return (1.0 - g2) / (4.0 * CV_PI * denom * sqrt(denom));
+}
+
+Number phase_isotropic() { return 1.0 / (4.0 * CV_PI); }
+
+// Table over theta = 0..pi in `mie_table_size` equal steps, linear interpolation, already
+// normalised to integrate to 1 over the sphere. Interpolated by hand on both sides so the GPU and
+// the CPU agree to float precision.
+Number phase_mie(Number cos_theta) {
+  int n = int(u_cloud.mie_table_size);
+  Number x = acos(clamp(cos_theta, -1.0, 1.0)) / CV_PI * Number(n - 1);
+  int i = min(int(floor(x)), n - 2);
+  Number f = x - Number(i);
+  return mix(mie_table_value(i), mie_table_value(i + 1), f);
+}
+
+Number phase_function(Number cos_theta) {
+  int mode = int(u_cloud.phase_mode);
+  if (mode == CV_PHASE_HG) return phase_hg(cos_theta, u_cloud.hg_g);
+  if (mode == CV_PHASE_MIE) return phase_mie(cos_theta);
+  return phase_isotropic();
+}

@@ -1,0 +1,130 @@
+// Dear ImGui panel: every entry of the render parameter table as a slider, checkbox or list with its
+// range and default, the table's doc line as the tooltip, and per-pass GPU times. The widgets come
+// from panel_widgets(), so a key added to the table (the sky's, the motion's) appears here with no
+// code of its own. Follows imgui's examples/example_glfw_opengl3/main.cpp.
+#include "panel.h"
+
+#include <string>
+#include <vector>
+
+#include <GLFW/glfw3.h>
+#include <imgui.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+
+#include "cloudviewer/errors.h"
+
+namespace cloudviewer {
+
+Panel::Panel(GLFWwindow* window) {
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini in the user's folder
+  ImGui::StyleColorsDark();
+  ImGui::GetStyle().Alpha = 0.92f;
+  if (!ImGui_ImplGlfw_InitForOpenGL(window, true) || !ImGui_ImplOpenGL3_Init("#version 450 core")) {
+    ImGui::DestroyContext();
+    throw GlError("Dear ImGui could not initialise its GLFW/OpenGL 3 backends");
+  }
+}
+
+Panel::~Panel() {
+  ImGui_ImplOpenGL3_Shutdown();
+  ImGui_ImplGlfw_Shutdown();
+  ImGui::DestroyContext();
+}
+
+bool Panel::wants_keyboard() { return ImGui::GetIO().WantCaptureKeyboard; }
+bool Panel::wants_mouse() { return ImGui::GetIO().WantCaptureMouse; }
+
+namespace {
+
+void tooltip(const PanelWidget& w) {
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", w.tooltip.c_str());
+}
+
+// Applies a value through the table's own parser (ranges and messages stay the table's).
+void set(RenderSettings& s, const std::string& key, const std::string& value) {
+  try {
+    render_param(key).set(s, value);
+  } catch (const InputError&) {
+    // A slider cannot leave the range; a typed value outside it is ignored.
+  }
+}
+
+std::string text(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.9g", v);
+  return buf;
+}
+
+}  // namespace
+
+void Panel::draw(RenderSettings& s, const GpuTimings& t, const std::string& hint) {
+  if (!visible) return;
+  ImGui_ImplOpenGL3_NewFrame();
+  ImGui_ImplGlfw_NewFrame();
+  ImGui::NewFrame();
+  ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(340, 0), ImGuiCond_FirstUseEver);
+  ImGui::Begin("cloudviewer");
+  ImGui::TextUnformatted(hint.c_str());
+  if (ImGui::CollapsingHeader("GPU time per pass", ImGuiTreeNodeFlags_DefaultOpen)) {
+    for (const auto& p : t.passes) ImGui::Text("%-14s %8.2f ms", p.first.c_str(), p.second);
+    ImGui::Text("%-14s %8.2f ms", "total", t.total_ms);
+  }
+  if (ImGui::CollapsingHeader("render.*", ImGuiTreeNodeFlags_DefaultOpen)) {
+    ImGui::PushItemWidth(150);
+    for (const PanelWidget& w : panel_widgets()) {
+      const ParamDef& p = render_param(w.key);
+      const std::string value = p.get(s);
+      const char* label = w.key.c_str();
+      const ImGuiSliderFlags flags = w.logarithmic ? ImGuiSliderFlags_Logarithmic : 0;
+      switch (w.kind) {
+        case PanelWidget::Kind::Checkbox: {
+          bool b = value == "true";
+          if (ImGui::Checkbox(label, &b)) set(s, w.key, b ? "true" : "false");
+          break;
+        }
+        case PanelWidget::Kind::SliderInt: {
+          int v = std::stoi(value);
+          if (ImGui::SliderInt(label, &v, int(w.lo), int(w.hi), "%d", flags)) set(s, w.key, std::to_string(v));
+          break;
+        }
+        case PanelWidget::Kind::SliderFloat: {
+          float v = std::stof(value);
+          if (ImGui::SliderFloat(label, &v, float(w.lo), float(w.hi), "%.4g", flags)) set(s, w.key, text(v));
+          break;
+        }
+        case PanelWidget::Kind::Combo: {
+          int index = 0;
+          for (size_t i = 0; i < w.choices.size(); ++i)
+            if (w.choices[i] == value) index = int(i);
+          std::vector<const char*> items;
+          for (const std::string& c : w.choices) items.push_back(c.c_str());
+          if (ImGui::Combo(label, &index, items.data(), int(items.size()))) set(s, w.key, w.choices[size_t(index)]);
+          break;
+        }
+        case PanelWidget::Kind::SliderFloatOrAuto: {
+          bool automatic = value == "auto";
+          std::string auto_label = "auto##" + w.key;
+          if (ImGui::Checkbox(auto_label.c_str(), &automatic)) set(s, w.key, automatic ? "auto" : "0");
+          tooltip(w);
+          ImGui::SameLine();
+          float v = automatic ? 0.f : std::stof(value);
+          ImGui::BeginDisabled(automatic);
+          if (ImGui::SliderFloat(label, &v, float(w.lo), float(w.hi), "%.4g", flags)) set(s, w.key, text(v));
+          ImGui::EndDisabled();
+          break;
+        }
+      }
+      tooltip(w);
+    }
+    ImGui::PopItemWidth();
+  }
+  ImGui::End();
+  ImGui::Render();
+  ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+}
+
+}  // namespace cloudviewer
