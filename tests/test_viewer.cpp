@@ -677,18 +677,19 @@ TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
 // One cloud-type gradient: what cloudgen bakes for each height profile is, bit for bit, what the
 // viewer's layer mode applies for that cloud type (the two had different breakpoints before).
 TEST(ViewerCloudgen, CloudTypeGradientIsCloudgensHeightProfile) {
-  struct Case { const char* profile; double type; };
-  for (Case c : {Case{"stratus", 0.0}, Case{"cumulus", 0.5}, Case{"cumulonimbus", 1.0}}) {
+  struct Case { cloudgen::HeightProfile profile; double type; };
+  for (Case c : {Case{cloudgen::HeightProfile::Stratus, 0.0}, Case{cloudgen::HeightProfile::Cumulus, 0.5},
+                 Case{cloudgen::HeightProfile::Cumulonimbus, 1.0}}) {
     cloudgen::Preset p;
     p.height_profile = c.profile;
     double peak = 0;
     for (int i = 0; i <= 1000; ++i) {
       double h = i / 1000.0;
       double baked = cloudgen::height_profile(p, h);
-      ASSERT_EQ(baked, reference_cloud_type_gradient(h, c.type)) << c.profile << " h " << h;
+      ASSERT_EQ(baked, reference_cloud_type_gradient(h, c.type)) << height_profile_name(c.profile) << " h " << h;
       peak = std::max(peak, baked);
     }
-    EXPECT_GT(peak, 0.99) << c.profile;  // a real profile, not zero everywhere
+    EXPECT_GT(peak, 0.99) << height_profile_name(c.profile);  // a real profile, not zero everywhere
   }
   // The types differ where they should: at h = 0.5 only the cumulonimbus is still dense.
   EXPECT_EQ(reference_cloud_type_gradient(0.5, 0.0), 0.0);
