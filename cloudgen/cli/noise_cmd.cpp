@@ -101,12 +101,17 @@ void add_noise_command(CLI::App& app, std::function<void()>& run) {
       "  cloudgen noise --kind worley --period 4 --octaves 5 --size 128 -o worley.raw\n"
       "  cloudgen noise --kind perlin --reference --at 3.14,42,7   # Perlin's ImprovedNoise: 0.13691995878400012");
   c->add_option("--kind", a->kind, "perlin | worley | perlin-worley")->check(CLI::IsMember({"perlin", "worley", "perlin-worley"}));
-  c->add_option("--period", a->period, "Base period in lattice cells: P or PX,PY,PZ (any positive integer)");
-  c->add_option("--octaves", a->octaves, "fBm octaves, 1..16");
+  c->add_option("--period", a->period,
+                "Base period in lattice cells: P or PX,PY,PZ, each 1.." + std::to_string(noise3d::kMaxPeriod));
+  // Ranges from libnoise3d's own limits (what noise3d::validate checks), not restated by hand.
+  c->add_option("--octaves", a->octaves, "fBm octaves, 1.." + std::to_string(noise3d::kMaxOctaves))
+      ->check(CLI::Range(1, noise3d::kMaxOctaves));
   c->add_option("--gain", a->gain, "Amplitude ratio between octaves, (0, 1]");
-  c->add_option("--lacunarity", a->lacunarity, "Integer frequency ratio between octaves, 2..16 (non-integers break the wrap)");
+  c->add_option("--lacunarity", a->lacunarity,
+                "Integer frequency ratio between octaves, 2.." + std::to_string(noise3d::kMaxLacunarity) +
+                    " (non-integers break the wrap)");
   c->add_option("--seed", a->seed, "Seed: an integer in [0, 2^64 - 1]");
-  c->add_option("--size", a->size, "Voxels per axis spanning one tile");
+  c->add_option("--size", a->size, "Voxels per axis spanning one tile, 1..2048")->check(CLI::Range(1, 2048));
   c->add_option("-o,--output", a->out, "Output cube (.raw); the sidecar is written beside it as .json");
   c->add_option("--threads", a->threads, "Worker threads (0 = all cores); output is identical for any count")
       ->check(CLI::Range(0, kMaxThreads));
