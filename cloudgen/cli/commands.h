@@ -14,5 +14,6 @@ extern std::atomic<bool> g_cancel;
 std::function<void(double)> progress_bar(const std::string& label, bool quiet);
 
 void add_noise_command(CLI::App& app, std::function<void()>& run);
+void add_phase_command(CLI::App& app, std::function<void()>& run);
 
 }  // namespace cloudgen::cli

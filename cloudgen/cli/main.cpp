@@ -261,6 +261,7 @@ int main(int argc, char** argv) {
   });
 
   add_noise_command(app, run);
+  add_phase_command(app, run);
 
   try {
     app.parse(argc, argv);
