@@ -32,3 +32,20 @@ build/bin/cloudviewer --params-markdown > "$tmp"
 replace_block docs/viewer.md render-params "$tmp"
 build/bin/cloudviewer --keys-markdown > "$tmp"
 replace_block docs/viewer.md render-keys "$tmp"
+
+# README: one small picture per shipped preset, the viewer's headless default view of it (the
+# preset's own `view` when it has one), so a newcomer sees what each preset makes before running
+# anything. `--no-pictures` skips them (they take a minute on the CPU).
+if [ "${1:-}" != "--no-pictures" ]; then
+  mkdir -p docs/images
+  gallery=""
+  for p in presets/*.json; do
+    name="$(basename "$p" .json)"
+    build/bin/cloudviewer "$p" --headless --size 240x135 --out "docs/images/preset_$name.png" >/dev/null
+    gallery+="| ![$name](docs/images/preset_$name.png) "
+  done
+  names="$(for p in presets/*.json; do printf '| `%s` ' "$(basename "$p" .json)"; done)"
+  seps="$(for p in presets/*.json; do printf '|---'; done)"
+  printf '%s|\n%s|\n%s|\n' "$names" "$seps" "$gallery" > "$tmp"
+  replace_block README.md preset-gallery "$tmp"
+fi

@@ -13,27 +13,29 @@
 
 #include "cloudviewer/errors.h"
 #include "internal.h"
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+#include "cloudgen/json_checked.h"
+#include "cloudgen/output.h"
+#endif
 
 namespace cloudviewer {
 namespace {
 
-struct TrackFrame {
-  std::string name, view;  ///< view class: below, inside, above (or what the track says)
-  Camera camera;
-};
-struct Config {
-  std::string name;
-  std::vector<std::string> sets;
-};
+// The value as short text for messages (the depth was bounded when the track was parsed; invalid
+// UTF-8 is replaced instead of throwing).
+std::string shown(const nlohmann::json& j) {
+  std::string t = j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  return t.size() > 60 ? t.substr(0, 57) + "..." : t;
+}
 
 // A number from the track: present, a number, finite and in [lo, hi]; else InputError naming the
 // JSON pointer, the value and the range.
 double number_from(const nlohmann::json& j, const std::string& where, double lo, double hi) {
-  if (!j.is_number()) throw InputError(where + ": expected a number, got " + j.dump());
+  if (!j.is_number()) throw InputError(where + ": expected a number, got " + shown(j));
   double d = j.get<double>();
   if (!std::isfinite(d) || d < lo || d > hi) {
     std::ostringstream os;
-    os << where << ": " << j.dump() << " is out of range [" << lo << ", " << hi << "]";
+    os << where << ": " << shown(j) << " is out of range [" << lo << ", " << hi << "]";
     throw InputError(os.str());
   }
   return d;
@@ -47,7 +49,7 @@ glm::dvec3 vec_from(const nlohmann::json& j, const std::string& where, double li
 
 std::string string_from(const nlohmann::json& obj, const char* key, const std::string& fallback, const std::string& where) {
   if (!obj.contains(key)) return fallback;
-  if (!obj[key].is_string()) throw InputError(where + "/" + key + ": expected a string, got " + obj[key].dump());
+  if (!obj[key].is_string()) throw InputError(where + "/" + key + ": expected a string, got " + shown(obj[key]));
   return obj[key].get<std::string>();
 }
 
@@ -64,16 +66,17 @@ std::vector<Config> default_configs() {
 
 }  // namespace
 
-int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, std::ostream& err) {
-  std::ifstream in(o.bench);
-  if (!in) throw InputError("--bench " + o.bench + ": no such file");
+BenchPlan parse_track(const std::string& text, const std::string& where, const Options& o, const PreparedVolume& vol) {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+  const nlohmann::json track = cloudgen::parse_json_checked(text, where);  // bounded depth, no duplicate keys
+#else
   nlohmann::json track;
   try {
-    in >> track;
+    track = nlohmann::json::parse(text);
   } catch (const std::exception& e) {
-    throw InputError("--bench " + o.bench + ": invalid JSON: " + e.what());
+    throw InputError(where + ": invalid JSON: " + e.what());
   }
-  const std::string where = o.bench;
+#endif
   if (!track.is_object()) throw InputError(where + ": expected a JSON object");
   std::string space = string_from(track, "space", "volume", where);
   if (space != "volume" && space != "world")
@@ -138,6 +141,7 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
   }
   Sun fixed_sun;
   bool has_sun = track.contains("sun");
+  (void)fixed_sun;
   if (has_sun) {
     glm::dvec3 s(0.0);
     const auto& j = track["sun"];
@@ -152,6 +156,31 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
     for (const std::string& a : c.sets) apply_setting(s, a);
     settings.push_back(s);
   }
+
+  BenchPlan plan;
+  plan.frames = std::move(frames);
+  plan.configs = std::move(configs);
+  plan.settings = std::move(settings);
+  plan.fixed_sun = fixed_sun;
+  plan.has_sun = has_sun;
+  return plan;
+}
+
+int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, std::ostream& err) {
+  std::string text;
+  {
+    std::ifstream in(o.bench, std::ios::binary);
+    if (!in) throw InputError("--bench " + o.bench + ": no such file");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    text = ss.str();
+  }
+  BenchPlan plan = parse_track(text, o.bench, o, vol);
+  const std::vector<TrackFrame>& frames = plan.frames;
+  const std::vector<Config>& configs = plan.configs;
+  const std::vector<RenderSettings>& settings = plan.settings;
+  const Sun fixed_sun = plan.fixed_sun;
+  const bool has_sun = plan.has_sun;
 
   HeadlessContext ctx;
   GlRenderer renderer{ShaderSource(o.shader_dir)};
@@ -174,10 +203,11 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
         << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s\n";
   }
 
-  std::ofstream csv;
-  if (!o.csv.empty()) {
-    csv.open(o.csv);
-    if (!csv) throw InputError("--csv " + o.csv + ": cannot write");
+  // The CSV is collected and written at the end through the toolkit's safe writer: an existing
+  // file is replaced only by a complete one, and a write error is reported (exit 2).
+  std::ostringstream csv;
+  const bool want_csv = !o.csv.empty();
+  if (want_csv) {
     csv << "config,frame,view,gpu_total_ms,gpu_ground_ms,gpu_cloud_ms,gpu_post_ms,wall_ms,loop_trips_per_pixel,"
            "rmse_vs_baseline,max_diff_vs_baseline,rmse_vs_reference\n";
   }
@@ -272,7 +302,7 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
       s.max_diff = std::max(s.max_diff, md), s.rmse_ref += o.bench_reference > 0 ? rr : 0;
       s.by_view[frames[i].view].first += mean.total_ms;
       s.by_view[frames[i].view].second += 1;
-      if (csv) {
+      if (want_csv) {
         csv << '"' << configs[c].name << "\",\"" << frames[i].name << "\"," << frames[i].view << "," << mean.total_ms
             << "," << mean.ground_ms << "," << mean.cloud_ms << "," << mean.post_ms << "," << wall << ","
             << trips[c * nfr + i] << "," << rb << "," << md << ",";
@@ -311,7 +341,17 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
          " max|diff| and RMSE base: display image against the baseline configuration, 0..1 scale";
   if (o.bench_reference > 0) out << ";\n RMSE ref: against the CPU reference at " << o.bench_reference << " steps";
   out << ")\n";
-  if (!o.csv.empty()) out << "wrote " << o.csv << "\n";
+  if (want_csv) {
+    const std::string csv_text = csv.str();
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+    cloudgen::atomic_write(o.csv, [&](const std::string& tmp) { cloudgen::write_file_bytes(tmp, csv_text.data(), csv_text.size()); });
+#else
+    std::ofstream f(o.csv, std::ios::binary);
+    f << csv_text;
+    if (!f.flush()) throw IoError("--csv " + o.csv + ": write failed");
+#endif
+    out << "wrote " << o.csv << "\n";
+  }
   return 0;
 }
 

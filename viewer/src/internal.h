@@ -39,6 +39,26 @@ double tileable_fbm(double x, double y, double z, int period, int octaves, uint3
 Camera resolve_camera(const Options& o, const PreparedVolume& vol, int width, int height);
 Sun resolve_sun(const Options& o, const Camera& cam);
 
+/// A benchmark camera track (viewer/tracks/default.json): the frames, the configurations and
+/// their settings.
+struct TrackFrame {
+  std::string name, view;  ///< view class: below, inside, above (or what the track says)
+  Camera camera;
+};
+struct Config {
+  std::string name;
+  std::vector<std::string> sets;
+};
+struct BenchPlan {
+  std::vector<TrackFrame> frames;
+  std::vector<Config> configs;
+  std::vector<RenderSettings> settings;  ///< o.settings with each configuration's sets applied
+  Sun fixed_sun;
+  bool has_sun = false;
+};
+/// Parses and checks a track (`where` names it in messages): every field typed and ranged,
+/// InputError naming the JSON pointer otherwise. Everything --bench does before OpenGL.
+BenchPlan parse_track(const std::string& text, const std::string& where, const Options& o, const PreparedVolume& vol);
 int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, std::ostream& err);
 int run_window(const Options& o, std::ostream& out, std::ostream& err);
 
