@@ -270,6 +270,13 @@ TEST(HostileInputs, DeepAndDuplicateJsonIsRefusedWithThePointer) {
   EXPECT_NE(error_of([] { parse_preset("{}", "x.json", {"towers.list=" + std::string(200, '[') + std::string(200, ']')}); })
                 .find("nested deeper"),
             std::string::npos);
+  // A list index far beyond the end would make the JSON library allocate it (found by fuzz_cli).
+  const std::string idx = error_of(
+      [] { parse_preset(R"({"towers": {"list": [{}]}})", "x.json", {"towers.list.99999999999.amplitude=1"}); });
+  EXPECT_NE(idx.find("is not an index of a list"), std::string::npos) << idx;
+  EXPECT_NE(error_of([] { parse_preset("{}", "x.json", {"towers.list.99999999999=1"}); }).find("beyond the end of a new list"),
+            std::string::npos);
+  EXPECT_NO_THROW(parse_preset("{}", "x.json", {"towers.list.0.amplitude=0.25"}));
   TempDir dir;
   write_text(dir / "deep.json", deep);
   for (const char* cmd : {"validate", "generate"}) {

@@ -381,10 +381,36 @@ void apply_override(json& doc, const std::string& ov, Reader& r) {
       return;
     }
   }
+  // List indices may address an existing element or append one: "towers.list.99999999999=1"
+  // would otherwise make the JSON library allocate a list of 1e11 elements (found by fuzzing).
+  const json* node = &doc;
+  for (size_t st = 1, en; st <= ptr.size(); st = en + 1) {
+    en = ptr.find('/', st);
+    if (en == std::string::npos) en = ptr.size();
+    const std::string tok = ptr.substr(st, en - st);
+    const bool digits = !tok.empty() && tok.find_first_not_of("0123456789") == std::string::npos;
+    const bool numeric = digits && tok.size() <= 9;
+    if (node && node->is_array()) {
+      const size_t n = node->size();
+      if (!numeric || std::stoul(tok) > n) {
+        r.problem("--set " + printable(key), "\"" + printable(tok) + "\" is not an index of a list of " + std::to_string(n) +
+                                                 " (use 0.." + std::to_string(n) + "; " + std::to_string(n) + " adds one)");
+        return;
+      }
+      node = std::stoul(tok) < n ? &(*node)[std::stoul(tok)] : nullptr;
+    } else if (node && node->is_object()) {
+      node = node->contains(tok) ? &(*node)[tok] : nullptr;
+    } else if (!node && digits && tok != "0") {  // a new list: only element 0 can be created
+      r.problem("--set " + printable(key), "list index " + tok + " is beyond the end of a new list (use 0)");
+      return;
+    } else {
+      node = nullptr;
+    }
+  }
   try {
     doc[json::json_pointer(ptr)] = v;
   } catch (const json::exception& e) {
-    r.problem("--set " + ov, e.what());
+    r.problem("--set " + printable(ov), printable(e.what()));
   }
 }
 
