@@ -2,6 +2,7 @@
 // double-precision CPU reference of the same shader math, occupancy skipping, convergence,
 // transmittance through a uniform slab, shader error reporting and bad inputs.
 // A failure to create the EGL context is a failure, not a skip: CI runs on this kind of machine.
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <filesystem>
@@ -952,4 +953,33 @@ TEST(ViewerMath, ForwardScatteringBrightensTheThinEdgesOfABackLitCloud) {
       }
     }
   }
+}
+
+// The viewer takes the occupancy grid a Volume carries when it was built for the same cell and
+// padding (cloudgen builds it with the one builder, cloudgen::build_occupancy), and builds it with
+// that same builder otherwise: the two grids of one volume are identical.
+TEST(ViewerVolume, OccupancyComesFromTheVolumeOrCloudgensBuilder) {
+  cloudgen::Volume v = synthetic_volume("blob");
+  v.occupancy_cell = 8;
+  v.occupancy_padding = 2;
+  cloudgen::build_occupancy(v);
+  PreparedVolume built = prepare_volume(synthetic_volume("blob"), 8, 2);  // no grid carried: built
+  ASSERT_EQ(built.occ.size(), v.occupancy.size());
+  EXPECT_TRUE(std::equal(built.occ.begin(), built.occ.end(), v.occupancy.begin()));
+  // A carried grid is taken as it is: mark one more cell and see it arrive.
+  size_t extra = 0;
+  while (v.occupancy[extra]) ++extra;
+  v.occupancy[extra] = 1;
+  PreparedVolume taken = prepare_volume(v, 8, 2);
+  EXPECT_EQ(taken.occ[extra], 1);
+  // Another cell size or padding: rebuilt, so the extra cell is gone.
+  PreparedVolume other = prepare_volume(v, 8, 1);
+  EXPECT_EQ(other.occ_padding, 1);
+  PreparedVolume rebuilt = prepare_volume(v, 4, 2);
+  EXPECT_EQ(rebuilt.occ_cell, 4);
+  cloudgen::Volume w = synthetic_volume("blob");
+  w.occupancy_cell = 8;
+  w.occupancy_padding = 1;
+  cloudgen::build_occupancy(w);
+  EXPECT_TRUE(std::equal(other.occ.begin(), other.occ.end(), w.occupancy.begin()));
 }

@@ -414,8 +414,16 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   }
 }
 
+namespace {
+const Pass& pass_named(const std::vector<Pass>& passes, const std::string& name) {
+  for (const Pass& p : passes)
+    if (p.name == name) return p;
+  throw GlError("no render pass '" + name + "'");
+}
+}  // namespace
+
 int GlRenderer::cloud_block_size() const {
-  const Pass& clouds = impl_->passes[1];
+  const Pass& clouds = pass_named(impl_->passes, "clouds");
   GLuint index = glGetUniformBlockIndex(clouds.program, "CloudBlock");
   GLint size = 0;
   glGetActiveUniformBlockiv(clouds.program, index, GL_UNIFORM_BLOCK_DATA_SIZE, &size);
@@ -423,7 +431,7 @@ int GlRenderer::cloud_block_size() const {
 }
 
 int GlRenderer::cloud_block_offset(const std::string& member) const {
-  const Pass& clouds = impl_->passes[1];
+  const Pass& clouds = pass_named(impl_->passes, "clouds");
   std::string name = "u_cloud." + member;
   GLuint index = glGetProgramResourceIndex(clouds.program, GL_UNIFORM, name.c_str());
   if (index == GL_INVALID_INDEX) return -1;

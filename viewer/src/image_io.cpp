@@ -49,6 +49,9 @@ void write_png_file(const std::string& path, const std::string& shown, const Ima
   errno = 0;
   FILE* fp = std::fopen(path.c_str(), "wb");
   if (!fp) throw IoError("cannot write '" + shown + "': " + system_reason("cannot open"));
+  // Everything with a destructor exists before setjmp: libpng's error longjmp skips destructors of
+  // objects constructed after it (ASan found the row buffer leaking on a failed write).
+  std::vector<png_byte> row(size_t(img.width) * 3);
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   if (!png || !info || setjmp(png_jmpbuf(png))) {
@@ -62,7 +65,6 @@ void write_png_file(const std::string& path, const std::string& shown, const Ima
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
   png_write_info(png, info);
-  std::vector<png_byte> row(size_t(img.width) * 3);
   for (int y = img.height - 1; y >= 0; --y) {  // bottom-up storage -> top-down file
     for (int x = 0; x < img.width; ++x)
       for (int c = 0; c < 3; ++c) {

@@ -72,8 +72,8 @@ Camera camera_of(const ViewState& v, double fov) {
   return c;
 }
 
-const char* phase_name(PhaseMode p) { return p == PhaseMode::None ? "none" : p == PhaseMode::Mie ? "mie" : "hg"; }
-const char* tonemap_name(ToneMap t) { return t == ToneMap::Aces ? "aces" : t == ToneMap::Clamp ? "clamp" : "reinhard"; }
+// A parameter's value as the table spells it (enum names, true/false).
+std::string value_of(const RenderSettings& s, const char* key) { return render_param(key).get(s); }
 
 // Keys that are not render parameters; the parameter keys are the table's (key_bindings()).
 const char* kWindowKeys =
@@ -285,8 +285,8 @@ int run_window(const Options& o, std::ostream& out, std::ostream& err) {
       title.precision(3);
       title << "cloudviewer | GPU " << gpu_ms_avg << " ms (clouds " << cloud_ms_avg << ") | steps " << settings.steps
             << " occ:" << (settings.occupancy ? "on" : "off") << " adapt:" << (settings.adaptive ? "on" : "off")
-            << " light:" << (settings.light_march ? "on" : "off") << " phase:" << phase_name(settings.phase)
-            << " g:" << settings.g << " tone:" << tonemap_name(settings.tonemap) << " bloom:" << settings.bloom
+            << " light:" << (settings.light_march ? "on" : "off") << " phase:" << value_of(settings, "phase")
+            << " g:" << settings.g << " tone:" << value_of(settings, "tonemap") << " bloom:" << settings.bloom
             << " density:" << settings.density << " exp:" << settings.exposure << " | sun " << sun.azimuth_deg
             << "," << sun.elevation_deg << (view.fly ? " | fly" : " | orbit");
       glfwSetWindowTitle(window, title.str().c_str());
