@@ -12,7 +12,7 @@ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Release -DCMAKE_C_COMPILER=clang -DC
 cmake --build build-fuzz -j "$jobs" --target fuzz_preset fuzz_cli fuzz_raw fuzz_ktx2 fuzz_vdb fuzz_track fuzz_viewer_input
 
 log "building the ASan+UBSan unit tests into build-asan/"
-cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCLOUD_SANITIZE=ON -DCLOUD_BUILD_VIEWER=OFF \
+cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCLOUD_SANITIZE=ON \
   -DCLOUD_BUILD_BENCH=OFF >/dev/null
 cmake --build build-asan -j "$jobs" --target cloud_tests cloudgen
 
