@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "cloudgen/view.h"
 #include "cloudgen/volume.h"
 #include "noise3d/noise3d.h"
 
@@ -74,7 +75,11 @@ struct Preset {
   bool vdb_half = false;
   std::string vdb_compression = "blosc";  ///< blosc | zip | none
   bool vdb_detail = true;
+  char vdb_up = 'z';          ///< 'z' (Blender) | 'y' (Houdini, Maya)
+  bool vdb_physical = false;  ///< export.vdb.units = physical: density grid in extinction per metre
   std::string raw_format = "rgba8";  ///< rgba8 | rgba16f | rgba32f
+
+  View view;  ///< optional camera, sun and render.* settings (viewer, `cloudgen blender`, README)
 };
 
 /// One entry of the parameter table.
