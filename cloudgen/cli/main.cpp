@@ -81,7 +81,7 @@ std::string human(uint64_t b) {
 }
 
 struct GenerateArgs {
-  std::string preset, format, region, max_memory = "16G";
+  std::string preset, format, region, max_memory = "16G", up;
   std::vector<std::string> outputs, sets;
   int64_t seed = -1;
   uint32_t resolution = 0;
@@ -92,6 +92,7 @@ struct GenerateArgs {
 void run_generate(const GenerateArgs& a) {
   std::vector<std::string> sets = a.sets;
   if (a.seed >= 0) sets.push_back("seed=" + std::to_string(a.seed));
+  if (!a.up.empty()) sets.push_back("export.vdb.up=" + a.up);
   const std::string path = resolve_preset(a.preset);
   Preset p = load_preset(path, sets);
   if (a.resolution) rescale(p, a.resolution);
@@ -100,6 +101,8 @@ void run_generate(const GenerateArgs& a) {
   eo.vdb_half = p.vdb_half;
   eo.vdb_compression = p.vdb_compression;
   eo.vdb_detail = p.vdb_detail;
+  eo.vdb_up = p.vdb_up;
+  eo.vdb_physical = p.vdb_physical;
   eo.texel = p.raw_format;
   std::vector<Format> formats;
   bool detail = false;
@@ -127,6 +130,7 @@ void run_generate(const GenerateArgs& a) {
   }
   GenerateStats st;
   Volume v = generate(p, go, &st);
+  add_view_metadata(v.metadata, p.view);
   const auto t0 = std::chrono::steady_clock::now();
   for (size_t i = 0; i < a.outputs.size(); ++i) {
     if (g_cancel) throw Cancelled();
@@ -172,6 +176,7 @@ int main(int argc, char** argv) {
   gen->add_option("-o,--output", ga->outputs, "Output file; repeat for several formats from one generation")->required();
   gen->add_option("--format", ga->format, "vdb | raw | ktx2 | atlas-png | atlas-exr (default: from each extension)");
   gen->add_option("--seed", ga->seed, "Override the preset's seed");
+  gen->add_option("--up", ga->up, "VDB up axis: z (Blender, default) or y (Houdini, Maya); = --set export.vdb.up=...");
   gen->add_option("--resolution", ga->resolution, "Rescale so the longest axis has N voxels (world size kept)");
   gen->add_option("--threads", ga->threads, "Worker threads (0 = all cores); output bytes are identical for any count");
   gen->add_option("--set", ga->sets, "Override a preset key with the same validation, e.g. --set threshold=0.4 "

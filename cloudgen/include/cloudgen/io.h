@@ -22,6 +22,8 @@ struct ExportOptions {
   bool vdb_half = false;                  ///< grids saved as 16-bit half floats
   std::string vdb_compression = "blosc";  ///< blosc | zip | none
   bool vdb_detail = true;                 ///< detail channels as extra grids
+  char vdb_up = 'z';                      ///< 'z': height on +z (Blender), 'y': as in memory (Houdini, Maya)
+  bool vdb_physical = false;              ///< density grid holds extinction per metre, not [0, 1]
   std::string texel = "rgba8";            ///< raw / ktx2 texel format: rgba8 | rgba16f | rgba32f
 };
 
