@@ -8,6 +8,7 @@
 #include "cloudviewer/renderer.h"
 #include "cloudviewer/scene.h"
 #include "cloudviewer/settings.h"
+#include "cloudgen/view.h"
 
 namespace cloudviewer {
 
@@ -28,6 +29,7 @@ struct Options {
   int bench_reference = 0;  ///< CPU reference step count for RMSE columns (0 = none)
   int bench_repeat = 3;
   RenderSettings settings;  ///< after --set
+  cloudgen::View view;      ///< the input's preset/metadata view (default_view.h)
 };
 
 /// Camera from --camera or the default framing; sun from --sun or behind the viewer.

@@ -12,6 +12,8 @@
 
 #include "noise3d/noise3d.h"
 
+#include "cloudgen/view.h"
+
 #include "cloudviewer/errors.h"
 
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
@@ -470,7 +472,7 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   p.ambient_color = glm::dvec4(0.30, 0.38, 0.52, s.albedo);
   // Auto values follow the voxel size, not the box, so a VDB cropped to its active voxels renders
   // like the dense texture it came from.
-  double sigma = s.sigma_t > 0 ? s.sigma_t : 0.5 / min_voxel;
+  double sigma = s.sigma_t > 0 ? s.sigma_t : cloudgen::default_extinction_per_metre(min_voxel);
   p.medium = glm::dvec4(sigma, s.erosion, s.density, s.powder_c);
   // Layer rays can run to the horizon: cap the loop (use render.adaptive=true there).
   double max_iter = layer ? 2048.0 + 8.0 * s.steps : 4.0 * std::ceil(diag / dt) + 64.0;
