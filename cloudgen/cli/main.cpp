@@ -151,6 +151,9 @@ void run_generate(const GenerateArgs& a) {
 }
 
 }  // namespace
+
+std::string resolve_preset_path(const std::string& p) { return resolve_preset(p); }
+
 }  // namespace cloudgen::cli
 
 int main(int argc, char** argv) {
@@ -248,6 +251,7 @@ int main(int argc, char** argv) {
   });
 
   add_noise_command(app, run);
+  add_blender_command(app, run);
 
   try {
     app.parse(argc, argv);

@@ -28,6 +28,8 @@ inline double default_extinction_per_metre(double voxel_size) { return 0.5 / vox
 inline constexpr Vec3 kSunColor{{1.0, 0.96, 0.9}};
 inline constexpr Vec3 kAmbientColor{{0.30, 0.38, 0.52}};
 inline constexpr Vec3 kSkyZenith{{0.12, 0.24, 0.55}};
+/// Ground albedo colour at render.ground_albedo = 0.18 (the viewer varies it by +-10% over 8 km).
+inline constexpr Vec3 kGroundColor{{0.10, 0.12, 0.07}};
 /// Elevation of the default sun, which stands behind the viewer.
 inline constexpr double kDefaultSunElevation = 35.0;
 /// Elevation of the default camera above a bare volume's long side.
