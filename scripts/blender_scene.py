@@ -38,6 +38,15 @@ obj = bpy.data.objects.new("cloud", vol)
 scene.collection.objects.link(obj)
 # A y-up file stands upright by +90 degrees about x; a z-up file is upright already.
 obj.rotation_euler = (math.pi / 2, 0.0, 0.0) if S["up"] == "y" else (0.0, 0.0, 0.0)
+# OpenVDB's convention puts voxel (i,j,k)'s value at index point (i,j,k), and Blender's object
+# bounds follow it, but Cycles in Blender 3.4 renders that value at index (i+0.5, j+0.5, k+0.5):
+# measured with a one-voxel grid (tests/blender_roundtrip.sh), the cloud sits half a voxel off
+# along every index axis. Shift the object back by half a voxel so Cycles puts it where the file
+# (and the viewer) say. Newer Blender versions are not measured; the test tells.
+shift = -0.5 * S["voxel_size"] if bpy.app.version < (3, 5, 0) else 0.0
+index_offset = Vector((shift, shift, shift))
+obj.location = obj.rotation_euler.to_matrix() @ index_offset
+obj["cycles_voxel_shift"] = list(obj.location)
 
 # ---------------------------------------------------------------- material
 M = S["material"]

@@ -3,6 +3,8 @@
   blender -b --factory-startup --python-exit-code 1 --python tests/blender_roundtrip.py -- \
       check SCENE.blend MASK.png VOXEL XMIN YMIN ZMIN XMAX YMAX ZMAX FULL.vdb HEIGHT
       compare VIEWER_T.png CYCLES_MASK.png [VIEWER.png CYCLES.png]
+      mask SCENE.blend MASK.png
+      centroid VIEWER_T.png CYCLES_MASK.png TOLERANCE_PX
 
 check: reloads a .blend written by `cloudgen blender`, checks it holds the volume (grid
 `density` loaded, upright: its world bounds equal the z-up box given, computed by OpenVDB's own
@@ -14,6 +16,9 @@ compare: the cloud masks of the viewer (VIEWER_T.png: render.output=transmittanc
 map, exposure 1; cloud where T < 0.9) and of Cycles (alpha > 0.1); prints their IoU, both bounding
 boxes in pixels and, given the two pictures, the mean luminance of the cloud pixels in each.
 Exits non-zero when the IoU is below 0.7.
+
+mask: only the alpha-mask render of `check`. centroid: the transmittance-weighted centroids of
+the two masks (a one-voxel grid) must lie within TOLERANCE_PX of each other.
 """
 import sys
 
@@ -40,6 +45,18 @@ def bbox(mask, w):
     return (min(xs), min(ys), max(xs), max(ys))
 
 
+def render_mask(scene, path):
+    """The cloud's alpha alone: transparent film, meshes (the ground) hidden from the camera."""
+    scene.render.film_transparent = True
+    for o in scene.objects:
+        if o.type == "MESH":
+            o.visible_camera = False
+    scene.render.filepath = path
+    scene.render.use_file_extension = False
+    bpy.ops.render.render(write_still=True)
+    print("wrote", path)
+
+
 if mode == "check":
     blend, mask_png, voxel = argv[1], argv[2], float(argv[3])
     want = [float(v) for v in argv[4:10]]
@@ -63,7 +80,9 @@ if mode == "check":
     assert suns, "no sun lamp"
     assert scene.camera is not None and scene.camera.type == "CAMERA", "no scene camera"
     bpy.context.view_layer.update()
-    corners = [obj.matrix_world @ __import__("mathutils").Vector(c) for c in obj.bound_box]
+    # Less the half-voxel shift the scene applies for Cycles (scripts/blender_scene.py).
+    shift = __import__("mathutils").Vector(obj.get("cycles_voxel_shift", (0.0, 0.0, 0.0)))
+    corners = [obj.matrix_world @ __import__("mathutils").Vector(c) - shift for c in obj.bound_box]
     got = [min(c[a] for c in corners) for a in range(3)] + [max(c[a] for c in corners) for a in range(3)]
     print("blender world bounds:", [round(v, 3) for v in got], "openvdb (z up):", want)
     for g, w in zip(got, want):
@@ -83,15 +102,24 @@ if mode == "check":
         raise SystemExit(f"imported as it is, the preset's box is {height} m along z, not its height {full_height} m")
     print(f"upright: the preset's {height:.0f} m height runs along z")
     bpy.data.objects.remove(fobj)
-    # The alpha mask: the cloud alone over a transparent film.
-    scene.render.film_transparent = True
-    for o in scene.objects:
-        if o.type == "MESH":
-            o.visible_camera = False
-    scene.render.filepath = mask_png
-    scene.render.use_file_extension = False
-    bpy.ops.render.render(write_still=True)
-    print("wrote", mask_png)
+    render_mask(scene, mask_png)
+elif mode == "mask":
+    bpy.ops.wm.open_mainfile(filepath=argv[1])
+    render_mask(bpy.context.scene, argv[2])
+elif mode == "centroid":
+    # Where each renderer puts a one-voxel grid: the cloud-weighted centroid of each mask.
+    vw, vh, vpx = pixels(argv[1])
+    cw, ch, cpx = pixels(argv[2])
+    tol = float(argv[3])
+    srgb_to_lin = lambda c: c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
+    def centroid(weights, w):
+        total = sum(weights)
+        return (sum(a * (i % w) for i, a in enumerate(weights)) / total, sum(a * (i // w) for i, a in enumerate(weights)) / total)
+    v = centroid([1.0 - srgb_to_lin(p[0]) for p in vpx], vw)
+    c = centroid([p[3] for p in cpx], cw)
+    print(f"one voxel: viewer centroid ({v[0]:.2f}, {v[1]:.2f}) px, cycles ({c[0]:.2f}, {c[1]:.2f}) px, image centre {(vw - 1) / 2}")
+    if max(abs(v[0] - c[0]), abs(v[1] - c[1])) > tol:
+        raise SystemExit(f"Cycles and the viewer place the voxel more than {tol} px apart")
 elif mode == "compare":
     vw, vh, vpx = pixels(argv[1])
     cw, ch, cpx = pixels(argv[2])

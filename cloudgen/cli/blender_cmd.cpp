@@ -156,6 +156,7 @@ void run_blender(const BlenderArgs& a) {
   s["vdb"] = fs::absolute(vdb).string();
   s["vdb_relative"] = "//" + fs::relative(fs::absolute(vdb), blend_abs.parent_path()).string();
   s["up"] = std::string(1, info.up);
+  s["voxel_size"] = info.voxel_size;
   s["material"] = {{"density", physical ? 1.0 : extinction},
                    {"grid_scale", grid_scale},
                    {"anisotropy", look.phase == "none" ? 0.0 : look.g},
