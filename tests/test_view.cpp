@@ -82,7 +82,9 @@ TEST(BlenderExport, OneVoxelLandsAtItsCentreInBothFrames) {
   // maps to the voxel's centre origin + 0.5 voxel. tests/blender_roundtrip.sh checks the same file
   // layout with OpenVDB's own indexToWorld; here the reader and the info text.
   TempDir dir;
-  const Volume v = one_voxel();
+  Volume v = one_voxel();
+  v.voxel_size = 50;  // OpenVDB's own hasUniformVoxels() rejects a turned 50 m map
+  v.origin = {100, 200, 300};
   for (char up : {'y', 'z'}) {
     ExportOptions o;
     o.vdb_up = up;
@@ -91,9 +93,9 @@ TEST(BlenderExport, OneVoxelLandsAtItsCentreInBothFrames) {
     const Volume r = read_vdb(path);
     ASSERT_EQ(r.dims, v.dims);
     for (int a = 0; a < 3; ++a) EXPECT_NEAR(r.origin[a], v.origin[a], 1e-9) << up << a;
-    // The world box of the voxel: y-up [100,110]x[200,210]x[300,310]; z-up (x, -z, y).
-    const std::string want = up == 'y' ? "world bbox [100, 200, 300] .. [110, 210, 310]"
-                                       : "world bbox [100, -310, 200] .. [110, -300, 210]";
+    // The world box of the voxel: y-up [100,150]x[200,250]x[300,350]; z-up (x, -z, y).
+    const std::string want = up == 'y' ? "world bbox [100, 200, 300] .. [150, 250, 350]"
+                                       : "world bbox [100, -350, 200] .. [150, -300, 250]";
     EXPECT_NE(describe_vdb(path).find(want), std::string::npos) << describe_vdb(path);
   }
 }

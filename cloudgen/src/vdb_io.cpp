@@ -31,11 +31,21 @@ void init_vdb() {
 /// degrees about x follows (right-handed, data unchanged): y-up (x, y, z) lands at (x, -z, y), the
 /// height on +z as Blender expects.
 openvdb::math::Transform::Ptr make_transform(const Volume& v, char up = 'y') {
-  auto xf = openvdb::math::Transform::createLinearTransform(v.voxel_size);
-  xf->postTranslate(openvdb::Vec3d(v.origin[0] + 0.5 * v.voxel_size, v.origin[1] + 0.5 * v.voxel_size,
-                                   v.origin[2] + 0.5 * v.voxel_size));
-  if (up == 'z') xf->postRotate(M_PI / 2, openvdb::math::X_AXIS);
-  return xf;
+  const double vs = v.voxel_size;
+  const openvdb::Vec3d c0(v.origin[0] + 0.5 * vs, v.origin[1] + 0.5 * vs, v.origin[2] + 0.5 * vs);
+  if (up != 'z') {
+    auto xf = openvdb::math::Transform::createLinearTransform(vs);
+    xf->postTranslate(c0);
+    return xf;
+  }
+  // Written out rather than postRotate(pi/2), whose cos(pi/2) = 6e-17 leaves stray terms in the
+  // map. Row-vector convention (world = index * M): the rows are the images of the index axes,
+  // then the translation.
+  const openvdb::Mat4d m(vs, 0.0, 0.0, 0.0,   //
+                         0.0, 0.0, vs, 0.0,   //
+                         0.0, -vs, 0.0, 0.0,  //
+                         c0.x(), -c0.z(), c0.y(), 1.0);
+  return openvdb::math::Transform::createLinearTransform(m);
 }
 
 /// The file's world frame back to the y-up frame: identity for 'y', (X, Y, Z) -> (X, Z, -Y) for 'z'.
@@ -146,6 +156,15 @@ const std::set<std::string>& computed_meta() {
   return k;
 }
 
+/// Linear with equal voxel edges. Not GridBase::hasUniformVoxels: OpenVDB's test divides by the
+/// cube root of the determinant, which rounds badly for rotated maps (a +90 degree turn of 50 m
+/// voxels fails it).
+bool cubic_voxels(const openvdb::GridBase& g) {
+  if (!g.transform().isLinear()) return false;
+  const openvdb::Vec3d v = g.voxelSize();
+  return v[0] > 0 && std::abs(v[1] - v[0]) <= 1e-9 * v[0] && std::abs(v[2] - v[0]) <= 1e-9 * v[0];
+}
+
 void open_or_throw(openvdb::io::File& file, const std::string& path) {
   init_vdb();
   try {
@@ -224,7 +243,7 @@ Volume read_vdb(const std::string& path) {
   base = file.readGrid("density");
   auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
   if (!grid) throw InputError(path + ": grid \"density\" is " + base->valueType() + ", expected float");
-  if (!grid->transform().isLinear() || !grid->hasUniformVoxels())
+  if (!cubic_voxels(*grid))
     throw InputError(path + ": grid \"density\" needs a linear transform with cubic voxels");
   const char up = up_axis_of(grid->transform(), path);
   Volume v;
@@ -335,7 +354,7 @@ SceneInfo read_vdb_scene_info(const std::string& path) {
     bb = file.readGrid("density")->evalActiveVoxelBoundingBox();
   }
   if (bb.empty()) throw InputError(path + ": grid \"density\" has no active voxels");
-  if (!g->transform().isLinear() || !g->hasUniformVoxels())
+  if (!cubic_voxels(*g))
     throw InputError(path + ": grid \"density\" needs a linear transform with cubic voxels");
   SceneInfo s;
   s.up = up_axis_of(g->transform(), path);
