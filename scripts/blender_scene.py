@@ -210,7 +210,8 @@ cy.seed = 0
 scene.render.resolution_x, scene.render.resolution_y = R["width"], R["height"]
 scene.render.resolution_percentage = 100
 scene.render.image_settings.file_format = "PNG"
-scene.render.image_settings.color_mode = "RGBA"
+scene.render.image_settings.color_mode = "RGB"  # sky and ground cover the frame
+scene.render.image_settings.compression = 90
 # The viewer's tone map, done in the compositor: x * exposure, Reinhard x / (1 + x) per channel,
 # then Blender's Standard view transform encodes sRGB like the viewer.
 scene.view_settings.view_transform = "Standard"

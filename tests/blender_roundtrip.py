@@ -48,6 +48,7 @@ def bbox(mask, w):
 def render_mask(scene, path):
     """The cloud's alpha alone: transparent film, meshes (the ground) hidden from the camera."""
     scene.render.film_transparent = True
+    scene.render.image_settings.color_mode = "RGBA"
     for o in scene.objects:
         if o.type == "MESH":
             o.visible_camera = False
