@@ -1,11 +1,14 @@
 // Blender-ready export: the VDB's up axis and placement (OpenVDB's voxel-centre convention), the
 // physical metadata, the detail grids' topology, every field read back, and the preset `view`.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
 #include <cstring>
+#include <cstdio>
 #include <filesystem>
+#include <sstream>
 
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
@@ -210,4 +213,26 @@ TEST(BlenderExport, FramingFillsTheFrameFromThirtyDegreesAbove) {
   const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
   EXPECT_NEAR(std::asin(-d[1] / len) * 180 / M_PI, 30.0, 1e-9);
   EXPECT_GT(f.eye[1], lo[1] + size[1]) << "the camera is above the layer";
+}
+
+TEST(BlenderExport, BlenderCommandErrorsNameTheProblem) {
+  TempDir dir;
+  const std::string cli = std::string(CLOUD_BINARY_DIR) + "/bin/cloudgen";
+  auto run = [&](const std::string& env, const std::string& args, std::string& out) {
+    const std::string cmd = env + " " + cli + " " + args + " 2>&1";
+    FILE* p = ::popen(cmd.c_str(), "r");
+    char buf[4096];
+    out.clear();
+    while (size_t n = std::fread(buf, 1, sizeof buf, p)) out.append(buf, n);
+    const int st = ::pclose(p);
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  };
+  std::string out;
+  EXPECT_EQ(run("", "blender tiny -o " + (dir / "x.txt"), out), 1) << out;
+  EXPECT_NE(out.find("must end in .blend"), std::string::npos) << out;
+  EXPECT_EQ(run("", "blender tiny -o " + (dir / "x.blend") + " --size 0x5", out), 1) << out;
+  EXPECT_NE(out.find("--size 0x5"), std::string::npos) << out;
+  EXPECT_EQ(run("env PATH=/nonexistent CLOUDGEN_BLENDER=", "blender tiny -o " + (dir / "x.blend"), out), 2) << out;
+  EXPECT_NE(out.find("install Debian's package `blender`"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir / "x.blend"));
 }
