@@ -43,9 +43,11 @@ obj.rotation_euler = (math.pi / 2, 0.0, 0.0) if S["up"] == "y" else (0.0, 0.0, 0
 # measured with a one-voxel grid (tests/blender_roundtrip.sh), the cloud sits half a voxel off
 # along every index axis. Shift the object back by half a voxel so Cycles puts it where the file
 # (and the viewer) say. Newer Blender versions are not measured; the test tells.
-shift = -0.5 * S["voxel_size"] if bpy.app.version < (3, 5, 0) else 0.0
-index_offset = Vector((shift, shift, shift))
-obj.location = obj.rotation_euler.to_matrix() @ index_offset
+# The index axes (x, y, z) run along Blender's (+x, +z, -y) for both up axes (a z-up file's grid
+# transform turns them so; a y-up file's object rotation does), so -half a voxel along each index
+# axis is (-h, +h, -h) in the world.
+h = 0.5 * S["voxel_size"] if bpy.app.version < (3, 5, 0) else 0.0
+obj.location = (-h, h, -h)
 obj["cycles_voxel_shift"] = list(obj.location)
 
 # ---------------------------------------------------------------- material

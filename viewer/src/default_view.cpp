@@ -1,5 +1,6 @@
 #include "default_view.h"
 
+#include <algorithm>
 #include <filesystem>
 
 #include "cloudgen/view.h"
@@ -79,9 +80,21 @@ void apply_input_view(Options& o, bool fov_given) {
 
 Camera default_view_camera(const PreparedVolume& vol, const RenderSettings& s, double fov_y_deg, double aspect) {
   if (s.mode != PlaceMode::Box) return default_camera(vol, s, fov_y_deg, aspect);
-  const glm::dvec3 size = vol.size();
-  const cloudgen::Framing f = cloudgen::frame_box({vol.origin.x, vol.origin.y, vol.origin.z}, {size.x, size.y, size.z},
-                                                  fov_y_deg, aspect);
+  // The box of the voxels with density > 0: a dense texture (or a preset generated here) then
+  // frames like the VDB made from it, which holds only those voxels (cloudgen blender frames that).
+  int lo[3] = {vol.dims[0], vol.dims[1], vol.dims[2]}, hi[3] = {-1, -1, -1};
+  for (int z = 0; z < vol.dims[2]; ++z)
+    for (int y = 0; y < vol.dims[1]; ++y)
+      for (int x = 0; x < vol.dims[0]; ++x)
+        if (vol.rgba[((size_t(z) * vol.dims[1] + y) * vol.dims[0] + x) * 4] > 0.f) {
+          const int c[3] = {x, y, z};
+          for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], c[a]), hi[a] = std::max(hi[a], c[a]);
+        }
+  if (hi[0] < 0)
+    for (int a = 0; a < 3; ++a) lo[a] = 0, hi[a] = vol.dims[a] - 1;  // empty: the whole box
+  const glm::dvec3 min = vol.origin + glm::dvec3(lo[0], lo[1], lo[2]) * vol.voxel_size;
+  const glm::dvec3 size = glm::dvec3(hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, hi[2] - lo[2] + 1) * vol.voxel_size;
+  const cloudgen::Framing f = cloudgen::frame_box({min.x, min.y, min.z}, {size.x, size.y, size.z}, fov_y_deg, aspect);
   Camera c;
   c.eye = vec(f.eye);
   c.target = vec(f.target);

@@ -13,8 +13,9 @@ namespace cloudviewer {
 /// the input for a bad view.render key.
 void apply_input_view(Options& o, bool fov_given);
 
-/// Default camera when there is no --camera and no view camera: box mode frames the volume from
-/// 30 degrees above its long side so it fills the frame; layer mode keeps default_camera.
+/// Default camera when there is no --camera and no view camera: box mode frames the box of the
+/// voxels with density > 0 from 30 degrees above its long side so it fills the frame; layer mode
+/// keeps default_camera.
 Camera default_view_camera(const PreparedVolume& vol, const RenderSettings& s, double fov_y_deg, double aspect);
 
 /// The sun for `cam`: --sun, else the view's azimuth/elevation, each missing one from default_sun.
