@@ -173,9 +173,9 @@ TEST(BlenderExport, PhysicalMetadataAndUnits) {
 }
 
 TEST(BlenderExport, PresetViewSectionThroughTheTable) {
-  const Preset p = load_preset(kPresets + "tiny.json",
-                               {"view.eye=[1,2,3]", "view.fov=40", "view.sun.azimuth=-30", "view.render.g=0.5",
-                                "export.vdb.up=y"});
+  const Preset p = parse_preset(R"({"name": "t", "resolution": [8, 8, 8]})", "t.json",
+                                {"view.eye=[1,2,3]", "view.fov=40", "view.sun.azimuth=-30", "view.render.g=0.5",
+                                 "export.vdb.up=y"});
   ASSERT_TRUE(p.view.eye && p.view.fov && p.view.sun_azimuth);
   EXPECT_EQ((*p.view.eye)[2], 3.0);
   EXPECT_FALSE(p.view.target) << "unset keys stay unset (the viewer's default)";
