@@ -236,3 +236,45 @@ TEST(BlenderExport, BlenderCommandErrorsNameTheProblem) {
   EXPECT_NE(out.find("install Debian's package `blender`"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir / "x.blend"));
 }
+
+TEST(BlenderExport, BakedErosionReplacesTheDetailGrids) {
+  TempDir dir;
+  Preset p = load_preset(kPresets + "thesis.json");
+  rescale(p, 32);
+  const Volume v = generate(p);
+  ASSERT_FALSE(v.detail[2].empty());
+  ExportOptions o;
+  o.vdb_detail = false;
+  write_vdb(v, dir / "d.vdb", o);
+  o.vdb_detail = true;
+  o.vdb_bake_erosion = true;
+  write_vdb(v, dir / "b.vdb", o);
+  const std::string info = describe_vdb(dir / "b.vdb");
+  EXPECT_EQ(info.find("detail_g"), std::string::npos) << info;
+  EXPECT_NE(info.find("erosion_baked: 0.35"), std::string::npos) << info;
+  EXPECT_LE(fs::file_size(dir / "b.vdb"), fs::file_size(dir / "d.vdb") * 11 / 10) << "about the density grid alone";
+  const Volume r = read_vdb(dir / "b.vdb");
+  EXPECT_TRUE(r.detail[0].empty());
+  // Values: the viewer's erosion at each voxel, the height fraction over the non-zero box.
+  uint32_t ylo = v.dims[1], yhi = 0;
+  for (uint32_t i = 0; i < v.voxel_count(); ++i)
+    if (v.density[i] > 0) {
+      const uint32_t y = uint32_t((i / v.dims[0]) % v.dims[1]);
+      ylo = std::min(ylo, y), yhi = std::max(yhi, y);
+    }
+  size_t lowered = 0, checked = 0;
+  for (uint32_t z = 0; z < r.dims[2]; ++z)
+    for (uint32_t y = 0; y < r.dims[1]; ++y)
+      for (uint32_t x = 0; x < r.dims[0]; ++x) {
+        const uint32_t ox = uint32_t(std::lround((r.origin[0] - v.origin[0]) / v.voxel_size)) + x;
+        const uint32_t oy = uint32_t(std::lround((r.origin[1] - v.origin[1]) / v.voxel_size)) + y;
+        const uint32_t oz = uint32_t(std::lround((r.origin[2] - v.origin[2]) / v.voxel_size)) + z;
+        const size_t i = v.index(ox, oy, oz);
+        const double want = eroded_density(v.density[i], v.detail[0][i], v.detail[1][i], v.detail[2][i],
+                                           (double(oy) - ylo + 0.5) / double(yhi - ylo + 1), 0.35);
+        ASSERT_NEAR(r.density[r.index(x, y, z)], want, 1e-6);
+        lowered += want < v.density[i];
+        ++checked;
+      }
+  EXPECT_GT(lowered, checked / 10) << "erosion lowers density";
+}

@@ -125,6 +125,7 @@ void run_blender(const BlenderArgs& a) {
     eo.vdb_detail = p.vdb_detail;
     eo.vdb_up = p.vdb_up;
     eo.vdb_physical = p.vdb_physical;
+    eo.vdb_bake_erosion = p.vdb_bake_erosion;
     vdb = fs::path(a.output).replace_extension(".vdb").string();
     write_vdb(v, vdb, eo);
     if (!a.quiet) std::fprintf(stderr, "wrote %s (vdb)\n", vdb.c_str());

@@ -103,6 +103,7 @@ void run_generate(const GenerateArgs& a) {
   eo.vdb_detail = p.vdb_detail;
   eo.vdb_up = p.vdb_up;
   eo.vdb_physical = p.vdb_physical;
+  eo.vdb_bake_erosion = p.vdb_bake_erosion;
   eo.texel = p.raw_format;
   std::vector<Format> formats;
   bool detail = false;

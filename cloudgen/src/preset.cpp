@@ -188,6 +188,11 @@ std::vector<Spec> build_table() {
       "grid holds extinction per metre (Principled Volume Density 1).",
       [](Preset& p, const json& j, const Index&) { p.vdb_physical = j.get<std::string>() == "physical"; },
       {"normalized", "physical"});
+  add("/export/vdb/bake_erosion", "bool", "false", 0, 0,
+      "Apply the viewer's erosion (view.render.erosion, 0.35 by default) to density in the VDB and write no "
+      "detail grids: a file about the size of its density grid, for tools that read density only (Blender's "
+      "Principled Volume); the erosion can no longer be changed at render time.",
+      [](Preset& p, const json& j, const Index&) { p.vdb_bake_erosion = j.get<bool>(); });
   add("/export/raw/format", "string", "\"rgba8\"", 0, 0, "Texel format of raw/KTX2 textures.",
       [](Preset& p, const json& j, const Index&) { p.raw_format = j.get<std::string>(); },
       {"rgba8", "rgba16f", "rgba32f"});

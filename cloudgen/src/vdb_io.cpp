@@ -152,7 +152,7 @@ openvdb::FloatGrid::Ptr make_masked_grid(const Volume& v, const std::vector<floa
 /// string copy read from another file).
 const std::set<std::string>& computed_meta() {
   static const std::set<std::string> k{"extinction_per_metre", "voxel_size_metres", "phase_g", "albedo",
-                                       "up_axis", "tiles_xz", "density_units"};
+                                       "up_axis", "tiles_xz", "density_units", "erosion_baked"};
   return k;
 }
 
@@ -183,10 +183,32 @@ void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o)
   const View view = view_of_metadata(v.metadata, path);
   const Look look = look_of_view(view, path);
   const double extinction = look.extinction(v.voxel_size);
+  const bool all_detail = !v.detail[0].empty() && !v.detail[1].empty() && !v.detail[2].empty();
+  const std::vector<float>* dens = &v.density;
+  std::vector<float> baked;
+  if (o.vdb_bake_erosion && all_detail && look.erosion > 0) {
+    // The height fraction runs over the box of the non-zero voxels, as in the viewer reading
+    // this file's unbaked twin (it crops to the active box).
+    uint32_t ylo = v.dims[1], yhi = 0;
+    for (uint32_t z = 0; z < v.dims[2]; ++z)
+      for (uint32_t y = 0; y < v.dims[1]; ++y)
+        for (uint32_t x = 0; x < v.dims[0]; ++x)
+          if (v.density[v.index(x, y, z)] > 0) ylo = std::min(ylo, y), yhi = std::max(yhi, y);
+    baked.resize(v.density.size());
+    const double ny = yhi >= ylo ? double(yhi - ylo + 1) : 1.0;
+    for (uint32_t z = 0; z < v.dims[2]; ++z)
+      for (uint32_t y = 0; y < v.dims[1]; ++y)
+        for (uint32_t x = 0; x < v.dims[0]; ++x) {
+          const size_t i = v.index(x, y, z);
+          baked[i] = float(eroded_density(v.density[i], v.detail[0][i], v.detail[1][i], v.detail[2][i],
+                                          (double(y) - double(ylo) + 0.5) / ny, look.erosion));
+        }
+    dens = &baked;
+  }
   // Density first: the detail grids take its topology, dilated by one voxel.
-  auto density = make_grid(v, v.density, "density", o.vdb_half, o.vdb_up, o.vdb_physical ? float(extinction) : 1.0f);
+  auto density = make_grid(v, *dens, "density", o.vdb_half, o.vdb_up, o.vdb_physical ? float(extinction) : 1.0f);
   std::vector<std::pair<const std::vector<float>*, std::string>> todo;
-  if (o.vdb_detail)
+  if (o.vdb_detail && !o.vdb_bake_erosion)
     for (int c = 0; c < 3; ++c)
       if (!v.detail[c].empty()) todo.push_back({&v.detail[c], v.detail_names[c]});
   openvdb::GridPtrVec grids(todo.size() + 1);
@@ -206,6 +228,7 @@ void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o)
   density->insertMeta("albedo", openvdb::DoubleMetadata(look.albedo));
   density->insertMeta("up_axis", openvdb::StringMetadata(std::string(1, o.vdb_up)));
   density->insertMeta("tiles_xz", openvdb::BoolMetadata(v.tiles_xz));
+  if (o.vdb_bake_erosion) density->insertMeta("erosion_baked", openvdb::DoubleMetadata(all_detail ? look.erosion : 0.0));
   density->insertMeta("density_units",
                       openvdb::StringMetadata(o.vdb_physical ? "extinction_per_metre" : "normalized"));
   // Never a creator starting with "Houdini": Blender then assumes a Y-up Houdini file and rotates it.

@@ -24,6 +24,7 @@ struct ExportOptions {
   bool vdb_detail = true;                 ///< detail channels as extra grids
   char vdb_up = 'z';                      ///< 'z': height on +z (Blender), 'y': as in memory (Houdini, Maya)
   bool vdb_physical = false;              ///< density grid holds extinction per metre, not [0, 1]
+  bool vdb_bake_erosion = false;          ///< density = the viewer's eroded density, no detail grids
   std::string texel = "rgba8";            ///< raw / ktx2 texel format: rgba8 | rgba16f | rgba32f
 };
 

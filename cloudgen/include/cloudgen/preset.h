@@ -77,6 +77,7 @@ struct Preset {
   bool vdb_detail = true;
   char vdb_up = 'z';          ///< 'z' (Blender) | 'y' (Houdini, Maya)
   bool vdb_physical = false;  ///< export.vdb.units = physical: density grid in extinction per metre
+  bool vdb_bake_erosion = false;  ///< export.vdb.bake_erosion: erode density now, write no detail grids
   std::string raw_format = "rgba8";  ///< rgba8 | rgba16f | rgba32f
 
   View view;  ///< optional camera, sun and render.* settings (viewer, `cloudgen blender`, README)
