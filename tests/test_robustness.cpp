@@ -122,13 +122,13 @@ TEST(OutputSafety, SeveralOutputsAreAllOrNothing) {
   TempDir dir;
   write_text(dir / "a.raw", "old raw");
   write_text(dir / "a.json", "old sidecar");
-  // tiny's raw texture is 131072 bytes, its VDB about 170 kB: a limit between them lets the raw
-  // files be staged and fails the VDB.
-  Process p = cli({"generate", "tiny", "-q", "-o", dir / "a.raw", "-o", dir / "b.vdb"});
-  p.fsize_limit = 150000;
+  // tiny's raw texture is 32^3 RGBA8 = 131072 bytes and its KTX2 the same texels plus a header:
+  // a file-size limit between the two lets the raw files be staged and fails the KTX2.
+  Process p = cli({"generate", "tiny", "-q", "-o", dir / "a.raw", "-o", dir / "b.ktx2"});
+  p.fsize_limit = 131072 + 64;
   auto r = p.run();
   EXPECT_EQ(r.code, 2) << r.out;
-  EXPECT_NE(r.out.find("b.vdb"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("b.ktx2"), std::string::npos) << r.out;
   EXPECT_EQ(read_text(dir / "a.raw"), "old raw");
   EXPECT_EQ(read_text(dir / "a.json"), "old sidecar");
   EXPECT_EQ(list_dir(dir.path), (std::vector<std::string>{"a.json", "a.raw"}));

@@ -15,5 +15,9 @@ std::function<void(double)> progress_bar(const std::string& label, bool quiet);
 
 void add_noise_command(CLI::App& app, std::function<void()>& run);
 void add_phase_command(CLI::App& app, std::function<void()>& run);
+void add_blender_command(CLI::App& app, std::function<void()>& run);
+
+/// "cumulus" -> the shipped presets/cumulus.json when no such file exists in the working folder.
+std::string resolve_preset_path(const std::string& p);
 
 }  // namespace cloudgen::cli

@@ -70,7 +70,7 @@ std::string human(uint64_t b) {
 }
 
 struct GenerateArgs {
-  std::string preset, format, region, max_memory = "16G", seed;
+  std::string preset, format, region, max_memory = "16G", seed, up;
   std::vector<std::string> outputs, sets;
   uint32_t resolution = 0;
   int threads = 0;
@@ -91,6 +91,7 @@ void test_hold(const char* where) {
 void run_generate(const GenerateArgs& a) {
   std::vector<std::string> sets = a.sets;
   if (!a.seed.empty()) sets.push_back("seed=" + std::to_string(parse_uint(a.seed, "--seed", kMaxSeed)));
+  if (!a.up.empty()) sets.push_back("export.vdb.up=" + a.up);
   const std::string path = resolve_preset(a.preset);
   Preset p = load_preset(path, sets);
   if (a.resolution) rescale(p, a.resolution);
@@ -131,6 +132,7 @@ void run_generate(const GenerateArgs& a) {
   }
   GenerateStats st;
   Volume v = generate(p, go, &st);
+  add_view_metadata(v.metadata, p.view);
   const auto t0 = std::chrono::steady_clock::now();
   for (size_t i = 0; i < a.outputs.size(); ++i) {
     if (g_cancel) throw Cancelled();
@@ -160,6 +162,9 @@ void run_generate(const GenerateArgs& a) {
 }
 
 }  // namespace
+
+std::string resolve_preset_path(const std::string& p) { return resolve_preset(p); }
+
 }  // namespace cloudgen::cli
 
 int main(int argc, char** argv) {
@@ -188,6 +193,7 @@ int main(int argc, char** argv) {
   gen->add_option("-o,--output", ga->outputs, "Output file; repeat for several formats from one generation")->required();
   gen->add_option("--format", ga->format, "vdb | raw | ktx2 | atlas-png | atlas-exr (default: from each extension)");
   gen->add_option("--seed", ga->seed, "Override the preset's seed: an integer in [0, 2^53]");
+  gen->add_option("--up", ga->up, "VDB up axis: z (Blender, default) or y (Houdini, Maya); = --set export.vdb.up=...");
   gen->add_option("--resolution", ga->resolution, "Rescale so the longest axis has N voxels (world size kept)");
   gen->add_option("--threads", ga->threads, "Worker threads (0 = all cores); output bytes are identical for any count")
       ->check(CLI::Range(0, kMaxThreads));
@@ -262,6 +268,7 @@ int main(int argc, char** argv) {
 
   add_noise_command(app, run);
   add_phase_command(app, run);
+  add_blender_command(app, run);
 
   try {
     app.parse(argc, argv);

@@ -235,6 +235,13 @@ void OutputBatch::claim(const std::string& path, const std::string& role) {
 }
 
 void OutputBatch::stage(const std::string& path, const std::function<void(const std::string&)>& fill) {
+  stage_impl(path, fill, false);
+}
+void OutputBatch::stage_named(const std::string& path, const std::function<void(const std::string&)>& fill) {
+  stage_impl(path, fill, true);
+}
+
+void OutputBatch::stage_impl(const std::string& path, const std::function<void(const std::string&)>& fill, bool named) {
   Impl::Staged s;
   s.dest = path;
   s.target = resolve_destination(path);
@@ -263,12 +270,12 @@ void OutputBatch::stage(const std::string& path, const std::function<void(const 
   // An anonymous temporary vanishes by itself if the process dies; libraries that want a file
   // name reach it through /proc/self/fd.
   static const bool have_proc = ::access("/proc/self/fd", X_OK) == 0;
-  if (have_proc) {
+  if (have_proc && !named) {
     s.fd = ::open(dir.c_str(), O_TMPFILE | O_RDWR | O_CLOEXEC, mode);
     s.anonymous = s.fd >= 0;
   }
   if (s.fd < 0) {
-    if (errno != EOPNOTSUPP && errno != EISDIR && errno != EINVAL && errno != ENOENT && have_proc)
+    if (!named && errno != EOPNOTSUPP && errno != EISDIR && errno != EINVAL && errno != ENOENT && have_proc)
       throw_io(path, "cannot create a temporary file in " + dir.string(), errno);
     s.named_tmp = unique_sibling(dir, fs::path(s.target.path).filename().string(), ".tmp-");
     s.fd = ::open(s.named_tmp.c_str(), O_CREAT | O_EXCL | O_RDWR | O_CLOEXEC, mode);
@@ -280,18 +287,29 @@ void OutputBatch::stage(const std::string& path, const std::function<void(const 
   }
   if (s.target.exists && s.target.kind == DestKind::Regular) (void)::fchmod(s.fd, mode);
   const std::string tmp = s.anonymous ? "/proc/self/fd/" + std::to_string(s.fd) : s.named_tmp;
+  if (named) {  // another program writes the path (and may replace it by rename): no descriptor kept
+    ::close(s.fd);
+    s.fd = -1;
+  }
   try {
     fill(tmp);
-    if (::fsync(s.fd) != 0 && errno != EINVAL) throw_io(path, "cannot flush the written data to disk", errno);
+    if (named) {
+      struct stat st;
+      if (::lstat(tmp.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) throw_io(path, "the writer left no file", ENOENT);
+      s.fd = ::open(tmp.c_str(), O_RDONLY | O_CLOEXEC);
+      if (s.fd < 0) throw_io(path, "cannot reopen the written file", errno);
+      if (s.target.exists && s.target.kind == DestKind::Regular) (void)::fchmod(s.fd, mode);
+    }
+    if (::fsync(s.fd) != 0 && errno != EINVAL && errno != EBADF) throw_io(path, "cannot flush the written data to disk", errno);
   } catch (const IoError& e) {
-    ::close(s.fd);
+    if (s.fd >= 0) ::close(s.fd);
     if (!s.named_tmp.empty()) ::unlink(s.named_tmp.c_str());
     // Writers name the path they were given; the user knows the destination.
     std::string msg = e.what();
     for (size_t k; (k = msg.find(tmp)) != std::string::npos;) msg.replace(k, tmp.size(), path);
     throw IoError(msg + "; the previous " + path + ", if any, is unchanged");
   } catch (...) {
-    ::close(s.fd);
+    if (s.fd >= 0) ::close(s.fd);
     if (!s.named_tmp.empty()) ::unlink(s.named_tmp.c_str());
     throw;
   }

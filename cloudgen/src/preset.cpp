@@ -5,6 +5,7 @@
 #include <cstdlib>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -68,8 +69,8 @@ std::vector<Spec> build_table() {
       std::string r;
       for (auto& c : s.choices) r += (r.empty() ? "" : " | ") + c;
       s.info.range = r;
-    } else if (type == "bool" || type == "string" || type == "array") {
-      s.info.range = type == "bool" ? "true | false" : type == "array" ? "list" : "any text";
+    } else if (type == "bool" || type == "string" || type == "array" || type == "object") {
+      s.info.range = type == "bool" ? "true | false" : type == "array" ? "list" : type == "object" ? "KEY: value" : "any text";
     } else {
       s.info.range = std::string(type == "integer" || type == "ivec3" || type == "period" ? "integer" : "number") +
                      " in [" + fmt(lo) + ", " + fmt(hi) + "]";
@@ -205,9 +206,51 @@ std::vector<Spec> build_table() {
       names_of(kCompressions, vdb_compression_name));
   add("/export/vdb/detail", "bool", "true", 0, 0, "Write the enabled detail channels as extra grids.",
       [](Preset& p, const json& j, const Index&) { p.export_options.vdb_detail = j.get<bool>(); });
+  add("/export/vdb/up", "string", "\"z\"", 0, 0,
+      "Up axis of the VDB's world: z puts the cloud's height on +z by a rotation in the grid transform "
+      "(Blender), y keeps the height on +y (Houdini, Maya). The voxel data is the same.",
+      [](Preset& p, const json& j, const Index&) { p.export_options.vdb_up = j.get<std::string>()[0]; }, {"z", "y"});
+  add("/export/vdb/units", "string", "\"normalized\"", 0, 0,
+      "normalized: density in [0, 1] (metadata extinction_per_metre gives the scale); physical: the density "
+      "grid holds extinction per metre (Principled Volume Density 1).",
+      [](Preset& p, const json& j, const Index&) { p.export_options.vdb_physical = j.get<std::string>() == "physical"; },
+      {"normalized", "physical"});
+  add("/export/vdb/bake_erosion", "bool", "false", 0, 0,
+      "Apply the viewer's erosion (view.render.erosion, 0.35 by default) to density in the VDB and write no "
+      "detail grids: a file about the size of its density grid, for tools that read density only (Blender's "
+      "Principled Volume); the erosion can no longer be changed at render time.",
+      [](Preset& p, const json& j, const Index&) { p.export_options.vdb_bake_erosion = j.get<bool>(); });
   add("/export/raw/format", "string", "\"rgba8\"", 0, 0, "Texel format of raw/KTX2 textures.",
       [](Preset& p, const json& j, const Index&) { p.export_options.texel = parse_texel(j.get<std::string>()); },
       names_of(kTexels, texel_name));
+
+  // The optional `view`: unset keys (null) leave the viewer's defaults.
+  auto opt_vec3 = [=](std::optional<Vec3>& dst, const json& j) {
+    if (j.is_null()) dst.reset();
+    else dst = v3(j);
+  };
+  add("/view/eye", "vec3", "null", -big, big, "Camera position, world metres (unset: the viewer's default framing).",
+      [=](Preset& p, const json& j, const Index&) { opt_vec3(p.view.eye, j); });
+  add("/view/target", "vec3", "null", -big, big, "Point the camera looks at, world metres (unset: the volume's centre).",
+      [=](Preset& p, const json& j, const Index&) { opt_vec3(p.view.target, j); });
+  auto opt_num = [](std::optional<double>& dst, const json& j) {
+    if (j.is_null()) dst.reset();
+    else dst = j.get<double>();
+  };
+  add("/view/fov", "number", "null", 1, 170, "Vertical field of view, degrees (unset: 60).",
+      [=](Preset& p, const json& j, const Index&) { opt_num(p.view.fov, j); });
+  add("/view/sun/azimuth", "number", "null", -360, 360,
+      "Sun azimuth, degrees clockwise from -z toward +x (unset: behind the camera).",
+      [=](Preset& p, const json& j, const Index&) { opt_num(p.view.sun_azimuth, j); });
+  add("/view/sun/elevation", "number", "null", -90, 90, "Sun elevation, degrees (unset: 35).",
+      [=](Preset& p, const json& j, const Index&) { opt_num(p.view.sun_elevation, j); });
+  add("/view/render", "object", "{}", 0, 0,
+      "cloudviewer render settings for this preset, {\"KEY\": value} as in `cloudviewer --help-params` "
+      "(e.g. {\"sigma_t\": 0.02, \"g\": 0.5}); the viewer checks keys and values, command-line flags override.",
+      [](Preset& p, const json& j, const Index&) {
+        p.view.render.clear();
+        for (auto& [k, val] : j.items()) p.view.render.push_back({k, val.is_string() ? val.get<std::string>() : val.dump()});
+      });
   return t;
 }
 
@@ -332,6 +375,18 @@ class Reader {
       ok = number_ok(s, v, true, ptr);
     } else if (t == "array") {
       if (!v.is_array()) ok = false, problem(ptr, dump(v) + " has the wrong type; expected a list");
+    } else if (t == "object") {
+      if (!v.is_object()) {
+        ok = false, problem(ptr, dump(v) + " has the wrong type; expected an object of KEY: value");
+      } else {
+        for (auto& [k, val] : v.items()) {
+          const bool name_ok = !k.empty() && k.size() <= 64 &&
+                               std::all_of(k.begin(), k.end(), [](char c) { return std::islower((unsigned char)c) || std::isdigit((unsigned char)c) || c == '_'; });
+          if (!name_ok) ok = false, problem(ptr + "/" + k, "not a setting name (lower-case letters, digits, _)");
+          else if (!(val.is_number() || val.is_boolean() || val.is_string()))
+            ok = false, problem(ptr + "/" + k, dump(val) + " has the wrong type; expected a number, true/false or a string");
+        }
+      }
     }
     if (!ok) return;
     s.set(p, v, idx);

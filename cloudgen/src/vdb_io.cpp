@@ -4,16 +4,20 @@
 #include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Dense.h>
+#include <openvdb/tools/Morphology.h>
 #include <openvdb/tools/Prune.h>
+#include <openvdb/tree/LeafManager.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <mutex>
+#include <set>
 #include <sstream>
 
 #include "cloudgen/io.h"
+#include "cloudgen/view.h"
 
 namespace cloudgen {
 namespace {
@@ -23,30 +27,144 @@ void init_vdb() {
   std::call_once(once, [] { openvdb::initialize(); });
 }
 
-/// Voxel (i,j,k) covers [origin + i*vs, origin + (i+1)*vs): its centre, index (i,j,k) in OpenVDB,
-/// sits at origin + (i + 0.5) * vs.
-openvdb::math::Transform::Ptr make_transform(const Volume& v) {
-  auto xf = openvdb::math::Transform::createLinearTransform(v.voxel_size);
-  xf->postTranslate(openvdb::Vec3d(v.origin[0] + 0.5 * v.voxel_size, v.origin[1] + 0.5 * v.voxel_size,
-                                   v.origin[2] + 0.5 * v.voxel_size));
-  return xf;
+/// OpenVDB's convention: voxel (i,j,k)'s value sits at its centre, the integer index point, which
+/// the transform maps to world space. Our voxel (i,j,k) covers [origin + i*vs, origin + (i+1)*vs),
+/// so index (i,j,k) -> origin + (i + 0.5) * vs in the y-up frame. With up = 'z' a rotation of +90
+/// degrees about x follows (right-handed, data unchanged): y-up (x, y, z) lands at (x, -z, y), the
+/// height on +z as Blender expects.
+openvdb::math::Transform::Ptr make_transform(const Volume& v, char up = 'y') {
+  const double vs = v.voxel_size;
+  const openvdb::Vec3d c0(v.origin[0] + 0.5 * vs, v.origin[1] + 0.5 * vs, v.origin[2] + 0.5 * vs);
+  if (up != 'z') {
+    auto xf = openvdb::math::Transform::createLinearTransform(vs);
+    xf->postTranslate(c0);
+    return xf;
+  }
+  // Written out rather than postRotate(pi/2), whose cos(pi/2) = 6e-17 leaves stray terms in the
+  // map. Row-vector convention (world = index * M): the rows are the images of the index axes,
+  // then the translation.
+  const openvdb::Mat4d m(vs, 0.0, 0.0, 0.0,   //
+                         0.0, 0.0, vs, 0.0,   //
+                         0.0, -vs, 0.0, 0.0,  //
+                         c0.x(), -c0.z(), c0.y(), 1.0);
+  return openvdb::math::Transform::createLinearTransform(m);
 }
 
-openvdb::FloatGrid::Ptr make_grid(const Volume& v, const std::vector<float>& data, const std::string& name,
-                                  bool half) {
+/// The file's world frame back to the y-up frame: identity for 'y', (X, Y, Z) -> (X, Z, -Y) for 'z'.
+openvdb::Vec3d to_y_up(const openvdb::Vec3d& w, char up) { return up == 'z' ? openvdb::Vec3d(w.x(), w.z(), -w.y()) : w; }
+
+/// 'y' or 'z' from where the transform sends the index axes; InputError for anything else (other
+/// rotations, shears), which a cloud volume reader would otherwise silently misplace.
+char up_axis_of(const openvdb::math::Transform& xf, const std::string& path) {
+  const openvdb::Vec3d o = xf.indexToWorld(openvdb::Vec3d(0.0));
+  const double vs = xf.voxelSize()[0];
+  auto axis = [&](int a) {
+    openvdb::Vec3d e(0.0);
+    e[a] = 1;
+    return (xf.indexToWorld(e) - o) / vs;
+  };
+  auto near = [](const openvdb::Vec3d& a, const openvdb::Vec3d& b) { return (a - b).length() < 1e-6; };
+  const openvdb::Vec3d x = axis(0), y = axis(1), z = axis(2);
+  if (near(x, {1, 0, 0}) && near(y, {0, 1, 0}) && near(z, {0, 0, 1})) return 'y';
+  if (near(x, {1, 0, 0}) && near(y, {0, 0, 1}) && near(z, {0, -1, 0})) return 'z';
+  throw InputError(path + ": grid \"density\" has a rotated or sheared transform; cloudgen reads axis-aligned "
+                          "y-up files and y-up files turned +90 degrees about x (export.vdb.up = z)");
+}
+
+openvdb::FloatGrid::Ptr new_grid(const Volume& v, const std::string& name, bool half, char up) {
   auto grid = openvdb::FloatGrid::create(0.0f);
   grid->setName(name);
   grid->setGridClass(openvdb::GRID_FOG_VOLUME);
-  grid->setTransform(make_transform(v));
+  grid->setTransform(make_transform(v, up));
   grid->setSaveFloatAsHalf(half);
+  return grid;
+}
+
+/// Every voxel of `data` that differs from the background 0 is active (densities are >= 0, so
+/// exactly the cloud voxels); `scale` multiplies the values (physical units).
+openvdb::FloatGrid::Ptr make_grid(const Volume& v, const std::vector<float>& data, const std::string& name,
+                                  bool half, char up = 'y', float scale = 1.0f) {
+  auto grid = new_grid(v, name, half, up);
   // Wrap our x-fastest buffer (no copy) and let OpenVDB's threaded copy activate every voxel
-  // that differs from the background 0 (densities are >= 0, so exactly the cloud voxels).
+  // that differs from the background 0.
   const openvdb::CoordBBox box(openvdb::Coord(0), openvdb::Coord(int(v.dims[0]) - 1, int(v.dims[1]) - 1,
                                                                  int(v.dims[2]) - 1));
-  openvdb::tools::Dense<const float, openvdb::tools::LayoutXYZ> dense(box, data.data());
+  std::vector<float> scaled;
+  const float* src = data.data();
+  if (scale != 1.0f) {
+    scaled.resize(data.size());
+    for (size_t i = 0; i < data.size(); ++i) scaled[i] = data[i] * scale;
+    src = scaled.data();
+  }
+  openvdb::tools::Dense<const float, openvdb::tools::LayoutXYZ> dense(box, src);
   openvdb::tools::copyFromDense(dense, *grid, 0.0f);
   openvdb::tools::prune(grid->tree());
   return grid;
+}
+
+/// Where a detail channel can matter: the density's active voxels dilated by the one voxel that a
+/// trilinear read reaches (26-neighbourhood), clipped to the volume, wrapped across x and z when
+/// the volume tiles (the viewer's trilinear reads wrap there). Erosion only lowers density, so
+/// detail outside this mask never changes a rendered value.
+openvdb::MaskGrid::Ptr detail_mask(const Volume& v, const openvdb::FloatGrid& density) {
+  auto mask = openvdb::MaskGrid::create(false);
+  mask->tree().topologyUnion(density.tree());
+  mask->tree().voxelizeActiveTiles();
+  openvdb::tools::dilateActiveValues(mask->tree(), 1, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                     openvdb::tools::IGNORE_TILES);
+  const openvdb::Coord hi(int(v.dims[0]) - 1, int(v.dims[1]) - 1, int(v.dims[2]) - 1);
+  if (v.tiles_xz) {
+    // Voxels dilated past an x or z face stand for the voxels on the opposite face.
+    std::vector<openvdb::Coord> wrapped;
+    for (auto it = mask->cbeginValueOn(); it; ++it) {
+      openvdb::Coord c = it.getCoord();
+      if (c.y() < 0 || c.y() > hi.y()) continue;
+      bool out = false;
+      for (int a : {0, 2}) {
+        const int n = hi[a] + 1;
+        if (c[a] < 0 || c[a] > hi[a]) c[a] = ((c[a] % n) + n) % n, out = true;
+      }
+      if (out) wrapped.push_back(c);
+    }
+    auto acc = mask->getAccessor();
+    for (const auto& c : wrapped) acc.setValueOn(c);
+  }
+  mask->tree().clip(openvdb::CoordBBox(openvdb::Coord(0), hi));
+  return mask;
+}
+
+/// A detail grid active exactly on `mask`, holding the channel's values there.
+openvdb::FloatGrid::Ptr make_masked_grid(const Volume& v, const std::vector<float>& data, const std::string& name,
+                                         bool half, char up, const openvdb::MaskGrid& mask) {
+  auto grid = new_grid(v, name, half, up);
+  grid->tree().topologyUnion(mask.tree());
+  grid->tree().voxelizeActiveTiles();
+  openvdb::tree::LeafManager<openvdb::FloatTree> leaves(grid->tree());
+  leaves.foreach([&](openvdb::FloatTree::LeafNodeType& leaf, size_t) {
+    for (auto it = leaf.beginValueOn(); it; ++it) {
+      const openvdb::Coord c = it.getCoord();
+      it.setValue(data[v.index(uint32_t(c.x()), uint32_t(c.y()), uint32_t(c.z()))]);
+    }
+  });
+  openvdb::tools::prune(grid->tree());
+  return grid;
+}
+
+/// Metadata that write_vdb computes (never copied from Volume::metadata, which may hold a stale
+/// string copy read from another file).
+const std::set<std::string>& computed_meta() {
+  static const std::set<std::string> k{"extinction_per_metre", "voxel_size_metres", "phase_g", "albedo",
+                                       "up_axis", "tiles_xz", "density_units", "erosion_baked"};
+  return k;
+}
+
+/// Linear with equal voxel edges. Not GridBase::hasUniformVoxels: OpenVDB's test divides by the
+/// cube root of the determinant, which rounds badly for rotated maps (a +90 degree turn of 50 m
+/// voxels fails it).
+bool cubic_voxels(const openvdb::GridBase& g) {
+  if (!g.transform().isLinear()) return false;
+  const openvdb::Vec3d v = g.voxelSize();
+  return v[0] > 0 && std::abs(v[1] - v[0]) <= 1e-9 * v[0] && std::abs(v[2] - v[0]) <= 1e-9 * v[0];
 }
 
 /// An exception's text cut to a length that fits a terminal line (a damaged file once put a
@@ -198,17 +316,59 @@ class CheckedVdbArchive : public openvdb::io::Archive {
 
 void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o, OutputBatch& batch) {
   init_vdb();
-  // The density grid and the detail grids are built in parallel.
-  std::vector<std::pair<const std::vector<float>*, std::string>> todo{{&v.density, "density"}};
-  if (o.vdb_detail)
+  if (o.vdb_up != 'y' && o.vdb_up != 'z')
+    throw InputError(std::string("export.vdb.up: \"") + o.vdb_up + "\" is not one of z, y");
+  const View view = view_of_metadata(v.metadata, path);
+  const Look look = look_of_view(view, path);
+  const double extinction = look.extinction(v.voxel_size);
+  const bool all_detail = !v.detail[0].empty() && !v.detail[1].empty() && !v.detail[2].empty();
+  const std::vector<float>* dens = &v.density;
+  std::vector<float> baked;
+  if (o.vdb_bake_erosion && all_detail && look.erosion > 0) {
+    // The height fraction runs over the box of the non-zero voxels, as in the viewer reading
+    // this file's unbaked twin (it crops to the active box).
+    uint32_t ylo = v.dims[1], yhi = 0;
+    for (uint32_t z = 0; z < v.dims[2]; ++z)
+      for (uint32_t y = 0; y < v.dims[1]; ++y)
+        for (uint32_t x = 0; x < v.dims[0]; ++x)
+          if (v.density[v.index(x, y, z)] > 0) ylo = std::min(ylo, y), yhi = std::max(yhi, y);
+    baked.resize(v.density.size());
+    const double ny = yhi >= ylo ? double(yhi - ylo + 1) : 1.0;
+    for (uint32_t z = 0; z < v.dims[2]; ++z)
+      for (uint32_t y = 0; y < v.dims[1]; ++y)
+        for (uint32_t x = 0; x < v.dims[0]; ++x) {
+          const size_t i = v.index(x, y, z);
+          baked[i] = float(eroded_density(v.density[i], v.detail[0][i], v.detail[1][i], v.detail[2][i],
+                                          (double(y) - double(ylo) + 0.5) / ny, look.erosion));
+        }
+    dens = &baked;
+  }
+  // Density first: the detail grids take its topology, dilated by one voxel.
+  auto density = make_grid(v, *dens, "density", o.vdb_half, o.vdb_up, o.vdb_physical ? float(extinction) : 1.0f);
+  std::vector<std::pair<const std::vector<float>*, std::string>> todo;
+  if (o.vdb_detail && !o.vdb_bake_erosion)
     for (int c = 0; c < 3; ++c)
       if (!v.detail[c].empty()) todo.push_back({&v.detail[c], v.detail_names[c]});
-  openvdb::GridPtrVec grids(todo.size());
-  tbb::parallel_for(size_t(0), todo.size(), [&](size_t i) {
-    grids[i] = make_grid(v, *todo[i].first, todo[i].second, o.vdb_half);
-  });
-  auto density = openvdb::gridPtrCast<openvdb::FloatGrid>(grids[0]);
-  for (auto& [k, val] : v.metadata) density->insertMeta(k, openvdb::StringMetadata(val));
+  openvdb::GridPtrVec grids(todo.size() + 1);
+  grids[0] = density;
+  if (!todo.empty()) {
+    auto mask = detail_mask(v, *density);
+    tbb::parallel_for(size_t(0), todo.size(), [&](size_t i) {
+      grids[i + 1] = make_masked_grid(v, *todo[i].first, todo[i].second, o.vdb_half, o.vdb_up, *mask);
+    });
+  }
+  for (auto& [k, val] : v.metadata)
+    if (!computed_meta().count(k)) density->insertMeta(k, openvdb::StringMetadata(val));
+  // The physical scale any renderer needs to light the cloud like cloudviewer does.
+  density->insertMeta("extinction_per_metre", openvdb::DoubleMetadata(extinction));
+  density->insertMeta("voxel_size_metres", openvdb::DoubleMetadata(v.voxel_size));
+  density->insertMeta("phase_g", openvdb::DoubleMetadata(look.g));
+  density->insertMeta("albedo", openvdb::DoubleMetadata(look.albedo));
+  density->insertMeta("up_axis", openvdb::StringMetadata(std::string(1, o.vdb_up)));
+  density->insertMeta("tiles_xz", openvdb::BoolMetadata(v.tiles_xz));
+  if (o.vdb_bake_erosion) density->insertMeta("erosion_baked", openvdb::DoubleMetadata(all_detail ? look.erosion : 0.0));
+  density->insertMeta("density_units",
+                      openvdb::StringMetadata(o.vdb_physical ? "extinction_per_metre" : "normalized"));
   // Never a creator starting with "Houdini": Blender then assumes a Y-up Houdini file and rotates it.
   density->setCreator(std::string("cloudgen ") + CLOUDGEN_VERSION);
   CheckedVdbArchive archive;
@@ -249,8 +409,9 @@ Volume read_vdb(const std::string& path, uint64_t max_bytes) {
   if (grid->getGridClass() == openvdb::GRID_LEVEL_SET)
     throw InputError(printable(path) + ": grid \"density\" is a level set (signed distances to a surface), not a fog "
                      "volume of densities; convert it first (e.g. OpenVDB's sdfToFogVolume, or Houdini's VDB Convert)");
-  if (!grid->transform().isLinear() || !grid->hasUniformVoxels())
+  if (!cubic_voxels(*grid))
     throw InputError(printable(path) + ": grid \"density\" needs a linear transform with cubic voxels");
+  const char up = up_axis_of(grid->transform(), path);
   Volume v;
   openvdb::CoordBBox bb = grid->evalActiveVoxelBoundingBox();
   if (bb.empty()) throw InputError(printable(path) + ": grid \"density\" has no active voxels");
@@ -267,7 +428,8 @@ Volume read_vdb(const std::string& path, uint64_t max_bytes) {
   check_read_budget(count, channels, 0, max_bytes, path);
   for (int a = 0; a < 3; ++a) v.dims[a] = uint32_t(dim[a]);
   v.voxel_size = grid->voxelSize()[0];
-  const openvdb::Vec3d w = grid->indexToWorld(lo.asVec3d());
+  // Index lo is the centre of the first voxel (OpenVDB's convention); our origin is its min corner.
+  const openvdb::Vec3d w = to_y_up(grid->indexToWorld(lo.asVec3d()), up);
   for (int a = 0; a < 3; ++a) v.origin[a] = w[a] - 0.5 * v.voxel_size;
   auto fill = [&](const openvdb::FloatGrid& g, std::vector<float>& out) {
     out.assign(v.voxel_count(), 0.0f);
@@ -291,8 +453,19 @@ Volume read_vdb(const std::string& path, uint64_t max_bytes) {
         fill(*d, v.detail[c]);
   check_finite_channels(v, path);
   for (auto it = grid->beginMeta(); it != grid->endMeta(); ++it)
-    if (it->first.rfind("file_", 0) != 0 && it->first != "class" && it->first != "name")
+    if (it->first.rfind("file_", 0) != 0 && it->first != "class" && it->first != "name" &&
+        !computed_meta().count(it->first))
       v.metadata.push_back({it->first, it->second->str()});
+  // Every field cloudgen writes comes back: tiling, and normalised density from physical units.
+  if (auto t = grid->getMetadata<openvdb::BoolMetadata>("tiles_xz")) v.tiles_xz = t->value();
+  auto units = grid->getMetadata<openvdb::StringMetadata>("density_units");
+  auto ext = grid->getMetadata<openvdb::DoubleMetadata>("extinction_per_metre");
+  if (units && units->value() == "extinction_per_metre") {
+    if (!ext || !(ext->value() > 0))
+      throw InputError(path + ": density_units is extinction_per_metre but extinction_per_metre is missing or not positive");
+    const float inv = float(1.0 / ext->value());
+    for (float& d : v.density) d *= inv;
+  }
   build_occupancy(v);
   return v;
 }
@@ -308,10 +481,19 @@ std::string describe_vdb(const std::string& path) {
       << openvdb::GridBase::gridClassToString(g->getGridClass()) << ", voxel size " << g->voxelSize()[0]
       << ", active voxels " << g->activeVoxelCount() << ", saved as " << (g->saveFloatAsHalf() ? "half" : "float")
       << "\n";
+    if (g->getName() == "density" && g->transform().isLinear()) {
+      try {
+        o << (up_axis_of(g->transform(), path) == 'z' ? "    up axis: z (height along +z: Blender)\n"
+                                                       : "    up axis: y (height along +y: Houdini, Maya)\n");
+      } catch (const InputError&) {
+        o << "    up axis: neither y nor z (rotated transform)\n";
+      }
+    }
     openvdb::CoordBBox bb = g->evalActiveVoxelBoundingBox();
     if (!bb.empty()) {
-      openvdb::Vec3d wlo = g->indexToWorld(bb.min().asVec3d() - openvdb::Vec3d(0.5)),
-                     whi = g->indexToWorld(bb.max().asVec3d() + openvdb::Vec3d(0.5));
+      const openvdb::Vec3d a = g->indexToWorld(bb.min().asVec3d() - openvdb::Vec3d(0.5)),
+                           b = g->indexToWorld(bb.max().asVec3d() + openvdb::Vec3d(0.5));
+      const openvdb::Vec3d wlo = openvdb::math::minComponent(a, b), whi = openvdb::math::maxComponent(a, b);
       o << "    index bbox " << bb.min() << " .. " << bb.max() << ", world bbox " << wlo << " .. " << whi << "\n";
     }
     if (auto fg = openvdb::gridPtrCast<openvdb::FloatGrid>(g)) {
@@ -336,6 +518,49 @@ std::string describe_vdb(const std::string& path) {
         o << "    " << printable(m->first) << ": " << printable(m->second->str()) << "\n";
   }
   return o.str();
+}
+
+SceneInfo read_vdb_scene_info(const std::string& path) {
+  init_vdb();
+  check_vdb_layout(path);  // the header and grid descriptors, bounded, before io::File reads them
+  openvdb::io::File file(path);
+  openvdb::GridBase::Ptr g;
+  try {
+    file.open();
+    if (!file.hasGrid("density")) {
+      file.close();
+      read_vdb(path);  // throws the reader's message (no density grid, grids present)
+    }
+    // Grid metadata only: OpenVDB stores the active bounding box as file_bbox_min / file_bbox_max.
+    g = file.readGridMetadata("density");
+  } catch (const openvdb::Exception& e) {
+    throw InputError(printable(path) + ": not a readable OpenVDB file (" + short_what(e) + ")");
+  } catch (const std::ios_base::failure& e) {
+    throw InputError(printable(path) + ": not a readable OpenVDB file (" + short_what(e) + ")");
+  } catch (const std::bad_alloc&) {
+    throw InputError(printable(path) + ": not a readable OpenVDB file (it asks for more memory than is available)");
+  }
+  openvdb::CoordBBox bb;
+  auto bmin = g->getMetadata<openvdb::Vec3IMetadata>("file_bbox_min");
+  auto bmax = g->getMetadata<openvdb::Vec3IMetadata>("file_bbox_max");
+  if (bmin && bmax) {
+    bb = openvdb::CoordBBox(openvdb::Coord(bmin->value()), openvdb::Coord(bmax->value()));
+  } else {
+    bb = VdbFile(path).grid("density")->evalActiveVoxelBoundingBox();  // the checked full read
+  }
+  if (bb.empty()) throw InputError(path + ": grid \"density\" has no active voxels");
+  if (!cubic_voxels(*g))
+    throw InputError(path + ": grid \"density\" needs a linear transform with cubic voxels");
+  SceneInfo s;
+  s.up = up_axis_of(g->transform(), path);
+  s.voxel_size = g->voxelSize()[0];
+  const openvdb::Vec3d w = to_y_up(g->indexToWorld(bb.min().asVec3d()), s.up);
+  for (int a = 0; a < 3; ++a) s.origin[a] = w[a] - 0.5 * s.voxel_size, s.dims[a] = uint32_t(bb.dim()[a]);
+  for (auto it = g->beginMeta(); it != g->endMeta(); ++it)
+    if (it->first.rfind("file_", 0) != 0 && it->first != "class" && it->first != "name")
+      s.metadata.push_back({it->first, it->second->str()});
+  file.close();
+  return s;
 }
 
 }  // namespace cloudgen

@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 
 #include "cloudviewer/errors.h"
+#include "default_view.h"
 #include "internal.h"
 
 namespace cloudviewer {
@@ -140,6 +141,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
     if (v[1] < -90 || v[1] > 90) throw InputError("--sun " + sun_text + ": elevation must be in [-90, 90]");
     o.sun = Sun{v[0], v[1]};
   }
+  if (o.bench.empty()) apply_input_view(o, app.count("--fov") > 0);  // the input's preset/metadata view
   if (!o.headless) return run_window(o, out, err);
   if (o.out.empty() && o.bench.empty()) throw InputError("--headless needs --out FILE or --bench TRACK.json");
   if (!o.out.empty()) {  // fail on a bad extension before rendering
@@ -190,10 +192,10 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
 
 Camera resolve_camera(const Options& o, const PreparedVolume& vol, int width, int height) {
   if (o.camera) return *o.camera;
-  return default_camera(vol, o.settings, o.fov, double(width) / height);
+  return default_view_camera(vol, o.settings, o.fov, double(width) / height);
 }
 
-Sun resolve_sun(const Options& o, const Camera& cam) { return o.sun ? *o.sun : default_sun(cam); }
+Sun resolve_sun(const Options& o, const Camera& cam) { return default_view_sun(o, cam); }
 
 int exit_code(const std::exception& e) {
   if (dynamic_cast<const InputError*>(&e)) return 1;

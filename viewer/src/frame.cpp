@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "cloudgen/view.h"
 #include "cloudviewer/constants.h"
 #include "cloudviewer/errors.h"
 #include "cloudviewer/scene.h"
@@ -56,7 +57,7 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   p.albedo = s.albedo;
   // Auto values follow the voxel size, not the box, so a VDB cropped to its active voxels renders
   // like the dense texture it came from.
-  p.sigma_t_per_m = s.sigma_t > 0 ? s.sigma_t : 0.5 / min_voxel;
+  p.sigma_t_per_m = s.sigma_t > 0 ? s.sigma_t : cloudgen::default_extinction_per_metre(min_voxel);
   p.erosion = s.erosion;
   p.density_scale = s.density;
   p.powder_c = s.powder_c;

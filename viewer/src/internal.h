@@ -9,6 +9,7 @@
 #include "cloudviewer/renderer.h"
 #include "cloudviewer/scene.h"
 #include "cloudviewer/settings.h"
+#include "cloudgen/view.h"
 
 namespace cloudviewer {
 
@@ -29,6 +30,7 @@ struct Options {
   int bench_reference = 0;  ///< CPU reference step count for RMSE columns (0 = none)
   int bench_repeat = 3;
   RenderSettings settings;  ///< after --set
+  cloudgen::View view;      ///< the input's preset/metadata view (default_view.h)
 };
 
 /// Tileable fBm in [0, 1] (libnoise3d Perlin fBm, mean 0.5, std ~0.13) for the synthetic volumes

@@ -47,12 +47,17 @@ class OutputBatch {
   /// Writes the content of `path` now: `fill(tmp)` writes to `tmp`, a path it may open, write and
   /// close (any library that takes a file name works). Nothing is visible at `path` until commit().
   void stage(const std::string& path, const std::function<void(const std::string& tmp)>& fill);
+  /// As stage(), for content written by another program (Blender): `tmp` is a named file
+  /// `.NAME.tmp-PID-N` in the destination's folder that the program may replace by rename; it
+  /// is removed if anything fails and by the next run if this one is killed.
+  void stage_named(const std::string& path, const std::function<void(const std::string& tmp)>& fill);
   /// Publishes every staged file in staging order; all or nothing (see the file comment).
   /// Returns the destination paths written.
   std::vector<std::string> commit();
   size_t staged() const;
 
  private:
+  void stage_impl(const std::string& path, const std::function<void(const std::string&)>& fill, bool named);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "cloudgen/export_options.h"
+#include "cloudgen/view.h"
 #include "cloudgen/volume.h"
 #include "noise3d/noise3d.h"
 
@@ -83,6 +84,8 @@ struct Preset {
   uint32_t occupancy_padding = 2;
 
   ExportOptions export_options;  ///< export.vdb.* and export.raw.* keys
+
+  View view;  ///< optional camera, sun and render.* settings (viewer, `cloudgen blender`, README)
 };
 
 /// One entry of the parameter table.

@@ -1,0 +1,251 @@
+// `cloudgen blender`: a Blender scene (.blend) that renders a cloudgen VDB like cloudviewer's
+// default view, built by Debian's headless `blender` with scripts/blender_scene.py. Every number of
+// the scene (camera, sun, world, material, tone map) is computed here from the VDB's metadata and
+// cloudgen/view.h, the definitions the viewer uses, and handed to the script as JSON.
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "cloudgen/generate.h"
+#include "cloudgen/io.h"
+#include "cloudgen/preset.h"
+#include "cloudgen/view.h"
+#include "commands.h"
+
+extern char** environ;
+
+namespace fs = std::filesystem;
+
+namespace cloudgen::cli {
+namespace {
+
+struct BlenderArgs {
+  std::string input, output, render, size = "640x360";
+  std::vector<std::string> sets;
+  int samples = 64;
+  int volume_bounces = 4;
+  bool quiet = false;
+};
+
+/// The blender executable: $CLOUDGEN_BLENDER, else `blender` on PATH.
+std::string find_blender() {
+  if (const char* e = std::getenv("CLOUDGEN_BLENDER"); e && *e) {
+    if (::access(e, X_OK) != 0) throw IoError(std::string("CLOUDGEN_BLENDER=") + e + ": not an executable file");
+    return e;
+  }
+  const char* path = std::getenv("PATH");
+  std::stringstream ss(path ? path : "");
+  for (std::string dir; std::getline(ss, dir, ':');) {
+    const fs::path p = fs::path(dir.empty() ? "." : dir) / "blender";
+    if (::access(p.c_str(), X_OK) == 0) return p.string();
+  }
+  throw IoError("blender: not found on PATH; install Debian's package `blender` (apt-get install blender) "
+                "or point CLOUDGEN_BLENDER at a Blender 3.x executable");
+}
+
+std::string script_path() {
+  if (const char* e = std::getenv("CLOUDGEN_SCRIPT_DIR"); e && *e) return (fs::path(e) / "blender_scene.py").string();
+  return std::string(CLOUD_SOURCE_DIR) + "/scripts/blender_scene.py";
+}
+
+/// Runs argv with stdout and stderr into `log`; returns the exit status (-1 when killed).
+int run_logged(const std::vector<std::string>& argv, const std::string& log) {
+  std::vector<char*> cargs;
+  for (const auto& a : argv) cargs.push_back(const_cast<char*>(a.c_str()));
+  cargs.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&fa, STDOUT_FILENO, STDERR_FILENO);
+  posix_spawn_file_actions_addopen(&fa, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, cargs[0], &fa, nullptr, cargs.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (rc != 0) throw IoError(argv[0] + ": cannot start (" + std::strerror(rc) + ")");
+  int st = 0;
+  while (::waitpid(pid, &st, 0) < 0)
+    if (errno != EINTR) throw IoError(argv[0] + ": waitpid failed");
+  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+std::string tail_of(const std::string& path, size_t lines) {
+  std::ifstream in(path);
+  std::vector<std::string> all;
+  for (std::string l; std::getline(in, l);) all.push_back(l);
+  std::string out;
+  for (size_t i = all.size() > lines ? all.size() - lines : 0; i < all.size(); ++i) out += "  " + all[i] + "\n";
+  return out;
+}
+
+/// y up (cloudgen, the viewer) -> Blender's z up: (x, y, z) -> (x, -z, y).
+nlohmann::json zup(const Vec3& v) { return {v[0], -v[2], v[1]}; }
+
+void run_blender(const BlenderArgs& a) {
+  if (a.output.empty()) throw InputError("-o/--output: give the .blend file to write");
+  if (fs::path(a.output).extension() != ".blend")
+    throw InputError("-o " + a.output + ": the scene file must end in .blend");
+  int width = 0, height = 0;
+  {
+    char x = 0;
+    std::istringstream ss(a.size);
+    if (!(ss >> width >> x >> height) || x != 'x' || !ss.eof() || width < 1 || height < 1 || width > 16384 ||
+        height > 16384)
+      throw InputError("--size " + a.size + ": expected WIDTHxHEIGHT, each 1..16384");
+  }
+  if (a.samples < 1 || a.samples > 65536) throw InputError("--samples " + std::to_string(a.samples) + ": allowed 1..65536");
+  if (a.volume_bounces < 0 || a.volume_bounces > 1024)
+    throw InputError("--volume-bounces " + std::to_string(a.volume_bounces) + ": allowed 0..1024");
+  if (!a.render.empty() && fs::path(a.render).extension() != ".png")
+    throw InputError("--render " + a.render + ": the image must end in .png");
+  const std::string blender = find_blender();
+  const std::string script = script_path();
+  if (!fs::exists(script)) throw IoError(script + ": the Blender scene script is missing (set CLOUDGEN_SCRIPT_DIR)");
+
+  // A preset is generated first, into a VDB beside the .blend (the scene refers to it).
+  std::string vdb = a.input;
+  if (fs::path(a.input).extension() != ".vdb") {
+    const std::string path = resolve_preset_path(a.input);
+    Preset p = load_preset(path, a.sets);
+    GenerateOptions go;
+    go.cancel = &g_cancel;
+    go.progress = progress_bar("generate", a.quiet);
+    Volume v = generate(p, go);
+    add_view_metadata(v.metadata, p.view);
+    ExportOptions eo;
+    eo = p.export_options;
+    vdb = fs::path(a.output).replace_extension(".vdb").string();
+    write_vdb(v, vdb, eo);
+    if (!a.quiet) std::fprintf(stderr, "wrote %s (vdb)\n", vdb.c_str());
+  } else if (!a.sets.empty()) {
+    throw InputError("--set: only a preset input takes overrides; " + a.input + " is a VDB");
+  }
+
+  // The viewer's default view of this file (cloudviewer/src/default_view.cpp does the same).
+  const SceneInfo info = read_scene_info(vdb);
+  const View view = view_of_metadata(info.metadata, vdb);
+  const Look look = look_of_view(view, vdb);
+  const Vec3 lo = info.origin, size = info.size();
+  const Vec3 centre{lo[0] + 0.5 * size[0], lo[1] + 0.5 * size[1], lo[2] + 0.5 * size[2]};
+  const double fov = view.fov.value_or(60.0);
+  Framing cam = view.eye ? Framing{*view.eye, view.target.value_or(centre)}
+                         : frame_box(lo, size, fov, double(width) / height);
+  const double az = view.sun_azimuth.value_or(sun_azimuth_behind(cam.eye, cam.target));
+  const double el = view.sun_elevation.value_or(kDefaultSunElevation);
+  bool physical = false;
+  double grid_scale = 1;
+  for (auto& [k, val] : info.metadata)
+    if (k == "density_units" && val == "extinction_per_metre") physical = true;
+  const double extinction = look.extinction(info.voxel_size);
+  if (physical) grid_scale = extinction;
+
+  using nlohmann::json;
+  json s;
+  const fs::path blend_abs = fs::absolute(a.output);
+  s["vdb"] = fs::absolute(vdb).string();
+  s["vdb_relative"] = "//" + fs::relative(fs::absolute(vdb), blend_abs.parent_path()).string();
+  s["up"] = std::string(1, info.up);
+  s["voxel_size"] = info.voxel_size;
+  s["material"] = {{"density", physical ? 1.0 : extinction},
+                   {"grid_scale", grid_scale},
+                   {"anisotropy", look.phase == "none" ? 0.0 : look.g},
+                   {"albedo", look.albedo},
+                   {"erosion", look.erosion},
+                   {"detail_grids", {"detail_g", "detail_b", "detail_a"}},
+                   {"box_bottom", lo[1]},
+                   {"box_height", size[1]}};
+  s["camera"] = {{"eye", zup(cam.eye)}, {"target", zup(cam.target)}, {"fov_y_deg", fov}};
+  s["sun"] = {{"direction", zup(sun_direction(az, el))},
+              {"strength", look.sun_intensity},
+              {"color", {kSunColor[0], kSunColor[1], kSunColor[2]}}};
+  json horizon = json::array();
+  for (int i = 0; i < 3; ++i) horizon.push_back(kSkyZenith[size_t(i)] + 0.55 * (1.0 - kSkyZenith[size_t(i)]));
+  s["world"] = {{"ambient", {kAmbientColor[0] * look.ambient, kAmbientColor[1] * look.ambient, kAmbientColor[2] * look.ambient}},
+                {"zenith", {kSkyZenith[0], kSkyZenith[1], kSkyZenith[2]}},
+                {"horizon", horizon}};
+  s["ground"] = {{"enabled", look.ground},
+                 {"height", std::min(0.0, lo[1])},
+                 {"color", {kGroundColor[0] * look.ground_albedo / 0.18, kGroundColor[1] * look.ground_albedo / 0.18,
+                            kGroundColor[2] * look.ground_albedo / 0.18}},
+                 {"half_extent", 5e4}};
+  s["tonemap"] = {{"exposure", look.exposure}, {"operator", look.tonemap}};
+  s["render"] = {{"width", width},
+                 {"height", height},
+                 {"samples", a.samples},
+                 {"volume_bounces", a.volume_bounces},
+                 {"max_bounces", std::max(8, a.volume_bounces + 4)},
+                 {"volume_step_rate", 1.0},
+                 {"volume_max_steps", 1024}};
+
+  char tmpl[] = "/tmp/cloudgen-blender-XXXXXX";
+  if (!::mkdtemp(tmpl)) throw IoError("cannot create a temporary folder in /tmp");
+  const fs::path work(tmpl);
+  struct Cleanup {
+    fs::path p;
+    ~Cleanup() {
+      std::error_code ec;
+      fs::remove_all(p, ec);
+    }
+  } cleanup{work};
+  const std::string scene_json = (work / "scene.json").string(), log = (work / "blender.log").string();
+
+  auto run = [&](const std::string& tmp_blend, const std::string& tmp_png) {
+    s["blend"] = fs::absolute(tmp_blend).string();
+    s["render_png"] = tmp_png.empty() ? "" : fs::absolute(tmp_png).string();
+    {
+      std::ofstream out(scene_json);
+      out << s.dump(2) << "\n";
+      if (!out) throw IoError(scene_json + ": cannot write the scene description");
+    }
+    if (g_cancel) throw Cancelled();
+    const int rc = run_logged({blender, "-b", "--factory-startup", "--python-exit-code", "1", "--python", script, "--",
+                               scene_json},
+                              log);
+    if (g_cancel) throw Cancelled();
+    if (rc != 0 || !fs::exists(tmp_blend) || (!tmp_png.empty() && !fs::exists(tmp_png)))
+      throw IoError(blender + " failed (exit " + std::to_string(rc) + ") building " + a.output + "; its last lines:\n" +
+                    tail_of(log, 15));
+  };
+  // Blender writes both files (and saves through "NAME@" + rename), so they are staged as named
+  // temporaries in their folders and published together: both or neither.
+  OutputBatch batch;
+  batch.stage_named(a.output, [&](const std::string& tmp_blend) {
+    if (a.render.empty()) run(tmp_blend, "");
+    else batch.stage_named(a.render, [&](const std::string& tmp_png) { run(tmp_blend, tmp_png); });
+  });
+  if (g_cancel) throw Cancelled();
+  batch.commit();
+  if (!a.quiet) {
+    std::fprintf(stderr, "wrote %s (Blender scene of %s)\n", a.output.c_str(), vdb.c_str());
+    if (!a.render.empty()) std::fprintf(stderr, "wrote %s (Cycles, %dx%d, %d samples)\n", a.render.c_str(), width, height, a.samples);
+  }
+}
+
+}  // namespace
+
+void add_blender_command(CLI::App& app, std::function<void()>& run) {
+  auto a = std::make_shared<BlenderArgs>();
+  CLI::App* c = app.add_subcommand(
+      "blender", "Write a Blender scene (.blend) that renders a VDB or preset like cloudviewer's default view.");
+  c->add_option("input", a->input, "A cloudgen .vdb, or a preset (generated first into OUTPUT's name with .vdb)")->required();
+  c->add_option("-o,--output", a->output, "The .blend to write")->required();
+  c->add_option("--render", a->render, "Also render the scene with Cycles into this .png");
+  c->add_option("--size", a->size, "Render size WIDTHxHEIGHT (also the camera's aspect; default 640x360)");
+  c->add_option("--samples", a->samples, "Cycles samples per pixel (default 64)");
+  c->add_option("--volume-bounces", a->volume_bounces, "Cycles volume bounces (default 4; docs/blender.md)");
+  c->add_option("--set", a->sets, "Override a preset key, as for generate (preset inputs only)");
+  c->add_flag("-q,--quiet", a->quiet, "No progress or summary");
+  c->footer("Runs Debian's `blender` headless (package blender; CLOUDGEN_BLENDER overrides the executable) with\n"
+            "scripts/blender_scene.py. Example:\n"
+            "  cloudgen blender cumulus -o out/cumulus.blend --render out/cumulus.png --size 320x180 --samples 32");
+  c->callback([a, &run] { run = [a] { run_blender(*a); }; });
+}
+
+}  // namespace cloudgen::cli
