@@ -77,6 +77,10 @@ vset=(--set render.output=transmittance render.tonemap=clamp render.exposure=1 r
 "$bin/cloudviewer" "$tmp/tiny.vdb" --headless --size 128x72 --out "$tmp/viewer.png" >/dev/null
 cmp "$tmp/viewer_t.png" "$tmp/viewer_t_y.png" && echo "viewer: the up = y file gives the same picture as up = z"
 blender_py compare "$tmp/viewer_t.png" "$tmp/cycles_mask.png" "$tmp/viewer.png" "$tmp/cycles.png"
+# The scene of the y-up file (its object turned upright in Blender) frames the same cloud.
+"$bin/cloudgen" blender "$tmp/tiny-y.vdb" -q -o "$tmp/scene-y.blend" --size 128x72 --samples 8
+blender_py mask "$tmp/scene-y.blend" "$tmp/cycles_mask_y.png" >/dev/null
+blender_py compare "$tmp/viewer_t_y.png" "$tmp/cycles_mask_y.png" | grep -E "IoU|agree"
 # 5. Cycles puts a one-voxel grid where OpenVDB's indexToWorld and the viewer do (Blender 3.4
 #    renders half a voxel off, 9 px here; the scene shifts it back). A 3^3 box of 10 m voxels with
 #    a dense middle voxel (and two faint corners that keep the box), without a view, so both

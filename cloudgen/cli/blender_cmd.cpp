@@ -31,7 +31,7 @@ struct BlenderArgs {
   std::string input, output, render, size = "640x360";
   std::vector<std::string> sets;
   int samples = 64;
-  int volume_bounces = 4;
+  int volume_bounces = 0;  ///< single scattering, like the viewer's march (docs/blender.md)
   bool quiet = false;
 };
 
@@ -239,7 +239,7 @@ void add_blender_command(CLI::App& app, std::function<void()>& run) {
   c->add_option("--render", a->render, "Also render the scene with Cycles into this .png");
   c->add_option("--size", a->size, "Render size WIDTHxHEIGHT (also the camera's aspect; default 640x360)");
   c->add_option("--samples", a->samples, "Cycles samples per pixel (default 64)");
-  c->add_option("--volume-bounces", a->volume_bounces, "Cycles volume bounces (default 4; docs/blender.md)");
+  c->add_option("--volume-bounces", a->volume_bounces, "Cycles volume bounces (default 0: single scattering like the viewer; 4-16 for brighter, multiply scattered clouds)");
   c->add_option("--set", a->sets, "Override a preset key, as for generate (preset inputs only)");
   c->add_flag("-q,--quiet", a->quiet, "No progress or summary");
   c->footer("Runs Debian's `blender` headless (package blender; CLOUDGEN_BLENDER overrides the executable) with\n"
