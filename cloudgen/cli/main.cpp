@@ -86,7 +86,7 @@ struct GenerateArgs {
   int64_t seed = -1;
   uint32_t resolution = 0;
   int threads = 0;
-  bool quiet = false, no_skip = false, stats = false;
+  bool quiet = false, no_skip = false, stats = false, mpi = false;
 };
 
 void run_generate(const GenerateArgs& a) {
@@ -108,8 +108,9 @@ void run_generate(const GenerateArgs& a) {
     formats.push_back(f);
     detail |= needs_detail(f, eo);
   }
+  const bool mpi = mpi_requested(a.mpi);  // ranks hold sparse bricks, not the dense volume
   const uint64_t need = memory_estimate(p, detail), limit = parse_bytes(a.max_memory);
-  if (need > limit)
+  if (!mpi && need > limit)
     throw InputError(path + ": resolution " + std::to_string(p.resolution[0]) + "x" + std::to_string(p.resolution[1]) + "x" +
                      std::to_string(p.resolution[2]) + " needs about " + human(need) + ", more than --max-memory " +
                      a.max_memory + " (lower /resolution or use --resolution N)");
@@ -125,6 +126,7 @@ void run_generate(const GenerateArgs& a) {
       throw InputError("--region: \"" + a.region + "\" should be X,Y,Z:W,H,D (origin and extent in voxels)");
     for (int i = 0; i < 3; ++i) go.region_origin[i] = o[i], go.region_extent[i] = e[i];
   }
+  if (mpi) return run_generate_mpi(p, go, a.outputs, formats, a.quiet, a.stats);
   GenerateStats st;
   Volume v = generate(p, go, &st);
   const auto t0 = std::chrono::steady_clock::now();
@@ -147,6 +149,9 @@ void run_generate(const GenerateArgs& a) {
 }
 
 }  // namespace
+
+std::string resolve_preset_path(const std::string& p) { return resolve_preset(p); }
+
 }  // namespace cloudgen::cli
 
 int main(int argc, char** argv) {
@@ -180,6 +185,7 @@ int main(int argc, char** argv) {
   gen->add_option("--max-memory", ga->max_memory, "Refuse presets whose memory estimate exceeds this (default 16G)");
   gen->add_flag("--no-skip", ga->no_skip, "Evaluate noise in empty bricks too (for benchmarks; same output)");
   gen->add_flag("--stats", ga->stats, "Print timing and memory even with --quiet");
+  gen->add_flag("--mpi", ga->mpi, "Generate on the ranks of an MPI job (implied under mpirun; docs/scale-out.md)");
   gen->add_flag("-q,--quiet", ga->quiet, "No progress bar or summary");
   std::string keys;
   for (const auto& pi : params()) {
@@ -243,6 +249,7 @@ int main(int argc, char** argv) {
   });
 
   add_noise_command(app, run);
+  add_scale_commands(app, run);
 
   try {
     app.parse(argc, argv);

@@ -11,17 +11,16 @@
 #include <sstream>
 
 #include "cloudgen/io.h"
+#include "vdb_internal.h"
 
 namespace cloudgen {
-namespace {
+namespace vdb {
 
-void init_vdb() {
+void init() {
   static std::once_flag once;
   std::call_once(once, [] { openvdb::initialize(); });
 }
 
-/// Voxel (i,j,k) covers [origin + i*vs, origin + (i+1)*vs): its centre, index (i,j,k) in OpenVDB,
-/// sits at origin + (i + 0.5) * vs.
 openvdb::math::Transform::Ptr make_transform(const Volume& v) {
   auto xf = openvdb::math::Transform::createLinearTransform(v.voxel_size);
   xf->postTranslate(openvdb::Vec3d(v.origin[0] + 0.5 * v.voxel_size, v.origin[1] + 0.5 * v.voxel_size,
@@ -29,13 +28,18 @@ openvdb::math::Transform::Ptr make_transform(const Volume& v) {
   return xf;
 }
 
-openvdb::FloatGrid::Ptr make_grid(const Volume& v, const std::vector<float>& data, const std::string& name,
-                                  bool half) {
+openvdb::FloatGrid::Ptr make_empty_grid(const Volume& v, const std::string& name, bool half) {
   auto grid = openvdb::FloatGrid::create(0.0f);
   grid->setName(name);
   grid->setGridClass(openvdb::GRID_FOG_VOLUME);
   grid->setTransform(make_transform(v));
   grid->setSaveFloatAsHalf(half);
+  return grid;
+}
+
+openvdb::FloatGrid::Ptr make_grid(const Volume& v, const std::vector<float>& data, const std::string& name,
+                                  bool half) {
+  auto grid = make_empty_grid(v, name, half);
   // Wrap our x-fastest buffer (no copy) and let OpenVDB's threaded copy activate every voxel
   // that differs from the background 0 (densities are >= 0, so exactly the cloud voxels).
   const openvdb::CoordBBox box(openvdb::Coord(0), openvdb::Coord(int(v.dims[0]) - 1, int(v.dims[1]) - 1,
@@ -45,6 +49,44 @@ openvdb::FloatGrid::Ptr make_grid(const Volume& v, const std::vector<float>& dat
   openvdb::tools::prune(grid->tree());
   return grid;
 }
+
+openvdb::GridPtrVec make_empty_grids(const Volume& v, const ExportOptions& o) {
+  openvdb::GridPtrVec grids{make_empty_grid(v, "density", o.vdb_half)};
+  if (o.vdb_detail)
+    for (int c = 0; c < 3; ++c)
+      if (!v.detail[c].empty()) grids.push_back(make_empty_grid(v, v.detail_names[c], o.vdb_half));
+  return grids;
+}
+
+void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::string& path, const ExportOptions& o) {
+  auto density = openvdb::gridPtrCast<openvdb::FloatGrid>(grids[0]);
+  for (auto& [k, val] : v.metadata) density->insertMeta(k, openvdb::StringMetadata(val));
+  // Never a creator starting with "Houdini": Blender then assumes a Y-up Houdini file and rotates it.
+  density->setCreator(std::string("cloudgen ") + CLOUDGEN_VERSION);
+  atomic_write(path, [&](const std::string& tmp) {
+    openvdb::io::File file(tmp);
+    uint32_t comp = openvdb::io::COMPRESS_ACTIVE_MASK;
+    if (o.vdb_compression == "blosc") comp |= openvdb::io::COMPRESS_BLOSC;
+    else if (o.vdb_compression == "zip") comp |= openvdb::io::COMPRESS_ZIP;
+    else if (o.vdb_compression != "none")
+      throw InputError("export.vdb.compression: \"" + o.vdb_compression + "\" is not one of blosc, zip, none");
+    if ((comp & openvdb::io::COMPRESS_BLOSC) && !openvdb::io::Archive::hasBloscCompression()) {
+      comp = openvdb::io::COMPRESS_ACTIVE_MASK | openvdb::io::COMPRESS_ZIP;
+    }
+    file.setCompression(comp);
+    openvdb::MetaMap meta;
+    meta.insertMeta("creator", openvdb::StringMetadata(std::string("cloudgen ") + CLOUDGEN_VERSION));
+    file.write(grids, meta);
+    file.close();
+  });
+}
+
+}  // namespace vdb
+
+namespace {
+
+using vdb::make_grid;
+void init_vdb() { vdb::init(); }
 
 void open_or_throw(openvdb::io::File& file, const std::string& path) {
   init_vdb();
@@ -68,26 +110,7 @@ void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o)
   tbb::parallel_for(size_t(0), todo.size(), [&](size_t i) {
     grids[i] = make_grid(v, *todo[i].first, todo[i].second, o.vdb_half);
   });
-  auto density = openvdb::gridPtrCast<openvdb::FloatGrid>(grids[0]);
-  for (auto& [k, val] : v.metadata) density->insertMeta(k, openvdb::StringMetadata(val));
-  // Never a creator starting with "Houdini": Blender then assumes a Y-up Houdini file and rotates it.
-  density->setCreator(std::string("cloudgen ") + CLOUDGEN_VERSION);
-  atomic_write(path, [&](const std::string& tmp) {
-    openvdb::io::File file(tmp);
-    uint32_t comp = openvdb::io::COMPRESS_ACTIVE_MASK;
-    if (o.vdb_compression == "blosc") comp |= openvdb::io::COMPRESS_BLOSC;
-    else if (o.vdb_compression == "zip") comp |= openvdb::io::COMPRESS_ZIP;
-    else if (o.vdb_compression != "none")
-      throw InputError("export.vdb.compression: \"" + o.vdb_compression + "\" is not one of blosc, zip, none");
-    if ((comp & openvdb::io::COMPRESS_BLOSC) && !openvdb::io::Archive::hasBloscCompression()) {
-      comp = openvdb::io::COMPRESS_ACTIVE_MASK | openvdb::io::COMPRESS_ZIP;
-    }
-    file.setCompression(comp);
-    openvdb::MetaMap meta;
-    meta.insertMeta("creator", openvdb::StringMetadata(std::string("cloudgen ") + CLOUDGEN_VERSION));
-    file.write(grids, meta);
-    file.close();
-  });
+  vdb::write_grids(v, grids, path, o);
 }
 
 Volume read_vdb(const std::string& path) {
