@@ -372,6 +372,21 @@ void run_generate_mpi(const Preset& p, const GenerateOptions& go, const std::vec
                    p.name.c_str(), p.resolution[0], p.resolution[1], p.resolution[2],
                    static_cast<unsigned long long>(r.active_voxels), bricks, r.ranks, r.plan_seconds,
                    r.gather_seconds, r.write_seconds);
+      // Measured cost of each kind of brick (thread time per brick), the inputs of the scaling
+      // model in docs/scale-out.md.
+      std::array<size_t, kBrickWorkKinds> kn{};
+      std::array<double, kBrickWorkKinds> ks{};
+      for (const auto& s : r.per_rank)
+        for (int k = 0; k < kBrickWorkKinds; ++k) kn[k] += s.gen.work_bricks[k], ks[k] += s.gen.work_seconds[k];
+      const char* kind_names[kBrickWorkKinds] = {"bound-skipped", "detail only", "evaluated, empty", "with cloud"};
+      std::string costs;
+      for (int k = 0; k < kBrickWorkKinds; ++k) {
+        char one[96];
+        std::snprintf(one, sizeof one, "%s%s %zu x %.3f ms", k ? ", " : "", kind_names[k], kn[k],
+                      kn[k] ? 1e3 * ks[k] / double(kn[k]) : 0.0);
+        costs += one;
+      }
+      std::fprintf(stderr, "  bricks by kind (count x thread time each): %s\n", costs.c_str());
       for (size_t i = 0; i < r.per_rank.size(); ++i) {
         const auto& s = r.per_rank[i];
         std::fprintf(stderr,

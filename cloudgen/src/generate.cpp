@@ -135,6 +135,17 @@ struct Shape {
     float d = r * s;
     return std::clamp((d - t) * inv * scale, 0.0f, 1.0f);
   }
+  /// Whether the bound allows density > 0 at a voxel that may lie outside the volume: outside in
+  /// y, or in x/z without wrapping, there is nothing; with wrapping x and z are taken modulo.
+  bool bound_at(int64_t x, int64_t y, int64_t z, bool wrap) const {
+    int64_t c[3] = {x, y, z};
+    for (int a = 0; a < 3; ++a) {
+      if (c[a] >= 0 && c[a] < int64_t(N[a])) continue;
+      if (!wrap || a == 1) return false;
+      c[a] = (c[a] % int64_t(N[a]) + N[a]) % int64_t(N[a]);
+    }
+    return finish(1.0f, (*this)(uint32_t(c[0]), uint32_t(c[1]), uint32_t(c[2]))) > 0;
+  }
 };
 
 /// Relative cost of one voxel of a channel: octaves weighted by kind (Worley's cell search costs
@@ -218,14 +229,6 @@ BrickPlan plan_bricks(const Preset& p, const GenerateOptions& opt) {
     // Detail: the same over the one-voxel shell around the brick (wrapping x and z if tiling).
     bool near = pb.density;
     if (!near && plan.detail) {
-      auto at = [&](int64_t c, int a, uint32_t& out) {
-        if (c < 0 || c >= int64_t(N[a])) {
-          if (!wrap || a == 1) return false;
-          c = (c + N[a]) % N[a];
-        }
-        out = uint32_t(c);
-        return true;
-      };
       for (int64_t z = int64_t(lo[2]) - 1; z <= int64_t(hi[2]) && !near; ++z)
         for (int64_t y = int64_t(lo[1]) - 1; y <= int64_t(hi[1]) && !near; ++y)
           for (int64_t x = int64_t(lo[0]) - 1; x <= int64_t(hi[0]) && !near; ++x) {
@@ -234,9 +237,7 @@ BrickPlan plan_bricks(const Preset& p, const GenerateOptions& opt) {
               x = hi[0] - 1;
               continue;
             }
-            uint32_t c[3];
-            if (!at(x, 0, c[0]) || !at(y, 1, c[1]) || !at(z, 2, c[2])) continue;
-            near = shape.finish(1.0f, shape(c[0], c[1], c[2])) > 0;
+            near = shape.bound_at(x, y, z, wrap);
           }
     }
     pb.detail = plan.detail && near;
@@ -291,39 +292,112 @@ void execute_plan(const Preset& p, const BrickPlan& plan, const std::vector<size
     return g;
   };
 
+  const bool wrap = p.tiling;
+  constexpr uint32_t S = kDetailBlock;
   auto one = [&](size_t b, std::vector<float>& noise) {
     const auto t0 = std::chrono::steady_clock::now();
     const PlannedBrick& bx = plan.bricks[b];
+    // The whole brick (density is evaluated on all of it, so what the detail rule sees does not
+    // depend on the region), and the part of it in the region, which is what the sink receives.
+    PlannedBrick wb = bx;
+    for (int a = 0; a < 3; ++a) wb.lo[a] = bx.lo[a] / kBrick * kBrick, wb.hi[a] = std::min(N[a], wb.lo[a] + kBrick);
+    const uint32_t W[3] = {wb.hi[0] - wb.lo[0], wb.hi[1] - wb.lo[1], wb.hi[2] - wb.lo[2]};
+    auto widx = [&](uint32_t x, uint32_t y, uint32_t z) {
+      return (size_t(z - wb.lo[2]) * W[1] + (y - wb.lo[1])) * W[0] + (x - wb.lo[0]);
+    };
     BrickResult res;
     const size_t cnt = bx.count();
     res.density.assign(cnt, 0.0f);
+    std::vector<float> dens;  // whole brick
     if (bx.density || !opt.skip_empty) {
-      noise.resize(cnt);
-      noise3d::evaluate_grid(rp, grid_of(bx), noise.data(), {1});
-      size_t q = 0, act = 0;
+      dens.resize(wb.count());
+      noise.resize(wb.count());
+      noise3d::evaluate_grid(rp, grid_of(wb), noise.data(), {1});
+      size_t q = 0;
+      for (uint32_t z = wb.lo[2]; z < wb.hi[2]; ++z)
+        for (uint32_t y = wb.lo[1]; y < wb.hi[1]; ++y)
+          for (uint32_t x = wb.lo[0]; x < wb.hi[0]; ++x, ++q)
+            dens[q] = shape.finish(channel_value(rc, noise[q]), shape(x, y, z));
+      size_t k = 0, act = 0;
       for (uint32_t z = bx.lo[2]; z < bx.hi[2]; ++z)
         for (uint32_t y = bx.lo[1]; y < bx.hi[1]; ++y)
-          for (uint32_t x = bx.lo[0]; x < bx.hi[0]; ++x, ++q) {
-            const float d = shape.finish(channel_value(rc, noise[q]), shape(x, y, z));
-            res.density[q] = d;
-            act += d > 0;
-          }
+          for (uint32_t x = bx.lo[0]; x < bx.hi[0]; ++x, ++k) act += (res.density[k] = dens[widx(x, y, z)]) > 0;
       res.any_density = act > 0;
       active += act;
     }
     if (!bx.density && opt.skip_empty) ++skipped;
     if (plan.detail && (bx.detail || !opt.skip_empty)) {
-      ++detail_done;
+      // Detail blocks (8^3, aligned like the bricks) that keep their noise: those within one voxel
+      // of this brick's density > 0 or, beyond the brick's faces, of the bound > 0.
+      const uint32_t nbk[3] = {(W[0] + S - 1) / S, (W[1] + S - 1) / S, (W[2] + S - 1) / S};
+      std::vector<uint8_t> keep(static_cast<size_t>(nbk[0]) * nbk[1] * nbk[2], 0);
+      if (bx.detail) {
+        const int64_t M[3] = {W[0] + 2, W[1] + 2, W[2] + 2};  // the brick and its one-voxel shell
+        std::vector<uint8_t> maybe(size_t(M[0] * M[1] * M[2]), 0);
+        for (int64_t z = -1; z <= W[2]; ++z)
+          for (int64_t y = -1; y <= W[1]; ++y)
+            for (int64_t x = -1; x <= W[0]; ++x) {
+              const bool inside = x >= 0 && y >= 0 && z >= 0 && x < W[0] && y < W[1] && z < W[2];
+              uint8_t m;
+              if (inside) m = !dens.empty() && dens[(size_t(z) * W[1] + y) * W[0] + x] > 0;
+              else m = shape.bound_at(int64_t(wb.lo[0]) + x, int64_t(wb.lo[1]) + y, int64_t(wb.lo[2]) + z, wrap);
+              maybe[size_t(((z + 1) * M[1] + (y + 1)) * M[0] + (x + 1))] = m;
+            }
+        for (uint32_t kz = 0; kz < nbk[2]; ++kz)
+          for (uint32_t ky = 0; ky < nbk[1]; ++ky)
+            for (uint32_t kx = 0; kx < nbk[0]; ++kx) {
+              bool any = false;  // the block dilated by one voxel, in maybe's coordinates
+              for (uint32_t z = kz * S; z <= std::min(W[2], (kz + 1) * S) + 1 && !any; ++z)
+                for (uint32_t y = ky * S; y <= std::min(W[1], (ky + 1) * S) + 1 && !any; ++y)
+                  for (uint32_t x = kx * S; x <= std::min(W[0], (kx + 1) * S) + 1 && !any; ++x)
+                    any = maybe[size_t((z * M[1] + y) * M[0] + x)];
+              keep[(size_t(kz) * nbk[1] + ky) * nbk[0] + kx] = any;
+            }
+      }
+      const bool some = std::any_of(keep.begin(), keep.end(), [](uint8_t k) { return k != 0; });
+      if (some || !opt.skip_empty) ++detail_done;
       for (int c = 1; c < 4; ++c) {
         if (!p.channels[c].enabled) continue;
+        const noise3d::FractalParams cp = channel_params(p, c);
         std::vector<float>& out = res.detail[c - 1];
-        out.resize(cnt);
-        noise3d::evaluate_grid(channel_params(p, c), grid_of(bx), out.data(), {1});
-        if (!bx.detail) {  // evaluated only to measure what skipping saves: the value is 0 here
-          out.clear();
-          continue;
+        out.assign(cnt, 0.0f);
+        if (!opt.skip_empty) {  // evaluate everything, keep what the rule keeps: same bytes
+          noise.resize(cnt);
+          noise3d::evaluate_grid(cp, grid_of(bx), noise.data(), {1});
         }
-        for (float& x : out) x = channel_value(p.channels[c], x);
+        size_t n_kept = 0;
+        for (uint32_t kz = 0; kz < nbk[2]; ++kz)
+          for (uint32_t ky = 0; ky < nbk[1]; ++ky)
+            for (uint32_t kx = 0; kx < nbk[0]; ++kx) {
+              if (!keep[(size_t(kz) * nbk[1] + ky) * nbk[0] + kx]) continue;
+              PlannedBrick blk;  // the block, clipped to the region part of the brick
+              const uint32_t k3[3] = {kx, ky, kz};
+              for (int a = 0; a < 3; ++a) {
+                blk.lo[a] = std::max(bx.lo[a], wb.lo[a] + k3[a] * S);
+                blk.hi[a] = std::min(bx.hi[a], wb.lo[a] + (k3[a] + 1) * S);
+              }
+              if (blk.lo[0] >= blk.hi[0] || blk.lo[1] >= blk.hi[1] || blk.lo[2] >= blk.hi[2]) continue;
+              ++n_kept;
+              const uint32_t bw = bx.hi[0] - bx.lo[0], bh = bx.hi[1] - bx.lo[1];
+              auto at_out = [&](uint32_t x, uint32_t y, uint32_t z) {
+                return (size_t(z - bx.lo[2]) * bh + (y - bx.lo[1])) * bw + (x - bx.lo[0]);
+              };
+              if (opt.skip_empty) {
+                std::vector<float> part(blk.count());
+                noise3d::evaluate_grid(cp, grid_of(blk), part.data(), {1});
+                size_t k = 0;
+                for (uint32_t z = blk.lo[2]; z < blk.hi[2]; ++z)
+                  for (uint32_t y = blk.lo[1]; y < blk.hi[1]; ++y)
+                    for (uint32_t x = blk.lo[0]; x < blk.hi[0]; ++x, ++k)
+                      out[at_out(x, y, z)] = channel_value(p.channels[c], part[k]);
+              } else {
+                for (uint32_t z = blk.lo[2]; z < blk.hi[2]; ++z)
+                  for (uint32_t y = blk.lo[1]; y < blk.hi[1]; ++y)
+                    for (uint32_t x = blk.lo[0]; x < blk.hi[0]; ++x)
+                      out[at_out(x, y, z)] = channel_value(p.channels[c], noise[at_out(x, y, z)]);
+              }
+            }
+        if (!n_kept) out.clear();
       }
     }
     res.any_value = res.any_density;

@@ -21,6 +21,7 @@ class Cancelled : public Error {
 };
 
 inline constexpr uint32_t kBrick = 16;  ///< bricks are 16^3 voxels aligned to the volume origin
+inline constexpr uint32_t kDetailBlock = 8;  ///< detail is kept or zeroed in 8^3 blocks (VDB leaves)
 
 struct GenerateOptions {
   int threads = 0;         ///< 0 = all cores; output bytes are identical for any value
@@ -61,15 +62,17 @@ struct GenerateStats {
 // and the brick, never on its neighbours or on which process computes it, so a plan can be split
 // across threads, MPI ranks or farm tiles and reassembled into the one-process bytes.
 //
-// Detail channels hold their noise value in every brick that lies within one voxel (the reach of
-// trilinear filtering, wrapping in x and z for tiling volumes) of a voxel the bound allows to be
-// non-zero; they are 0 in all other bricks. So detail is exact wherever density, or a neighbour's
-// density, is non-zero.
+// Detail channels hold their noise value in every 8^3 detail block that lies within one voxel (the
+// reach of trilinear filtering, wrapping in x and z for tiling volumes) of a voxel of its own brick
+// whose density is > 0, or of a voxel beyond the brick's faces that the bound allows to be > 0;
+// they are 0 in all other blocks. So detail is exact wherever density, or a neighbour's density,
+// is non-zero, and a brick's values still depend on nothing outside it but the noise-free bound.
 
 struct PlannedBrick {
   std::array<uint32_t, 3> lo{}, hi{};  ///< voxel range [lo, hi) in volume coordinates, clipped to the region
   bool density = true;  ///< false: the bound proves density 0 in the whole brick
-  bool detail = true;   ///< false: detail channels are 0 here (nothing within a voxel can hold cloud)
+  bool detail = true;   ///< false: detail channels are 0 here (nothing within a voxel can hold cloud);
+                        ///< true: some of its detail blocks may keep their noise
   double cost = 0;      ///< expected work in arbitrary units (octave-voxels of noise, plus the bound)
   size_t count() const { return size_t(hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]); }
 };
