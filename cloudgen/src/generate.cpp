@@ -113,7 +113,17 @@ struct Shape {
     }
     towers = resolve_towers(p);
     t = float(p.threshold), inv = float(1.0 / (1.0 - p.threshold)), scale = float(p.density_scale);
+    // Voxels a tower can reach: q < 9 needs |u - c| < 3 sigma on each axis, u = (i + 0.5) / N.
+    for (const Tower& w : towers) {
+      std::array<int64_t, 6> r;
+      for (int a = 0; a < 3; ++a) {
+        r[a] = int64_t(std::floor((w.center[a] - 3 * w.sigma[a]) * N[a] - 0.5)) - 1;
+        r[3 + a] = int64_t(std::ceil((w.center[a] + 3 * w.sigma[a]) * N[a] - 0.5)) + 1;
+      }
+      tower_box.push_back(r);
+    }
   }
+  std::vector<std::array<int64_t, 6>> tower_box;  // inclusive voxel bounds (lo xyz, hi xyz), with a margin
   /// Shape factor without noise; the density is R * shape before the threshold.
   float operator()(uint32_t x, uint32_t y, uint32_t z) const {
     float prof = profile[y];
@@ -134,6 +144,46 @@ struct Shape {
   float finish(float r, float s) const {
     float d = r * s;
     return std::clamp((d - t) * inv * scale, 0.0f, 1.0f);
+  }
+  /// Voxel indices of [lo, hi] (inclusive, may reach one voxel outside the volume) on axis a:
+  /// clipped in y and without wrapping, taken modulo in x and z with it.
+  std::vector<uint32_t> axis_set(int a, int64_t lo, int64_t hi, bool wrap) const {
+    std::vector<uint32_t> v;
+    for (int64_t i = lo; i <= hi; ++i) {
+      if (i >= 0 && i < int64_t(N[a])) v.push_back(uint32_t(i));
+      else if (wrap && a != 1) v.push_back(uint32_t((i % int64_t(N[a]) + N[a]) % int64_t(N[a])));
+    }
+    return v;
+  }
+  /// Whether the bound allows density > 0 anywhere in the box [lo, hi] (inclusive; see axis_set).
+  /// Exact, and fast where no tower reaches: the shape is then profile(y) * coverage(x, z), and
+  /// rounding is monotone, so its maximum is fl(max profile * max coverage).
+  bool any_in(const std::array<int64_t, 3>& lo, const std::array<int64_t, 3>& hi, bool wrap) const {
+    std::vector<uint32_t> c[3];
+    for (int a = 0; a < 3; ++a) {
+      c[a] = axis_set(a, lo[a], hi[a], wrap);
+      if (c[a].empty()) return false;
+    }
+    bool tower = false;
+    for (const auto& r : tower_box) {
+      bool hit = true;
+      for (int a = 0; a < 3 && hit; ++a)
+        hit = std::any_of(c[a].begin(), c[a].end(), [&](uint32_t i) { return int64_t(i) >= r[a] && int64_t(i) <= r[3 + a]; });
+      tower = tower || hit;
+    }
+    if (tower) {
+      for (uint32_t z : c[2])
+        for (uint32_t y : c[1])
+          for (uint32_t x : c[0])
+            if (finish(1.0f, (*this)(x, y, z)) > 0) return true;
+      return false;
+    }
+    float pmax = 0, cmax = coverage.empty() ? 1.0f : 0.0f;
+    for (uint32_t y : c[1]) pmax = std::max(pmax, profile[y]);
+    if (!coverage.empty())
+      for (uint32_t z : c[2])
+        for (uint32_t x : c[0]) cmax = std::max(cmax, coverage[size_t(z) * N[0] + x]);
+    return finish(1.0f, coverage.empty() ? pmax : pmax * cmax) > 0;
   }
   /// Whether the bound allows density > 0 at a voxel that may lie outside the volume: outside in
   /// y, or in x/z without wrapping, there is nothing; with wrapping x and z are taken modulo.
@@ -219,27 +269,14 @@ BrickPlan plan_bricks(const Preset& p, const GenerateOptions& opt) {
       lo[a] = uint32_t((b0[a] + q[a]) * kBrick);
       hi[a] = std::min(N[a], uint32_t((b0[a] + q[a] + 1) * kBrick));
     }
-    // Density: any voxel of the whole brick above the threshold with R = 1?
-    float smax = 0;
-    for (uint32_t z = lo[2]; z < hi[2] && smax <= 0; ++z)
-      for (uint32_t y = lo[1]; y < hi[1]; ++y)
-        for (uint32_t x = lo[0]; x < hi[0]; ++x) smax = std::max(smax, shape.finish(1.0f, shape(x, y, z)));
+    // Density: any voxel of the whole brick above the threshold with R = 1? Detail: the same over
+    // the brick grown by one voxel (wrapping x and z if tiling).
     PlannedBrick& pb = plan.bricks[b];
-    pb.density = smax > 0;
-    // Detail: the same over the one-voxel shell around the brick (wrapping x and z if tiling).
+    const std::array<int64_t, 3> ilo{lo[0], lo[1], lo[2]}, ihi{int64_t(hi[0]) - 1, int64_t(hi[1]) - 1, int64_t(hi[2]) - 1};
+    pb.density = shape.any_in(ilo, ihi, false);
     bool near = pb.density;
-    if (!near && plan.detail) {
-      for (int64_t z = int64_t(lo[2]) - 1; z <= int64_t(hi[2]) && !near; ++z)
-        for (int64_t y = int64_t(lo[1]) - 1; y <= int64_t(hi[1]) && !near; ++y)
-          for (int64_t x = int64_t(lo[0]) - 1; x <= int64_t(hi[0]) && !near; ++x) {
-            const bool inside = x >= lo[0] && x < hi[0] && y >= lo[1] && y < hi[1] && z >= lo[2] && z < hi[2];
-            if (inside) {  // already known to be 0: jump to the far face of this row
-              x = hi[0] - 1;
-              continue;
-            }
-            near = shape.bound_at(x, y, z, wrap);
-          }
-    }
+    if (!near && plan.detail)
+      near = shape.any_in({ilo[0] - 1, ilo[1] - 1, ilo[2] - 1}, {ihi[0] + 1, ihi[1] + 1, ihi[2] + 1}, wrap);
     pb.detail = plan.detail && near;
     for (int a = 0; a < 3; ++a) {
       pb.lo[a] = std::max(lo[a], plan.region_lo[a]);
