@@ -387,6 +387,8 @@ void run_generate_mpi(const Preset& p, const GenerateOptions& go, const std::vec
         costs += one;
       }
       std::fprintf(stderr, "  bricks by kind (count x thread time each): %s\n", costs.c_str());
+      std::fprintf(stderr, "  gather: rank 0 received %s of brick buffers, added bricks to the grids in %.3f s\n",
+                   human_bytes(r.received_bytes).c_str(), r.insert_seconds);
       for (size_t i = 0; i < r.per_rank.size(); ++i) {
         const auto& s = r.per_rank[i];
         std::fprintf(stderr,

@@ -243,7 +243,7 @@ double BrickPlan::total_cost() const {
   return c;
 }
 
-BrickPlan plan_bricks(const Preset& p, const GenerateOptions& opt) {
+BrickPlan plan_bricks(const Preset& p, const GenerateOptions& opt, size_t first, size_t count) {
   BrickPlan plan;
   plan.dims = p.resolution;
   check_region(p, opt, plan.region_lo, plan.region_hi);
@@ -285,8 +285,18 @@ BrickPlan plan_bricks(const Preset& p, const GenerateOptions& opt) {
     const size_t whole = size_t(hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
     pb.cost = double(whole) * 0.5 + double(pb.count()) * ((pb.density ? density_cost : 0) + (pb.detail ? detail_cost : 0));
   };
+  const size_t b_end = first + std::min(count, plan.bricks.size() - std::min(first, plan.bricks.size()));
+  for (size_t b = 0; b < plan.bricks.size(); ++b)
+    if (b < first || b >= b_end) {  // undecided: the whole brick as if it held cloud
+      const size_t q[3] = {b % nb[0], b / nb[0] % nb[1], b / (size_t(nb[0]) * nb[1])};
+      for (int a = 0; a < 3; ++a) {
+        plan.bricks[b].lo[a] = std::max(plan.region_lo[a], uint32_t((b0[a] + q[a]) * kBrick));
+        plan.bricks[b].hi[a] = std::min(plan.region_hi[a], uint32_t((b0[a] + q[a] + 1) * kBrick));
+      }
+      plan.bricks[b].detail = plan.detail;
+    }
   in_arena(opt.threads, [&] {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, plan.bricks.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(first, std::max(first, b_end), 1), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t b = r.begin(); b != r.end(); ++b) plan_one(b);
     });
   });

@@ -87,8 +87,15 @@ void append(std::vector<char>& buf, const Stored& s) {
   }
 }
 
+double g_insert_seconds = 0;  // rank 0: time spent adding bricks to the grids
+
 void add_stored(VdbAssembler& out, const BrickPlan& plan, const std::array<uint32_t, 3>& r0, size_t brick,
                 const float* const ch[4]) {
+  const auto t0 = std::chrono::steady_clock::now();
+  struct Timer {
+    std::chrono::steady_clock::time_point t;
+    ~Timer() { g_insert_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count(); }
+  } timer{t0};
   const PlannedBrick& b = plan.bricks[brick];
   std::array<uint32_t, 3> lo, hi;
   for (int a = 0; a < 3; ++a) lo[a] = b.lo[a] - r0[a], hi[a] = b.hi[a] - r0[a];
@@ -123,6 +130,7 @@ Result generate_vdb(const Preset& p, const GenerateOptions& go, const ExportOpti
   MPI_Comm_size(MPI_COMM_WORLD, &res.ranks);
   MPI_Comm_rank(MPI_COMM_WORLD, &res.rank);
   const int rank = res.rank, nranks = res.ranks;
+  g_insert_seconds = 0;
   auto t0 = std::chrono::steady_clock::now();
   auto since = [](std::chrono::steady_clock::time_point& t) {
     const auto now = std::chrono::steady_clock::now();
@@ -133,7 +141,39 @@ Result generate_vdb(const Preset& p, const GenerateOptions& go, const ExportOpti
 
   // Every rank makes the same plan and the same split (both deterministic), so nothing but the
   // results travels.
-  const BrickPlan plan = plan_bricks(p, go);
+  // Each rank decides a contiguous share of the plan; the decisions (2 flags and a cost per brick)
+  // are exchanged, so the plan costs every rank 1/N of the bound, not all of it.
+  BrickPlan plan = plan_bricks(p, go, 0, 0);
+  {
+    const size_t nb = plan.bricks.size();
+    std::vector<int> counts(static_cast<size_t>(nranks)), displs(static_cast<size_t>(nranks));
+    for (int r = 0; r < nranks; ++r) {
+      const size_t a = nb * size_t(r) / size_t(nranks), b = nb * size_t(r + 1) / size_t(nranks);
+      displs[size_t(r)] = int(a), counts[size_t(r)] = int(b - a);
+    }
+    const size_t first = size_t(displs[size_t(rank)]), count = size_t(counts[size_t(rank)]);
+    const BrickPlan part = plan_bricks(p, go, first, count);
+    struct Decision {
+      double cost;
+      int32_t density, detail;
+    };
+    std::vector<Decision> all(nb), mine_d(count);
+    for (size_t i = 0; i < count; ++i) {
+      const PlannedBrick& b = part.bricks[first + i];
+      mine_d[i] = {b.cost, b.density, b.detail};
+    }
+    MPI_Datatype dt;
+    check(MPI_Type_contiguous(int(sizeof(Decision)), MPI_BYTE, &dt), "type");
+    MPI_Type_commit(&dt);
+    check(MPI_Allgatherv(mine_d.data(), int(count), dt, all.data(), counts.data(), displs.data(), dt, MPI_COMM_WORLD),
+          "allgather of the plan");
+    MPI_Type_free(&dt);
+    for (size_t i = 0; i < nb; ++i) {
+      plan.bricks[i].cost = all[i].cost;
+      plan.bricks[i].density = all[i].density != 0;
+      plan.bricks[i].detail = all[i].detail != 0;
+    }
+  }
   const std::vector<size_t> mine = balance_bricks(plan, nranks)[size_t(rank)];
   res.plan_seconds = since(t0);
 
@@ -182,6 +222,7 @@ Result generate_vdb(const Preset& p, const GenerateOptions& go, const ExportOpti
         MPI_Get_count(&st, MPI_BYTE, &n);
         buf.resize(size_t(n));
         check(MPI_Recv(buf.data(), n, MPI_BYTE, src, st.MPI_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE), "receive");
+        res.received_bytes += uint64_t(n);
         if (st.MPI_TAG == kTagDone) break;
         size_t at = 0;
         while (at < buf.size()) {
@@ -246,6 +287,7 @@ Result generate_vdb(const Preset& p, const GenerateOptions& go, const ExportOpti
       res.per_rank.push_back(s);
     }
     res.active_voxels = out->active_voxels();
+    res.insert_seconds = g_insert_seconds;
     for (const std::string& o : outputs) out->write(o);
     res.write_seconds = since(t0);
   }

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <atomic>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -87,7 +88,9 @@ struct BrickPlan {
 
 /// The plan of `generate(p, opt)`: opt's region and detail flag; skip_empty does not change it
 /// (with skipping off, the skippable noise is evaluated and discarded, for benchmarks).
-BrickPlan plan_bricks(const Preset& p, const GenerateOptions& opt = {});
+/// `first`, `count`: decide only those bricks (MPI ranks each plan a share and exchange it); the
+/// others keep density = detail = true and cost 0.
+BrickPlan plan_bricks(const Preset& p, const GenerateOptions& opt = {}, size_t first = 0, size_t count = SIZE_MAX);
 
 /// One generated brick: channels over the brick's voxels (x fastest). A detail channel is empty
 /// when the preset does not enable it, the plan has no detail, or the brick's detail is 0.

@@ -29,6 +29,8 @@ struct Result {
   std::vector<RankStats> per_rank;  ///< on rank 0 only: every rank, in rank order
   double plan_seconds = 0, gather_seconds = 0, write_seconds = 0;
   uint64_t active_voxels = 0;       ///< on rank 0
+  uint64_t received_bytes = 0;      ///< on rank 0: brick buffers received from the other ranks
+  double insert_seconds = 0;        ///< on rank 0: time adding bricks to the sparse grids
 };
 
 /// Starts MPI (once). Throws InputError when built without MPI.
