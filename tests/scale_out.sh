@@ -46,6 +46,11 @@ if [[ "$part" == all || "$part" == mpi ]]; then
         fi
       done
     done
+    # More ranks than bricks (tiny has 8): the idle ranks generate nothing, the output is the same.
+    if mpirun -n 9 --oversubscribe $cg generate tiny -q --stats -o "$tmp/mpi9.vdb" 2> "$tmp/log" &&
+       grep -q "8 bricks on 9 ranks" "$tmp/log" && $eq "$tmp/ref0.vdb" "$tmp/mpi9.vdb"; then
+      ok "mpirun -n 9 (more ranks than bricks) equals the one-process VDB"
+    else fail "mpirun -n 9: $(cat "$tmp/log")"; fi
     # A rank that dies (deterministically: rank 1 kills itself before sending its bricks) fails the
     # run, and rank 0 writes nothing, not even a temporary file.
     mkdir -p "$tmp/kill"

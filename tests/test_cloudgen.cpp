@@ -281,8 +281,13 @@ TEST(Pipeline, PlanSplitIntoPartsGivesTheSameBytes) {
   GenerateOptions one, two;
   one.threads = 1, two.threads = 2;
   GenerateStats se, so;
-  execute_plan(p, plan, even, one, sink, &se);
-  execute_plan(p, plan, odd, two, sink, &so);
+  execute_plan(p, plan, &even, one, sink, &se);
+  execute_plan(p, plan, &odd, two, sink, &so);
+  // An empty share (an MPI rank with more ranks than bricks) generates nothing.
+  GenerateStats s0;
+  const std::vector<size_t> none;
+  execute_plan(p, plan, &none, one, [](size_t, BrickResult&) { FAIL() << "a brick of an empty share"; }, &s0);
+  EXPECT_EQ(s0.bricks, 0u);
   EXPECT_EQ(se.bricks + so.bricks, plan.bricks.size());
   EXPECT_TRUE(same_bytes(v.density, full.density));
   EXPECT_TRUE(same_bytes(v.detail[0], full.detail[0]));

@@ -318,13 +318,13 @@ Volume volume_header(const Preset& p, const BrickPlan& plan) {
   return v;
 }
 
-void execute_plan(const Preset& p, const BrickPlan& plan, const std::vector<size_t>& which,
+void execute_plan(const Preset& p, const BrickPlan& plan, const std::vector<size_t>* which,
                   const GenerateOptions& opt, const BrickSink& sink, GenerateStats* stats) {
   const auto t_start = std::chrono::steady_clock::now();
   const std::array<uint32_t, 3> N = p.resolution;
   if (plan.dims != N) throw Error("execute_plan: the plan was made for another resolution");
-  const size_t n = which.empty() ? plan.bricks.size() : which.size();
-  auto brick_at = [&](size_t i) { return which.empty() ? i : which[i]; };
+  const size_t n = which ? which->size() : plan.bricks.size();
+  auto brick_at = [&](size_t i) { return which ? (*which)[i] : i; };
   const noise3d::FractalParams rp = channel_params(p, 0);
   const Channel& rc = p.channels[0];
   const Shape shape(p, opt.threads);
@@ -501,7 +501,7 @@ Volume generate(const Preset& p, const GenerateOptions& opt, GenerateStats* stat
     for (int c = 0; c < 3; ++c)
       if (!res.detail[c].empty()) copy(res.detail[c], v.detail[c]);
   };
-  execute_plan(p, plan, {}, opt, into_volume, stats);
+  execute_plan(p, plan, nullptr, opt, into_volume, stats);
   if (opt.occupancy) build_occupancy(v);
   if (stats) {
     stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();

@@ -182,7 +182,7 @@ Result generate_vdb(const Preset& p, const GenerateOptions& go, const ExportOpti
   RankStats me;
   GenerateOptions opt = go;
   opt.progress = rank == 0 ? go.progress : nullptr;
-  execute_plan(p, plan, mine, opt, [&](size_t b, BrickResult& r) {
+  execute_plan(p, plan, &mine, opt, [&](size_t b, BrickResult& r) {
     if (!r.any_value) return;  // all-zero bricks add nothing to a sparse grid
     std::lock_guard<std::mutex> lock(mtx);
     kept.push_back({b, std::move(r)});

@@ -103,9 +103,9 @@ struct BrickResult {
 /// Receives each finished brick (plan index, result); called concurrently from worker threads.
 using BrickSink = std::function<void(size_t brick, BrickResult& result)>;
 
-/// Generates the plan's bricks listed in `which` (all when empty) with opt.threads workers and
-/// hands each to `sink`. Stats count only those bricks (active_voxels too).
-void execute_plan(const Preset& p, const BrickPlan& plan, const std::vector<size_t>& which,
+/// Generates the plan's bricks listed in `which` (all of them when null; none for an empty list)
+/// with opt.threads workers and hands each to `sink`. Stats count only those bricks.
+void execute_plan(const Preset& p, const BrickPlan& plan, const std::vector<size_t>* which,
                   const GenerateOptions& opt, const BrickSink& sink, GenerateStats* stats = nullptr);
 
 /// The Volume that generate() fills, without channel data: dims, origin, voxel size, tiling,
