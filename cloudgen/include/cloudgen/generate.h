@@ -22,7 +22,8 @@ class Cancelled : public Error {
 };
 
 inline constexpr uint32_t kBrick = 16;  ///< bricks are 16^3 voxels aligned to the volume origin
-inline constexpr uint32_t kDetailBlock = 8;  ///< detail is kept or zeroed in 8^3 blocks (VDB leaves)
+/// Detail is kept or zeroed in blocks of 16 x 8 x 8 voxels (x, y, z): two VDB leaves, whole rows.
+inline constexpr uint32_t kDetailBlock = 8;
 
 struct GenerateOptions {
   int threads = 0;         ///< 0 = all cores; output bytes are identical for any value
@@ -63,7 +64,7 @@ struct GenerateStats {
 // and the brick, never on its neighbours or on which process computes it, so a plan can be split
 // across threads, MPI ranks or farm tiles and reassembled into the one-process bytes.
 //
-// Detail channels hold their noise value in every 8^3 detail block that lies within one voxel (the
+// Detail channels hold their noise value in every 16x8x8 detail block that lies within one voxel (the
 // reach of trilinear filtering, wrapping in x and z for tiling volumes) of a voxel of its own brick
 // whose density is > 0, or of a voxel beyond the brick's faces that the bound allows to be > 0;
 // they are 0 in all other blocks. So detail is exact wherever density, or a neighbour's density,
