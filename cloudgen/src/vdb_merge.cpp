@@ -5,6 +5,8 @@
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Prune.h>
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 
 #include "cloudgen/scale.h"
@@ -42,8 +44,9 @@ VdbAssembler::~VdbAssembler() = default;
 void VdbAssembler::add(const std::array<uint32_t, 3>& lo, const std::array<uint32_t, 3>& hi, const float* density,
                        const std::array<const float*, 3>& detail) {
   const float* src[4] = {density, detail[0], detail[1], detail[2]};
-  for (int c = 0; c < 4; ++c) {
-    if (!impl_->channel[c] || !src[c]) continue;
+  // The channels are separate grids, so they are filled in parallel.
+  tbb::parallel_for(0, 4, [&](int c) {
+    if (!impl_->channel[c] || !src[c]) return;
     // Same rule as copyFromDense with tolerance 0 in write_vdb: a voxel is active iff it is not
     // the background 0; pruning at the end gives the same tree.
     auto acc = impl_->channel[c]->getAccessor();
@@ -52,7 +55,7 @@ void VdbAssembler::add(const std::array<uint32_t, 3>& lo, const std::array<uint3
       for (uint32_t y = lo[1]; y < hi[1]; ++y)
         for (uint32_t x = lo[0]; x < hi[0]; ++x, ++k)
           if (src[c][k] != 0.0f) acc.setValueOn(openvdb::Coord(int(x), int(y), int(z)), src[c][k]);
-  }
+  });
   impl_->pruned = false;
 }
 
