@@ -393,7 +393,7 @@ void execute_plan(const Preset& p, const BrickPlan& plan, const std::vector<size
     }
     if (!bx.density && opt.skip_empty) ++skipped;
     if (plan.detail && (bx.detail || !opt.skip_empty)) {
-      // Detail blocks (8^3, aligned like the bricks) that keep their noise: those within one voxel
+      // Detail blocks (16x8x8, aligned like the bricks) that keep their noise: those within one voxel
       // of this brick's density > 0 or, beyond the brick's faces, of the bound > 0.
       const uint32_t nbk[3] = {(W[0] + S[0] - 1) / S[0], (W[1] + S[1] - 1) / S[1], (W[2] + S[2] - 1) / S[2]};
       std::vector<uint8_t> keep(static_cast<size_t>(nbk[0]) * nbk[1] * nbk[2], 0);
