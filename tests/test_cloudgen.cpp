@@ -18,6 +18,7 @@
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
 #include "cloudgen/preset.h"
+#include "cloudgen/scale.h"
 
 using namespace cloudgen;
 namespace fs = std::filesystem;
@@ -296,6 +297,52 @@ TEST(Pipeline, PlanSplitIntoPartsGivesTheSameBytes) {
   for (const PlannedBrick& b : plan.bricks) (b.density ? c_full : c_skip) = b.cost;
   EXPECT_GT(c_skip, 0.0);
   EXPECT_LT(c_skip, c_full);
+}
+
+// The MPI split: every brick on exactly one rank, deterministic, and no rank above the greedy
+// (longest-first) bound of the mean load plus one brick.
+TEST(Scale, BalanceCoversEveryBrickOnceWithinTheGreedyBound) {
+  Preset p = preset("cumulus-field");
+  rescale(p, 128);
+  const BrickPlan plan = plan_bricks(p);
+  double total = 0, biggest = 0;
+  for (const auto& b : plan.bricks) total += b.cost, biggest = std::max(biggest, b.cost);
+  for (int n : {1, 2, 3, 7}) {
+    SCOPED_TRACE(n);
+    const auto parts = balance_bricks(plan, n);
+    EXPECT_EQ(parts, balance_bricks(plan, n));
+    ASSERT_EQ(parts.size(), size_t(n));
+    std::vector<int> seen(plan.bricks.size(), 0);
+    for (const auto& part : parts) {
+      double load = 0;
+      for (size_t b : part) ++seen[b], load += plan.bricks[b].cost;
+      EXPECT_LE(load, total / n + biggest + 1e-9);
+    }
+    for (int s : seen) ASSERT_EQ(s, 1);
+  }
+  EXPECT_THROW(balance_bricks(plan, 0), InputError);
+}
+
+// Tile checksums ignore only the random UUID OpenVDB writes into every file.
+TEST(Scale, TileChecksumIsTheSameForTheSameVolumeAndSeesDamage) {
+  TempDir dir;
+  Preset p = preset("tiny");
+  Volume v = generate(p);
+  write_vdb(v, dir / "a.vdb", {});
+  write_vdb(v, dir / "b.vdb", {});
+  std::ifstream fa(dir / "a.vdb", std::ios::binary), fb(dir / "b.vdb", std::ios::binary);
+  std::string ba((std::istreambuf_iterator<char>(fa)), {}), bb((std::istreambuf_iterator<char>(fb)), {});
+  ASSERT_EQ(ba.size(), bb.size());
+  EXPECT_NE(ba, bb) << "OpenVDB's per-file UUID should differ";
+  EXPECT_EQ(file_checksum(dir / "a.vdb"), file_checksum(dir / "b.vdb"));
+  ba[ba.size() / 2] ^= 1;
+  std::ofstream(dir / "c.vdb", std::ios::binary) << ba;
+  EXPECT_NE(file_checksum(dir / "a.vdb"), file_checksum(dir / "c.vdb"));
+  EXPECT_THROW(file_checksum(dir / "missing.vdb"), IoError);
+  const VdbHeader h = read_vdb_header(dir / "a.vdb");
+  EXPECT_EQ(h.meta("preset_hash"), preset_hash(p));
+  EXPECT_EQ(h.meta("seed"), "3");
+  EXPECT_DOUBLE_EQ(h.origin[0], p.origin[0]);
 }
 
 TEST(Pipeline, IdenticalAcrossThreadCountsAndRegions) {
