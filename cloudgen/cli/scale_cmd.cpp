@@ -102,7 +102,8 @@ void run_plan(const PlanArgs& a) {
   char extra = 0;
   if (std::sscanf(a.tiles.c_str(), "%u,%u,%u%c", &t[0], &t[1], &t[2], &extra) != 3 || !t[0] || !t[1] || !t[2])
     throw InputError("--tiles: \"" + a.tiles + "\" should be X,Y,Z (tiles per axis, each >= 1)");
-  const std::string path = resolve_preset_path(a.preset);
+  // Absolute paths in the commands, so a farm job may start in any folder (of a shared file system).
+  const std::string path = fs::absolute(resolve_preset_path(a.preset)).lexically_normal().string();
   const std::vector<std::string> args = tile_args(a.sets, a.seed, a.resolution);
   const Preset p = load_with_args(path, args, "plan");
   GenerateOptions go;
@@ -117,7 +118,7 @@ void run_plan(const PlanArgs& a) {
                        std::to_string(nb[i]) + " bricks of " + std::to_string(kBrick) + " voxels there (allowed: 1.." +
                        std::to_string(nb[i]) + ")");
   }
-  const fs::path dir = fs::path(a.out).parent_path();
+  const fs::path dir = fs::absolute(a.out).lexically_normal().parent_path();
   json tiles = json::array();
   size_t index = 0;
   for (uint32_t tz = 0; tz < t[2]; ++tz)

@@ -59,6 +59,8 @@ openvdb::GridPtrVec make_empty_grids(const Volume& v, const ExportOptions& o) {
 }
 
 void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::string& path, const ExportOptions& o) {
+  // Both the one-process writer and the MPI / tile assembler end here: a change to the grids'
+  // topology, transform or metadata made here reaches every path's output alike.
   auto density = openvdb::gridPtrCast<openvdb::FloatGrid>(grids[0]);
   for (auto& [k, val] : v.metadata) density->insertMeta(k, openvdb::StringMetadata(val));
   // Never a creator starting with "Houdini": Blender then assumes a Y-up Houdini file and rotates it.
