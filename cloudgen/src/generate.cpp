@@ -83,6 +83,24 @@ std::vector<Tower> resolve_towers(const Preset& p) {
   return t;
 }
 
+std::vector<float> coverage_map(const Preset& p, int threads) {
+  std::vector<float> coverage;
+  if (!p.coverage_enabled) return coverage;
+  const std::array<uint32_t, 3> N = p.resolution;
+  noise3d::FractalParams cp;
+  cp.kind = p.coverage_kind;
+  cp.period = {p.coverage_period, 1,
+               std::max<uint32_t>(1, uint32_t(std::lround(double(p.coverage_period) * N[2] / N[0])))};
+  cp.octaves = p.coverage_octaves;
+  cp.seed = p.seed ^ 0xC0FEC0FEull;
+  noise3d::GridRegion g;
+  g.size = {N[0], 1, N[2]};
+  coverage.resize(g.count());
+  noise3d::evaluate_grid(cp, g, coverage.data(), {threads});
+  for (float& c : coverage) c = float(smoothstep(p.coverage_low, p.coverage_high, to_unit(cp.kind, c)));
+  return coverage;
+}
+
 namespace {
 
 /// The noise-free factors of the density, shared by the plan (bound) and its execution (values):
@@ -98,19 +116,7 @@ struct Shape {
   Shape(const Preset& pr, int threads) : p(pr), N(pr.resolution) {
     profile.resize(N[1]);
     for (uint32_t y = 0; y < N[1]; ++y) profile[y] = float(height_profile(p, (y + 0.5) / N[1]));
-    if (p.coverage_enabled) {
-      noise3d::FractalParams cp;
-      cp.kind = p.coverage_kind;
-      cp.period = {p.coverage_period, 1,
-                   std::max<uint32_t>(1, uint32_t(std::lround(double(p.coverage_period) * N[2] / N[0])))};
-      cp.octaves = p.coverage_octaves;
-      cp.seed = p.seed ^ 0xC0FEC0FEull;
-      noise3d::GridRegion g;
-      g.size = {N[0], 1, N[2]};
-      coverage.resize(g.count());
-      noise3d::evaluate_grid(cp, g, coverage.data(), {threads});
-      for (float& c : coverage) c = float(smoothstep(p.coverage_low, p.coverage_high, to_unit(cp.kind, c)));
-    }
+    coverage = coverage_map(p, threads);
     towers = resolve_towers(p);
     t = float(p.threshold), inv = float(1.0 / (1.0 - p.threshold)), scale = float(p.density_scale);
     for (const Tower& w : towers) {

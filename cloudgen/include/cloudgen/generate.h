@@ -119,6 +119,9 @@ std::string preset_hash(const Preset& p);
 
 /// The vertical profile (height distribution plus cloud-type gradient) at normalised height h.
 double height_profile(const Preset& p, double h);
+/// The coverage map over the whole x-z plane, [z][x] (x fastest), in [0, 1]; empty when the
+/// preset has no coverage (then coverage is 1 everywhere).
+std::vector<float> coverage_map(const Preset& p, int threads = 0);
 /// The Gaussian towers (explicit plus random), resolved to an explicit list.
 std::vector<Tower> resolve_towers(const Preset& p);
 
