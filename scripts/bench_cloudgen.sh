@@ -5,7 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 reps="${1:-3}"
-cg=build/bin/cloudgen
+cg="${CLOUDGEN:-build/bin/cloudgen}"   # CLOUDGEN=other/binary compares builds in the same run
 tmp="$(mktemp -d)"; trap 'rm -rf "$tmp"' EXIT
 
 # best-of-N wall time and peak RSS of one command

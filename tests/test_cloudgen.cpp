@@ -4,18 +4,21 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <sstream>
 #include <thread>
 
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
 #include "cloudgen/preset.h"
+#include "cloudgen/scale.h"
 #include "test_util.h"
 
 using namespace cloudgen;
@@ -163,6 +166,162 @@ TEST(Pipeline, SkippingDoesNotChangeASingleValue) {
       EXPECT_GT(s_on.bricks_skipped, s_on.bricks / 2);
     }
   }
+}
+
+// Detail channels are skipped where the bound proves that no voxel within one voxel can hold
+// cloud; everywhere the renderer's trilinear filter can read them next to cloud (the density's
+// non-zero voxels dilated by their 26 neighbours, wrapping x and z in tiling volumes) they must
+// equal the channel's noise exactly.
+TEST(Pipeline, DetailIsExactWithinOneVoxelOfCloud) {
+  for (const char* name : {"tiny", "thesis", "cumulus", "cumulus-field"}) {
+    SCOPED_TRACE(name);
+    Preset p = preset(name);
+    rescale(p, 96);
+    GenerateStats st;
+    Volume v = generate(p, {}, &st);
+    const auto N = v.dims;
+    std::vector<uint8_t> mask(v.voxel_count(), 0);
+    size_t masked = 0;
+    for (uint32_t z = 0; z < N[2]; ++z)
+      for (uint32_t y = 0; y < N[1]; ++y)
+        for (uint32_t x = 0; x < N[0]; ++x) {
+          if (v.density[v.index(x, y, z)] <= 0) continue;
+          for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+              for (int dx = -1; dx <= 1; ++dx) {
+                int64_t q[3] = {int64_t(x) + dx, int64_t(y) + dy, int64_t(z) + dz};
+                if (q[1] < 0 || q[1] >= N[1]) continue;
+                bool out = false;
+                for (int a : {0, 2}) {
+                  if (q[a] >= 0 && q[a] < N[a]) continue;
+                  if (v.tiles_xz) q[a] = (q[a] + N[a]) % N[a];
+                  else out = true;
+                }
+                if (out) continue;
+                uint8_t& m = mask[v.index(uint32_t(q[0]), uint32_t(q[1]), uint32_t(q[2]))];
+                masked += !m;
+                m = 1;
+              }
+        }
+    ASSERT_GT(masked, 0u);
+    size_t zero_outside = 0;
+    for (int c = 1; c < 4; ++c) {
+      if (!p.channels[c].enabled) continue;
+      const Channel& ch = p.channels[c];
+      // The presets' detail channels are plain Worley in [0, 1]: the value is the clamped noise.
+      ASSERT_TRUE(ch.kind == noise3d::Kind::Worley && !ch.invert && ch.remap[0] == 0.0 && ch.remap[1] == 1.0);
+      std::vector<float> ref(v.voxel_count());
+      noise3d::GridRegion g;
+      g.size = N;
+      noise3d::evaluate_grid(channel_params(p, c), g, ref.data());
+      const std::vector<float>& d = v.detail[c - 1];
+      ASSERT_EQ(d.size(), ref.size());
+      for (size_t i = 0; i < ref.size(); ++i) {
+        if (mask[i]) {
+          ASSERT_EQ(d[i], std::clamp(ref[i], 0.0f, 1.0f)) << "channel " << c << " voxel " << i;
+        } else {
+          zero_outside += d[i] == 0.0f;
+        }
+      }
+    }
+    // And the skipping happened: detail was evaluated in fewer bricks than the volume has.
+    if (std::string(name) != "tiny") {
+      EXPECT_LT(st.detail_bricks, st.bricks);
+      EXPECT_GT(zero_outside, 0u);
+    }
+  }
+}
+
+// A plan executed in any split (here: two interleaved halves, each with its own thread count)
+// gives the bytes of generate(): what MPI ranks and farm tiles rely on.
+TEST(Pipeline, PlanSplitIntoPartsGivesTheSameBytes) {
+  Preset p = preset("thesis");
+  rescale(p, 64);
+  const Volume full = generate(p);
+  const BrickPlan plan = plan_bricks(p);
+  ASSERT_EQ(plan.bricks.size(), 4u * 4u * 4u);
+  Volume v = volume_header(p, plan);
+  EXPECT_EQ(v.metadata, full.metadata);
+  v.density.assign(v.voxel_count(), 0.0f);
+  v.detail[0].assign(v.voxel_count(), 0.0f);
+  std::mutex mtx;
+  auto sink = [&](size_t b, BrickResult& r) {
+    std::lock_guard<std::mutex> lock(mtx);
+    const PlannedBrick& bx = plan.bricks[b];
+    size_t k = 0;
+    for (uint32_t z = bx.lo[2]; z < bx.hi[2]; ++z)
+      for (uint32_t y = bx.lo[1]; y < bx.hi[1]; ++y)
+        for (uint32_t x = bx.lo[0]; x < bx.hi[0]; ++x, ++k) {
+          v.density[v.index(x, y, z)] = r.density[k];
+          if (!r.detail[0].empty()) v.detail[0][v.index(x, y, z)] = r.detail[0][k];
+        }
+  };
+  std::vector<size_t> even, odd;
+  for (size_t b = 0; b < plan.bricks.size(); ++b) (b % 2 ? odd : even).push_back(b);
+  GenerateOptions one, two;
+  one.threads = 1, two.threads = 2;
+  GenerateStats se, so;
+  execute_plan(p, plan, &even, one, sink, &se);
+  execute_plan(p, plan, &odd, two, sink, &so);
+  // An empty share (an MPI rank with more ranks than bricks) generates nothing.
+  GenerateStats s0;
+  const std::vector<size_t> none;
+  execute_plan(p, plan, &none, one, [](size_t, BrickResult&) { FAIL() << "a brick of an empty share"; }, &s0);
+  EXPECT_EQ(s0.bricks, 0u);
+  EXPECT_EQ(se.bricks + so.bricks, plan.bricks.size());
+  EXPECT_TRUE(same_bytes(v.density, full.density));
+  EXPECT_TRUE(same_bytes(v.detail[0], full.detail[0]));
+  // Expected cost: a brick the bound skips is planned cheaper than one whose noise is evaluated.
+  double c_skip = 0, c_full = 0;
+  for (const PlannedBrick& b : plan.bricks) (b.density ? c_full : c_skip) = b.cost;
+  EXPECT_GT(c_skip, 0.0);
+  EXPECT_LT(c_skip, c_full);
+}
+
+// The MPI split: every brick on exactly one rank, deterministic, and no rank above the greedy
+// (longest-first) bound of the mean load plus one brick.
+TEST(Scale, BalanceCoversEveryBrickOnceWithinTheGreedyBound) {
+  Preset p = preset("cumulus-field");
+  rescale(p, 128);
+  const BrickPlan plan = plan_bricks(p);
+  double total = 0, biggest = 0;
+  for (const auto& b : plan.bricks) total += b.cost, biggest = std::max(biggest, b.cost);
+  for (int n : {1, 2, 3, 7}) {
+    SCOPED_TRACE(n);
+    const auto parts = balance_bricks(plan, n);
+    EXPECT_EQ(parts, balance_bricks(plan, n));
+    ASSERT_EQ(parts.size(), size_t(n));
+    std::vector<int> seen(plan.bricks.size(), 0);
+    for (const auto& part : parts) {
+      double load = 0;
+      for (size_t b : part) ++seen[b], load += plan.bricks[b].cost;
+      EXPECT_LE(load, total / n + biggest + 1e-9);
+    }
+    for (int s : seen) ASSERT_EQ(s, 1);
+  }
+  EXPECT_THROW(balance_bricks(plan, 0), InputError);
+}
+
+// Tile checksums ignore only the random UUID OpenVDB writes into every file.
+TEST(Scale, TileChecksumIsTheSameForTheSameVolumeAndSeesDamage) {
+  TempDir dir;
+  Preset p = preset("tiny");
+  Volume v = generate(p);
+  write_vdb(v, dir / "a.vdb", {});
+  write_vdb(v, dir / "b.vdb", {});
+  std::ifstream fa(dir / "a.vdb", std::ios::binary), fb(dir / "b.vdb", std::ios::binary);
+  std::string ba((std::istreambuf_iterator<char>(fa)), {}), bb((std::istreambuf_iterator<char>(fb)), {});
+  ASSERT_EQ(ba.size(), bb.size());
+  EXPECT_NE(ba, bb) << "OpenVDB's per-file UUID should differ";
+  EXPECT_EQ(file_checksum(dir / "a.vdb"), file_checksum(dir / "b.vdb"));
+  ba[ba.size() / 2] ^= 1;
+  std::ofstream(dir / "c.vdb", std::ios::binary) << ba;
+  EXPECT_NE(file_checksum(dir / "a.vdb"), file_checksum(dir / "c.vdb"));
+  EXPECT_THROW(file_checksum(dir / "missing.vdb"), IoError);
+  const VdbHeader h = read_vdb_header(dir / "a.vdb");
+  EXPECT_EQ(h.meta("preset_hash"), preset_hash(p));
+  EXPECT_EQ(h.meta("seed"), "3");
+  EXPECT_DOUBLE_EQ(h.origin[0], p.origin[0]);
 }
 
 TEST(Pipeline, IdenticalAcrossThreadCountsAndRegions) {

@@ -118,8 +118,7 @@ void run_blender(const BlenderArgs& a) {
     go.cancel = &g_cancel;
     go.progress = progress_bar("generate", a.quiet);
     Volume v = generate(p, go);
-    add_view_metadata(v.metadata, p.view);
-    ExportOptions eo;
+      ExportOptions eo;
     eo = p.export_options;
     vdb = fs::path(a.output).replace_extension(".vdb").string();
     write_vdb(v, vdb, eo);

@@ -4,6 +4,11 @@
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <functional>
+#include <string>
+#include <vector>
+
+#include "cloudgen/generate.h"
+#include "cloudgen/io.h"
 
 namespace cloudgen::cli {
 
@@ -19,5 +24,16 @@ void add_blender_command(CLI::App& app, std::function<void()>& run);
 
 /// "cumulus" -> the shipped presets/cumulus.json when no such file exists in the working folder.
 std::string resolve_preset_path(const std::string& p);
+
+/// "cumulus" -> presets/cumulus.json when no such file exists in the working folder.
+std::string resolve_preset_path(const std::string& preset);
+
+// Scale-out (scale_cmd.cpp): `plan`, `merge`, and generate's MPI path.
+void add_scale_commands(CLI::App& app, std::function<void()>& run);
+/// True with --mpi or when an MPI launcher started this process.
+bool mpi_requested(bool mpi_flag);
+/// generate over MPI ranks; every rank calls it; rank 0 writes the .vdb outputs and reports.
+void run_generate_mpi(const Preset& p, const GenerateOptions& go, const std::vector<std::string>& outputs,
+                      const std::vector<Format>& formats, bool quiet, bool stats);
 
 }  // namespace cloudgen::cli

@@ -74,7 +74,7 @@ struct GenerateArgs {
   std::vector<std::string> outputs, sets;
   uint32_t resolution = 0;
   int threads = 0;
-  bool quiet = false, no_skip = false, stats = false;
+  bool quiet = false, no_skip = false, stats = false, mpi = false;
 };
 
 /// Test hook (tests/test_cloudgen.cpp): CLOUDGEN_TEST_HOLD=generate pauses at the first progress
@@ -109,8 +109,9 @@ void run_generate(const GenerateArgs& a) {
     detail |= needs_detail(f, eo);
     for (const OutputFile& of : output_files(o, f, true)) batch.claim(of.path, of.role);
   }
+  const bool mpi = mpi_requested(a.mpi);  // ranks hold sparse bricks, not the dense volume
   const uint64_t need = memory_estimate(p, detail), limit = parse_bytes(a.max_memory, "--max-memory");
-  if (need > limit)
+  if (!mpi && need > limit)
     throw InputError(path + ": resolution " + std::to_string(p.resolution[0]) + "x" + std::to_string(p.resolution[1]) + "x" +
                      std::to_string(p.resolution[2]) + " needs about " + human(need) + ", more than --max-memory " +
                      a.max_memory + " (lower /resolution or use --resolution N)");
@@ -130,9 +131,9 @@ void run_generate(const GenerateArgs& a) {
     go.region_origin = r.origin;
     go.region_extent = r.extent;
   }
+  if (mpi) return run_generate_mpi(p, go, a.outputs, formats, a.quiet, a.stats);
   GenerateStats st;
   Volume v = generate(p, go, &st);
-  add_view_metadata(v.metadata, p.view);
   const auto t0 = std::chrono::steady_clock::now();
   for (size_t i = 0; i < a.outputs.size(); ++i) {
     if (g_cancel) throw Cancelled();
@@ -204,6 +205,7 @@ int main(int argc, char** argv) {
   gen->add_option("--max-memory", ga->max_memory, "Refuse presets whose memory estimate exceeds this (default 16G)");
   gen->add_flag("--no-skip", ga->no_skip, "Evaluate noise in empty bricks too (for benchmarks; same output)");
   gen->add_flag("--stats", ga->stats, "Print timing and memory even with --quiet");
+  gen->add_flag("--mpi", ga->mpi, "Generate on the ranks of an MPI job (implied under mpirun; docs/scale-out.md)");
   gen->add_flag("-q,--quiet", ga->quiet, "No progress bar or summary");
   std::string keys;
   for (const auto& pi : params()) {
@@ -269,6 +271,7 @@ int main(int argc, char** argv) {
   add_noise_command(app, run);
   add_phase_command(app, run);
   add_blender_command(app, run);
+  add_scale_commands(app, run);
 
   try {
     app.parse(argc, argv);

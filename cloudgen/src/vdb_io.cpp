@@ -6,6 +6,7 @@
 #include <openvdb/tools/Dense.h>
 #include <openvdb/tools/Morphology.h>
 #include <openvdb/tools/Prune.h>
+#include <openvdb/tools/ValueTransformer.h>
 #include <openvdb/tree/LeafManager.h>
 #include <tbb/parallel_for.h>
 
@@ -18,11 +19,12 @@
 
 #include "cloudgen/io.h"
 #include "cloudgen/view.h"
+#include "vdb_internal.h"
 
 namespace cloudgen {
-namespace {
+namespace vdb {
 
-void init_vdb() {
+void init() {
   static std::once_flag once;
   std::call_once(once, [] { openvdb::initialize(); });
 }
@@ -32,7 +34,7 @@ void init_vdb() {
 /// so index (i,j,k) -> origin + (i + 0.5) * vs in the y-up frame. With up = 'z' a rotation of +90
 /// degrees about x follows (right-handed, data unchanged): y-up (x, y, z) lands at (x, -z, y), the
 /// height on +z as Blender expects.
-openvdb::math::Transform::Ptr make_transform(const Volume& v, char up = 'y') {
+openvdb::math::Transform::Ptr make_transform(const Volume& v, char up) {
   const double vs = v.voxel_size;
   const openvdb::Vec3d c0(v.origin[0] + 0.5 * vs, v.origin[1] + 0.5 * vs, v.origin[2] + 0.5 * vs);
   if (up != 'z') {
@@ -71,7 +73,7 @@ char up_axis_of(const openvdb::math::Transform& xf, const std::string& path) {
                           "y-up files and y-up files turned +90 degrees about x (export.vdb.up = z)");
 }
 
-openvdb::FloatGrid::Ptr new_grid(const Volume& v, const std::string& name, bool half, char up) {
+openvdb::FloatGrid::Ptr make_empty_grid(const Volume& v, const std::string& name, bool half, char up) {
   auto grid = openvdb::FloatGrid::create(0.0f);
   grid->setName(name);
   grid->setGridClass(openvdb::GRID_FOG_VOLUME);
@@ -80,27 +82,28 @@ openvdb::FloatGrid::Ptr new_grid(const Volume& v, const std::string& name, bool 
   return grid;
 }
 
-/// Every voxel of `data` that differs from the background 0 is active (densities are >= 0, so
-/// exactly the cloud voxels); `scale` multiplies the values (physical units).
-openvdb::FloatGrid::Ptr make_grid(const Volume& v, const std::vector<float>& data, const std::string& name,
-                                  bool half, char up = 'y', float scale = 1.0f) {
-  auto grid = new_grid(v, name, half, up);
+openvdb::FloatGrid::Ptr make_grid(const Volume& v, const std::vector<float>& data, const std::string& name, bool half,
+                                  char up) {
+  auto grid = make_empty_grid(v, name, half, up);
   // Wrap our x-fastest buffer (no copy) and let OpenVDB's threaded copy activate every voxel
-  // that differs from the background 0.
+  // that differs from the background 0 (densities are >= 0, so exactly the cloud voxels).
   const openvdb::CoordBBox box(openvdb::Coord(0), openvdb::Coord(int(v.dims[0]) - 1, int(v.dims[1]) - 1,
                                                                  int(v.dims[2]) - 1));
-  std::vector<float> scaled;
-  const float* src = data.data();
-  if (scale != 1.0f) {
-    scaled.resize(data.size());
-    for (size_t i = 0; i < data.size(); ++i) scaled[i] = data[i] * scale;
-    src = scaled.data();
-  }
-  openvdb::tools::Dense<const float, openvdb::tools::LayoutXYZ> dense(box, src);
+  openvdb::tools::Dense<const float, openvdb::tools::LayoutXYZ> dense(box, data.data());
   openvdb::tools::copyFromDense(dense, *grid, 0.0f);
   openvdb::tools::prune(grid->tree());
   return grid;
 }
+
+openvdb::GridPtrVec make_empty_grids(const Volume& v, const ExportOptions& o) {
+  openvdb::GridPtrVec grids{make_empty_grid(v, "density", o.vdb_half, o.vdb_up)};
+  if (o.vdb_detail && !o.vdb_bake_erosion)
+    for (int c = 0; c < 3; ++c)
+      if (!v.detail[c].empty()) grids.push_back(make_empty_grid(v, v.detail_names[c], o.vdb_half, o.vdb_up));
+  return grids;
+}
+
+namespace {
 
 /// Where a detail channel can matter: the density's active voxels dilated by the one voxel that a
 /// trilinear read reaches (26-neighbourhood), clipped to the volume, wrapped across x and z when
@@ -131,23 +134,6 @@ openvdb::MaskGrid::Ptr detail_mask(const Volume& v, const openvdb::FloatGrid& de
   }
   mask->tree().clip(openvdb::CoordBBox(openvdb::Coord(0), hi));
   return mask;
-}
-
-/// A detail grid active exactly on `mask`, holding the channel's values there.
-openvdb::FloatGrid::Ptr make_masked_grid(const Volume& v, const std::vector<float>& data, const std::string& name,
-                                         bool half, char up, const openvdb::MaskGrid& mask) {
-  auto grid = new_grid(v, name, half, up);
-  grid->tree().topologyUnion(mask.tree());
-  grid->tree().voxelizeActiveTiles();
-  openvdb::tree::LeafManager<openvdb::FloatTree> leaves(grid->tree());
-  leaves.foreach([&](openvdb::FloatTree::LeafNodeType& leaf, size_t) {
-    for (auto it = leaf.beginValueOn(); it; ++it) {
-      const openvdb::Coord c = it.getCoord();
-      it.setValue(data[v.index(uint32_t(c.x()), uint32_t(c.y()), uint32_t(c.z()))]);
-    }
-  });
-  openvdb::tools::prune(grid->tree());
-  return grid;
 }
 
 /// Metadata that write_vdb computes (never copied from Volume::metadata, which may hold a stale
@@ -250,7 +236,7 @@ void check_vdb_layout(const std::string& path) {
 class VdbFile {
  public:
   explicit VdbFile(const std::string& path) : path_(path) {
-    init_vdb();
+    init();
     check_vdb_layout(path);
     std::ifstream in(path, std::ios::binary);
     if (!in) throw InputError(printable(path) + ": cannot open file");
@@ -298,9 +284,6 @@ class VdbFile {
   uint32_t compression_ = 0;
 };
 
-}  // namespace
-
-namespace {
 
 /// OpenVDB's io::File::write opens its own std::ofstream and never checks it, so a full disk
 /// gave a truncated file and exit 0. Archive::write on our checked stream, with the same
@@ -314,47 +297,49 @@ class CheckedVdbArchive : public openvdb::io::Archive {
 
 }  // namespace
 
-void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o, OutputBatch& batch) {
-  init_vdb();
+void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::string& path, const ExportOptions& o,
+                 OutputBatch& batch, double erosion_baked) {
+  // The one-process writer and the MPI / tile assembler both end here, so the grids' topology,
+  // scale, metadata and file come out the same whichever path made the voxels.
   if (o.vdb_up != 'y' && o.vdb_up != 'z')
     throw InputError(std::string("export.vdb.up: \"") + o.vdb_up + "\" is not one of z, y");
+  if (o.vdb_bake_erosion && erosion_baked < 0)
+    throw InputError("export.vdb.bake_erosion needs the dense detail channels: it is not available for MPI or merged "
+                     "outputs (write the baked VDB from one process, or keep the detail grids)");
   const View view = view_of_metadata(v.metadata, path);
   const Look look = look_of_view(view, path);
   const double extinction = look.extinction(v.voxel_size);
-  const bool all_detail = !v.detail[0].empty() && !v.detail[1].empty() && !v.detail[2].empty();
-  const std::vector<float>* dens = &v.density;
-  std::vector<float> baked;
-  if (o.vdb_bake_erosion && all_detail && look.erosion > 0) {
-    // The height fraction runs over the box of the non-zero voxels, as in the viewer reading
-    // this file's unbaked twin (it crops to the active box).
-    uint32_t ylo = v.dims[1], yhi = 0;
-    for (uint32_t z = 0; z < v.dims[2]; ++z)
-      for (uint32_t y = 0; y < v.dims[1]; ++y)
-        for (uint32_t x = 0; x < v.dims[0]; ++x)
-          if (v.density[v.index(x, y, z)] > 0) ylo = std::min(ylo, y), yhi = std::max(yhi, y);
-    baked.resize(v.density.size());
-    const double ny = yhi >= ylo ? double(yhi - ylo + 1) : 1.0;
-    for (uint32_t z = 0; z < v.dims[2]; ++z)
-      for (uint32_t y = 0; y < v.dims[1]; ++y)
-        for (uint32_t x = 0; x < v.dims[0]; ++x) {
-          const size_t i = v.index(x, y, z);
-          baked[i] = float(eroded_density(v.density[i], v.detail[0][i], v.detail[1][i], v.detail[2][i],
-                                          (double(y) - double(ylo) + 0.5) / ny, look.erosion));
-        }
-    dens = &baked;
-  }
-  // Density first: the detail grids take its topology, dilated by one voxel.
-  auto density = make_grid(v, *dens, "density", o.vdb_half, o.vdb_up, o.vdb_physical ? float(extinction) : 1.0f);
-  std::vector<std::pair<const std::vector<float>*, std::string>> todo;
-  if (o.vdb_detail && !o.vdb_bake_erosion)
-    for (int c = 0; c < 3; ++c)
-      if (!v.detail[c].empty()) todo.push_back({&v.detail[c], v.detail_names[c]});
-  openvdb::GridPtrVec grids(todo.size() + 1);
-  grids[0] = density;
-  if (!todo.empty()) {
+  auto density = openvdb::gridPtrCast<openvdb::FloatGrid>(grids[0]);
+  // Detail grids: exactly the density's voxels dilated by the one voxel a trilinear read reaches
+  // (values outside never change a rendered value; inside, voxels whose detail is 0 are active
+  // too, as the dense texture holds them).
+  if (grids.size() > 1) {
     auto mask = detail_mask(v, *density);
-    tbb::parallel_for(size_t(0), todo.size(), [&](size_t i) {
-      grids[i + 1] = make_masked_grid(v, *todo[i].first, todo[i].second, o.vdb_half, o.vdb_up, *mask);
+    // A sub-box of a larger volume (a farm tile, `--region`): cloud just outside it can need the
+    // detail on its faces, so the faces stay, and merged tiles equal the one-process file.
+    bool partial = false;
+    for (const auto& [k, val] : v.metadata) partial |= k == "region";
+    if (partial) {
+      auto acc = mask->getAccessor();
+      const int n[3] = {int(v.dims[0]), int(v.dims[1]), int(v.dims[2])};
+      for (int z = 0; z < n[2]; ++z)
+        for (int y = 0; y < n[1]; ++y)
+          for (int x = 0; x < n[0]; ++x)
+            if (x == 0 || y == 0 || z == 0 || x == n[0] - 1 || y == n[1] - 1 || z == n[2] - 1)
+              acc.setValueOn(openvdb::Coord(x, y, z));
+    }
+    tbb::parallel_for(size_t(1), grids.size(), [&](size_t i) {
+      auto g = openvdb::gridPtrCast<openvdb::FloatGrid>(grids[i]);
+      g->tree().topologyUnion(mask->tree());
+      g->tree().topologyIntersection(mask->tree());
+      g->tree().voxelizeActiveTiles();
+      openvdb::tools::prune(g->tree());
+    });
+  }
+  if (o.vdb_physical) {  // the grid holds extinction per metre: Principled Volume density 1
+    const float k = float(extinction);
+    openvdb::tools::foreach(density->beginValueOn(), [k](const openvdb::FloatGrid::ValueOnIter& it) {
+      it.setValue(*it * k);
     });
   }
   for (auto& [k, val] : v.metadata)
@@ -366,7 +351,7 @@ void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o,
   density->insertMeta("albedo", openvdb::DoubleMetadata(look.albedo));
   density->insertMeta("up_axis", openvdb::StringMetadata(std::string(1, o.vdb_up)));
   density->insertMeta("tiles_xz", openvdb::BoolMetadata(v.tiles_xz));
-  if (o.vdb_bake_erosion) density->insertMeta("erosion_baked", openvdb::DoubleMetadata(all_detail ? look.erosion : 0.0));
+  if (o.vdb_bake_erosion) density->insertMeta("erosion_baked", openvdb::DoubleMetadata(erosion_baked));
   density->insertMeta("density_units",
                       openvdb::StringMetadata(o.vdb_physical ? "extinction_per_metre" : "normalized"));
   // Never a creator starting with "Houdini": Blender then assumes a Y-up Houdini file and rotates it.
@@ -392,6 +377,63 @@ void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o,
       }
     });
   });
+}
+
+void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::string& path, const ExportOptions& o) {
+  OutputBatch batch;
+  write_grids(v, grids, path, o, batch, -1);
+  batch.commit();
+}
+
+}  // namespace vdb
+
+namespace {
+using vdb::cubic_voxels;
+using vdb::up_axis_of;
+using vdb::to_y_up;
+using vdb::VdbFile;
+using vdb::check_vdb_layout;
+using vdb::short_what;
+using vdb::computed_meta;
+void init_vdb() { vdb::init(); }
+}  // namespace
+
+void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o, OutputBatch& batch) {
+  vdb::init();
+  const View view = view_of_metadata(v.metadata, path);
+  const Look look = look_of_view(view, path);
+  const bool all_detail = !v.detail[0].empty() && !v.detail[1].empty() && !v.detail[2].empty();
+  const std::vector<float>* dens = &v.density;
+  std::vector<float> baked;
+  if (o.vdb_bake_erosion && all_detail && look.erosion > 0) {
+    // The height fraction runs over the box of the non-zero voxels, as in the viewer reading
+    // this file's unbaked twin (it crops to the active box).
+    uint32_t ylo = v.dims[1], yhi = 0;
+    for (uint32_t z = 0; z < v.dims[2]; ++z)
+      for (uint32_t y = 0; y < v.dims[1]; ++y)
+        for (uint32_t x = 0; x < v.dims[0]; ++x)
+          if (v.density[v.index(x, y, z)] > 0) ylo = std::min(ylo, y), yhi = std::max(yhi, y);
+    baked.resize(v.density.size());
+    const double ny = yhi >= ylo ? double(yhi - ylo + 1) : 1.0;
+    for (uint32_t z = 0; z < v.dims[2]; ++z)
+      for (uint32_t y = 0; y < v.dims[1]; ++y)
+        for (uint32_t x = 0; x < v.dims[0]; ++x) {
+          const size_t i = v.index(x, y, z);
+          baked[i] = float(eroded_density(v.density[i], v.detail[0][i], v.detail[1][i], v.detail[2][i],
+                                          (double(y) - double(ylo) + 0.5) / ny, look.erosion));
+        }
+    dens = &baked;
+  }
+  openvdb::GridPtrVec grids{vdb::make_grid(v, *dens, "density", o.vdb_half, o.vdb_up)};
+  std::vector<std::pair<const std::vector<float>*, std::string>> todo;
+  if (o.vdb_detail && !o.vdb_bake_erosion)
+    for (int c = 0; c < 3; ++c)
+      if (!v.detail[c].empty()) todo.push_back({&v.detail[c], v.detail_names[c]});
+  grids.resize(todo.size() + 1);
+  tbb::parallel_for(size_t(0), todo.size(), [&](size_t i) {
+    grids[i + 1] = vdb::make_grid(v, *todo[i].first, todo[i].second, o.vdb_half, o.vdb_up);
+  });
+  vdb::write_grids(v, grids, path, o, batch, all_detail ? look.erosion : 0.0);
 }
 
 Volume read_vdb(const std::string& path, uint64_t max_bytes) {

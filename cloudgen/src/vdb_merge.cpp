@@ -1,0 +1,146 @@
+// Assembling the one-process VDB from bricks (MPI ranks) or tile files (farm jobs). The grids are
+// made, stamped and written by the same functions as write_vdb (vdb_internal.h); only the way
+// voxels arrive differs: here sparse, box by box, never as a dense copy of the volume.
+#include <openvdb/io/File.h>
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/Prune.h>
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+
+#include "cloudgen/scale.h"
+#include "vdb_internal.h"
+
+namespace cloudgen {
+
+struct VdbAssembler::Impl {
+  Volume header;
+  ExportOptions options;
+  openvdb::GridPtrVec grids;                        // as write_vdb orders them
+  std::array<openvdb::FloatGrid::Ptr, 4> channel;   // density, detail g/b/a (null when not written)
+  bool pruned = false;
+};
+
+VdbAssembler::VdbAssembler(const Volume& header, const std::array<bool, 3>& detail, const ExportOptions& o)
+    : impl_(std::make_unique<Impl>()) {
+  vdb::init();
+  impl_->header = header;
+  impl_->options = o;
+  // make_empty_grids decides which detail grids exist from non-empty detail vectors: mark the
+  // generated ones with one element (never read).
+  Volume marks = header;
+  for (int c = 0; c < 3; ++c) marks.detail[c].assign(detail[c] ? 1 : 0, 0.0f);
+  impl_->grids = vdb::make_empty_grids(marks, o);
+  impl_->channel[0] = openvdb::gridPtrCast<openvdb::FloatGrid>(impl_->grids[0]);
+  size_t g = 1;
+  if (o.vdb_detail)
+    for (int c = 0; c < 3; ++c)
+      if (detail[c]) impl_->channel[c + 1] = openvdb::gridPtrCast<openvdb::FloatGrid>(impl_->grids[g++]);
+}
+
+VdbAssembler::~VdbAssembler() = default;
+
+void VdbAssembler::add(const std::array<uint32_t, 3>& lo, const std::array<uint32_t, 3>& hi, const float* density,
+                       const std::array<const float*, 3>& detail) {
+  const float* src[4] = {density, detail[0], detail[1], detail[2]};
+  // The channels are separate grids, so they are filled in parallel.
+  tbb::parallel_for(0, 4, [&](int c) {
+    if (!impl_->channel[c] || !src[c]) return;
+    // Same rule as copyFromDense with tolerance 0 in write_vdb: a voxel is active iff it is not
+    // the background 0; pruning at the end gives the same tree.
+    auto acc = impl_->channel[c]->getAccessor();
+    size_t k = 0;
+    for (uint32_t z = lo[2]; z < hi[2]; ++z)
+      for (uint32_t y = lo[1]; y < hi[1]; ++y)
+        for (uint32_t x = lo[0]; x < hi[0]; ++x, ++k)
+          if (src[c][k] != 0.0f) acc.setValueOn(openvdb::Coord(int(x), int(y), int(z)), src[c][k]);
+  });
+  impl_->pruned = false;
+}
+
+namespace {
+
+openvdb::io::File& open_file(openvdb::io::File& f, const std::string& path) {
+  vdb::init();
+  try {
+    f.open();
+  } catch (const openvdb::Exception& e) {
+    throw InputError(path + ": not a readable OpenVDB file (" + e.what() + ")");
+  }
+  return f;
+}
+
+}  // namespace
+
+void VdbAssembler::add_vdb(const std::string& path, const std::array<uint32_t, 3>& offset) {
+  openvdb::io::File file(path);
+  open_file(file, path);
+  const std::string names[4] = {"density", impl_->header.detail_names[0], impl_->header.detail_names[1],
+                                impl_->header.detail_names[2]};
+  const openvdb::Coord off(static_cast<int>(offset[0]), static_cast<int>(offset[1]), static_cast<int>(offset[2]));
+  try {
+    for (int c = 0; c < 4; ++c) {
+      if (!impl_->channel[c]) continue;
+      if (!file.hasGrid(names[c])) throw InputError(path + ": no grid \"" + names[c] + "\"");
+      auto tile = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(names[c]));
+      if (!tile) throw InputError(path + ": grid \"" + names[c] + "\" is not a float grid");
+      auto acc = impl_->channel[c]->getAccessor();
+      for (auto it = tile->cbeginValueOn(); it; ++it) {
+        if (it.isVoxelValue()) {
+          acc.setValueOn(it.getCoord() + off, *it);
+        } else {
+          openvdb::CoordBBox bb;
+          it.getBoundingBox(bb);
+          for (auto q = bb.begin(); q; ++q) acc.setValueOn(*q + off, *it);
+        }
+      }
+    }
+  } catch (const openvdb::Exception& e) {
+    throw InputError(path + ": damaged OpenVDB file (" + e.what() + ")");
+  }
+  file.close();
+  impl_->pruned = false;
+}
+
+void VdbAssembler::write(const std::string& path) {
+  if (!impl_->pruned)
+    for (auto& g : impl_->channel)
+      if (g) openvdb::tools::prune(g->tree());
+  impl_->pruned = true;
+  vdb::write_grids(impl_->header, impl_->grids, path, impl_->options);
+}
+
+uint64_t VdbAssembler::active_voxels() const { return impl_->channel[0]->activeVoxelCount(); }
+
+std::string VdbHeader::meta(const std::string& key) const {
+  for (const auto& [k, v] : metadata)
+    if (k == key) return v;
+  return "";
+}
+
+VdbHeader read_vdb_header(const std::string& path) {
+  openvdb::io::File file(path);
+  open_file(file, path);
+  VdbHeader h;
+  try {
+    for (auto it = file.beginName(); it != file.endName(); ++it) h.grids.push_back(it.gridName());
+    if (std::find(h.grids.begin(), h.grids.end(), "density") == h.grids.end())
+      throw InputError(path + ": no grid \"density\"");
+    auto g = file.readGridMetadata("density");
+    for (auto it = g->beginMeta(); it != g->endMeta(); ++it)
+      if (it->first.rfind("file_", 0) != 0 && it->first != "class" && it->first != "name")
+        h.metadata.push_back({it->first, it->second->str()});
+    h.voxel_size = g->voxelSize()[0];
+    // The origin in the y-up frame whichever way the file stands (export.vdb.up).
+    const char up = vdb::up_axis_of(g->transform(), path);
+    const openvdb::Vec3d w = vdb::to_y_up(g->indexToWorld(openvdb::Vec3d(0.0)), up);
+    for (int a = 0; a < 3; ++a) h.origin[a] = w[a] - 0.5 * h.voxel_size;
+  } catch (const openvdb::Exception& e) {
+    throw InputError(path + ": damaged OpenVDB file (" + e.what() + ")");
+  }
+  file.close();
+  return h;
+}
+
+}  // namespace cloudgen
