@@ -147,6 +147,7 @@ void apply_setting(RenderSettings& s, const std::string& assignment) {
     throw InputError("--set " + assignment + ": expected render.key=value");
   std::string key = assignment.substr(0, eq);
   std::string value = assignment.substr(eq + 1);
+  if (key.rfind("atmosphere.", 0) == 0) return apply_atmosphere_setting(s.atmosphere, assignment);
   if (key.rfind("render.", 0) == 0) key = key.substr(7);
   std::string known;
   for (const ParamDef& p : render_params()) {

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "cloudviewer/atmosphere.h"
 #include "cloudviewer/constants.h"
 
 namespace cloudviewer {
@@ -69,6 +70,8 @@ struct RenderSettings {
   double bloom_threshold = 1.0;
   OutputMode output = OutputMode::Radiance;
   int frame = 0;                   ///< frame index (jitter pattern)
+  // The atmosphere model (`--set atmosphere.KEY=VALUE`; its own table in atmosphere.h).
+  AtmosphereSettings atmosphere;
 };
 
 enum class ParamKind { Bool, Int, Float, Enum, FloatOrAuto };
@@ -90,8 +93,8 @@ const std::vector<ParamDef>& render_params();
 /// The entry for `key` (without "render."); throws InputError listing the known keys.
 const ParamDef& render_param(const std::string& key);
 
-/// Applies one `render.key=value` (the "render." prefix is optional). Throws InputError naming the
-/// key, the value and what is allowed.
+/// Applies one `render.key=value` (the "render." prefix is optional) or `atmosphere.key=value`.
+/// Throws InputError naming the key, the value and what is allowed.
 void apply_setting(RenderSettings& s, const std::string& assignment);
 
 /// One line per parameter: "render.key=value".
