@@ -112,3 +112,108 @@ vec3 transmittance_to_top(Number r, Number mu) {
   vec3 b = mix(transmittance_texel(i0 + ivec2(0, 1)), transmittance_texel(i0 + ivec2(1, 1)), f.x);
   return mix(a, b, f.y);
 }
+
+// ------------------------------------------------------------------------------- single scattering
+// Transmittance between (r, mu) and the point at distance d along the ray (inside the atmosphere),
+// as a ratio of two LUT lookups; rays that hit the ground use the reversed ray, which does not.
+vec3 transmittance_along(Number r, Number mu, Number d, bool hits_ground) {
+  Number bottom = u_atmo.bottom_radius_m, top = u_atmo.top_radius_m;
+  Number r_d = clamp(sqrt(d * d + 2.0 * r * mu * d + r * r), bottom, top);
+  Number mu_d = clamp((r * mu + d) / r_d, -1.0, 1.0);
+  vec3 num = hits_ground ? transmittance_to_top(r_d, -mu_d) : transmittance_to_top(r, mu);
+  vec3 den = hits_ground ? transmittance_to_top(r, -mu) : transmittance_to_top(r_d, mu_d);
+  return min(num / max(den, vec3(1e-30)), vec3(1.0));
+}
+
+// Sunlight reaching radius r with the sun at cosine mu_s from the zenith: the transmittance to the
+// top times the visible fraction of the sun's disc above the horizon (a smooth set, zero in the
+// Earth's shadow), after Bruneton's GetTransmittanceToSun.
+vec3 transmittance_to_sun(Number r, Number mu_s) {
+  Number sin_h = u_atmo.bottom_radius_m / r;
+  Number cos_h = -atmo_safe_sqrt(1.0 - sin_h * sin_h);
+  Number a = u_atmo.sun_angular_radius * sin_h;
+  return transmittance_to_top(r, mu_s) * smoothstep(-a, a, mu_s - cos_h);
+}
+
+// Phase functions (1/sr): Rayleigh and Cornette-Shanks for Mie.
+Number rayleigh_phase(Number nu) { return 3.0 / (16.0 * CV_PI) * (1.0 + nu * nu); }
+Number mie_phase(Number g, Number nu) {
+  Number k = 3.0 / (8.0 * CV_PI) * (1.0 - g * g) / (2.0 + g * g);
+  return k * (1.0 + nu * nu) / pow(max(1.0 + g * g - 2.0 * g * nu, 1e-6), 1.5);
+}
+
+// Radiance of the sky seen from altitude `alt` (planet centre straight below, zenith +y) along unit
+// `v`, with the sun along unit `s` and `solar` its irradiance at the top of the atmosphere: single
+// Rayleigh + Mie scattering ray-marched per pixel (CV_SKY_SAMPLES midpoint samples, each reading
+// the transmittance LUT) up to the top, the ground or t_max. `transmittance` receives the view
+// ray's transmittance over that segment (0 when it ends on the ground), `t_end` its length from the
+// camera (CV_NO_HIT when the ray misses the atmosphere) and `ground` the sunlit ground radiance
+// there (albedo / pi * direct sun; 0 when the ray does not end on the ground).
+vec3 atmosphere_scattering(Number alt, vec3 v, vec3 s, vec3 solar, Number t_max, OUT(vec3) transmittance,
+                           OUT(Number) t_end, OUT(vec3) ground) {
+  Number bottom = u_atmo.bottom_radius_m, top = u_atmo.top_radius_m;
+  transmittance = vec3(1.0);
+  ground = vec3(0.0);
+  t_end = CV_NO_HIT;
+  Number r = bottom + clamp(alt, 0.0, 1e9);
+  Number mu = clamp(v.y, -1.0, 1.0);
+  Number mu_s = clamp(s.y, -1.0, 1.0);
+  Number nu = clamp(dot(v, s), -1.0, 1.0);
+  Number t0 = 0.0;
+  if (r > top) {  // from space: start where the ray enters the atmosphere
+    Number rmu = r * mu;
+    Number disc = rmu * rmu - r * r + top * top;
+    if (disc < 0.0 || rmu > 0.0) return vec3(0.0);
+    t0 = -rmu - sqrt(disc);
+    mu = clamp((r * mu + t0) / top, -1.0, 1.0);
+    mu_s = clamp((r * mu_s + t0 * nu) / top, -1.0, 1.0);
+    r = top;
+  }
+  bool hits_ground = ray_intersects_ground(r, mu);
+  Number d_atmo = hits_ground ? distance_to_bottom_boundary(r, mu) : distance_to_top_boundary(r, mu);
+  Number d_end = clamp(t_max - t0, 0.0, d_atmo);
+  int n = CV_SKY_SAMPLES;
+  Number dx = d_end / Number(n);
+  vec3 rayleigh = vec3(0.0);
+  vec3 mie = vec3(0.0);
+  for (int i = 0; i < n; ++i) {
+    Number d = (Number(i) + 0.5) * dx;
+    Number r_d = clamp(sqrt(d * d + 2.0 * r * mu * d + r * r), bottom, top);
+    Number mu_s_d = clamp((r * mu_s + d * nu) / r_d, -1.0, 1.0);
+    vec3 t = transmittance_along(r, mu, d, hits_ground) * transmittance_to_sun(r_d, mu_s_d);
+    rayleigh += t * rayleigh_density(r_d - bottom);
+    mie += t * mie_density(r_d - bottom);
+  }
+  t_end = t0 + d_end;
+  transmittance = transmittance_along(r, mu, d_end, hits_ground);
+  if (hits_ground && d_end >= d_atmo) {
+    Number mu_s_g = clamp((r * mu_s + d_end * nu) / bottom, -1.0, 1.0);
+    ground = u_atmo.ground_albedo / CV_PI * solar * transmittance_to_sun(bottom, mu_s_g) * max(mu_s_g, 0.0);
+  }
+  return solar * dx * (rayleigh * u_atmo.rayleigh_scattering_per_m * rayleigh_phase(nu) +
+                       mie * u_atmo.mie_scattering_per_m * mie_phase(u_atmo.mie_g, nu));
+}
+
+// The sun's disc along unit `v` (radiance relative to `disc_radiance`): limb darkening
+// 1 - 0.6 (1 - cos theta) across the disc (theta: the angle at the sun's surface), an anti-aliased
+// rim, and the transmittance to the top (0 where the line of sight hits the ground: a partial set).
+vec3 atmosphere_sun_disc(Number alt, vec3 v, vec3 s, vec3 disc_radiance) {
+  Number r = u_atmo.bottom_radius_m + clamp(alt, 0.0, 1e9);
+  Number alpha = u_atmo.sun_angular_radius;
+  Number angle = acos(clamp(dot(v, s), -1.0, 1.0));
+  if (angle >= alpha * 1.2) return vec3(0.0);
+  Number x = min(angle / alpha, 1.0);
+  Number limb = 1.0 - 0.6 * (1.0 - sqrt(max(1.0 - x * x, 0.0)));
+  Number rim = 1.0 - smoothstep(0.9, 1.2, angle / alpha);
+  Number mu = clamp(v.y, -1.0, 1.0);
+  if (ray_intersects_ground(r, mu)) return vec3(0.0);
+  Number top = u_atmo.top_radius_m;
+  if (r > top) {  // from space: through the atmosphere from where the line of sight enters it
+    Number rmu = r * mu;
+    Number disc = rmu * rmu - r * r + top * top;
+    if (disc < 0.0 || rmu > 0.0) return disc_radiance * (limb * rim);
+    mu = clamp(-sqrt(disc) / top, -1.0, 1.0);  // (r mu + t0) / top at the entry t0 = -r mu - sqrt(disc)
+    r = top;
+  }
+  return disc_radiance * transmittance_to_top(r, mu) * (limb * rim);
+}

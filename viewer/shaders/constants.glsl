@@ -23,8 +23,9 @@
 #define CV_LIGHT_OFF 0
 #define CV_LIGHT_MARCH 1
 #define CV_LIGHT_MARCH_SKIP_EMPTY 2
-// Sky model (the only one today; the sky issue adds its atmosphere model beside it).
+// Sky model (CloudParams.sky_mode; render.sky).
 #define CV_SKY_ANALYTIC 0
+#define CV_SKY_PRECOMPUTED 1
 
 // Uniform buffer binding points.
 #define CV_BINDING_CLOUD 0
@@ -50,6 +51,7 @@
 #define CV_TRANSMITTANCE_W 256
 #define CV_TRANSMITTANCE_H 64
 #define CV_TRANSMITTANCE_SAMPLES 500
+#define CV_SKY_SAMPLES 32           // per-pixel single-scattering samples along a view ray
 
 // Marching.
 #define CV_TRANSMITTANCE_EPSILON 1e-3  // stop marching below this transmittance

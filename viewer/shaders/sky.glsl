@@ -1,9 +1,10 @@
-// Background sky and aerial perspective. A simple analytic model today (CV_SKY_ANALYTIC); the sky
-// issue adds a precomputed atmosphere header beside this one and selects it with u_cloud.sky_mode.
-// Needs constants.glsl, medium.glsl (layer_mode) and `u_cloud`.
+// Background sky and aerial perspective: the analytic model (render.sky=analytic, CV_SKY_ANALYTIC)
+// or the precomputed atmosphere (sky_atmosphere.glsl, CV_SKY_PRECOMPUTED), chosen by u_cloud.sky_mode.
+// Needs constants.glsl, medium.glsl (layer_mode), sky_atmosphere.glsl and `u_cloud`.
 
 // Horizon-to-zenith gradient and a soft sun disc.
 vec3 sky_radiance(vec3 rd) {
+  if (sky_precomputed()) return precomputed_sky_radiance(rd);
   vec3 sun = u_cloud.sun_dir;
   vec3 zenith = u_cloud.sky_zenith;
   vec3 horizon = mix(zenith, vec3(1.0), 0.55);

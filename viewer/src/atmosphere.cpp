@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <iomanip>
+#include <mutex>
 #include <sstream>
 
 #include <tbb/parallel_for.h>
@@ -241,6 +242,37 @@ glm::dvec3 TransmittanceLut::to_top(double r, double mu) const {
   AtmosphereShader sh{params, &texels};
   if (sh.ray_intersects_ground(r, mu)) return glm::dvec3(0.0);
   return sh.transmittance_to_top(r, mu);
+}
+
+std::shared_ptr<const TransmittanceLut> shared_transmittance_lut(const AtmosphereSettings& s) {
+  static std::mutex mutex;
+  static AtmosphereSettings last;
+  static std::shared_ptr<const TransmittanceLut> lut;
+  std::lock_guard<std::mutex> lock(mutex);
+  if (!lut || last != s) {
+    lut = std::make_shared<const TransmittanceLut>(compute_transmittance_lut(rounded_to_float(make_atmosphere_params(s))));
+    last = s;
+  }
+  return lut;
+}
+
+glm::dvec3 sky_ambient_color(const AtmosphereSettings& s, const glm::dvec3& sun_dir, double solar, double altitude) {
+  std::shared_ptr<const TransmittanceLut> lut = shared_transmittance_lut(s);
+  AtmosphereShader sh{lut->params, &lut->texels};
+  // Midpoint rule over the hemisphere in (cos theta, phi): E = int L cos theta d(cos theta) d phi.
+  const int n_theta = 16, n_phi = 32;
+  glm::dvec3 e(0.0);
+  for (int i = 0; i < n_theta; ++i) {
+    double c = (i + 0.5) / n_theta, sn = std::sqrt(1 - c * c);
+    for (int j = 0; j < n_phi; ++j) {
+      double phi = 2 * M_PI * (j + 0.5) / n_phi;
+      glm::dvec3 v(sn * std::cos(phi), c, sn * std::sin(phi)), t, g;
+      double t_end = 0;
+      e += sh.atmosphere_scattering(altitude, v, sun_dir, glm::dvec3(solar), CV_NO_HIT, t, t_end, g) * c;
+    }
+  }
+  e *= (1.0 / n_theta) * (2 * M_PI / n_phi);
+  return e / M_PI;
 }
 
 std::vector<glm::dvec3> transmittance_dump_cpu(const AtmosphereSettings& s) {

@@ -4,6 +4,7 @@
 // CPU reference of the LUTs (the shared header shaders/atmosphere.glsl compiled as C++ in double).
 #pragma once
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -90,6 +91,15 @@ struct TransmittanceLut {
   glm::dvec3 to_top(double r, double mu) const;
 };
 TransmittanceLut compute_transmittance_lut(const ref::AtmosphereParams& p);
+
+/// The LUT of `s` as the renderers use it (parameters rounded to float, what the GPU sees), computed
+/// once per distinct atmosphere and shared (thread-safe).
+std::shared_ptr<const TransmittanceLut> shared_transmittance_lut(const AtmosphereSettings& s);
+
+/// The sky's irradiance at `altitude` (m above the ground) from the upper hemisphere, divided by pi:
+/// the isotropic radiance with the same irradiance, the clouds' ambient colour with
+/// render.sky=precomputed. `sun_dir` unit, world +y up; `solar`: the sun's irradiance scale.
+glm::dvec3 sky_ambient_color(const AtmosphereSettings& s, const glm::dvec3& sun_dir, double solar, double altitude);
 
 /// The --dump-lut grid: kDumpAltitudes altitudes 0..top, kDumpMus values of mu -1..1.
 constexpr int kDumpAltitudes = 33;

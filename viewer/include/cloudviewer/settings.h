@@ -19,6 +19,7 @@ enum class OutputMode {
   Iterations = CV_OUTPUT_ITERATIONS
 };
 enum class PlaceMode { Box = 0, Layer = 1 };
+enum class SkyMode { Analytic = CV_SKY_ANALYTIC, Precomputed = CV_SKY_PRECOMPUTED };
 
 struct RenderSettings {
   // placement
@@ -58,6 +59,7 @@ struct RenderSettings {
   double sun_intensity = 30;       ///< sun radiance scale
   double ambient = 0.8;            ///< ambient sky radiance scale
   // background
+  SkyMode sky = SkyMode::Analytic;  ///< analytic gradient (the thesis) or Bruneton's atmosphere
   bool ground = true;
   double ground_height = 0;        ///< m (world y)
   bool ground_height_auto = true;  ///< ground at min(0, volume bottom)
