@@ -27,3 +27,22 @@ vec3 precomputed_sky_radiance(vec3 rd) {
   vec3 disc = atmosphere_sun_disc(u_cloud.sky_altitude_m, rd, u_cloud.sun_dir, solar * u_cloud.sun_disc_scale);
   return sky + transmittance * ground + disc;
 }
+
+// Aerial perspective: the light the air scatters towards the camera over the first t metres of
+// camera ray rd (`inscattered`) and the air's transmittance over them (RGB: `transmittance`).
+void air_segment(vec3 rd, Number t, OUT(vec3) inscattered, OUT(vec3) transmittance) {
+  vec3 solar = u_cloud.sun_color * u_cloud.sun_radiance;
+  vec3 ground = vec3(0.0);
+  Number t_end = 0.0;
+  inscattered = atmosphere_scattering(u_cloud.sky_altitude_m, rd, u_cloud.sun_dir, solar, t, transmittance, t_end,
+                                      ground);
+}
+
+// A surface at distance t along rd (the ground pass's ground) seen through the air.
+vec3 surface_through_air(vec3 radiance, Number t, vec3 rd) {
+  if (!sky_precomputed()) return radiance;
+  vec3 inscattered = vec3(0.0);
+  vec3 transmittance = vec3(1.0);
+  air_segment(rd, t, inscattered, transmittance);
+  return radiance * transmittance + inscattered;
+}

@@ -209,7 +209,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
     renderer.render(frame, &t);
     img = renderer.read_back();
     out << ctx.description() << "\n"
-        << "gpu: " << o.width << "x" << o.height << " total " << t.total_ms << " ms (ground " << t.ground_ms
+        << "gpu: " << o.width << "x" << o.height << " total " << t.total_ms << " ms (atmosphere LUTs " << t.atmosphere_ms << ", ground " << t.ground_ms
         << ", clouds " << t.cloud_ms << ", post " << t.post_ms << ")\n";
   }
   ImageStats st = image_stats(img.linear);
