@@ -357,3 +357,43 @@ TEST(AtmosphereSky, FiniteEverywhere) {
       EXPECT_GE(image_stats(gl.linear).min, 0.0);
     }
 }
+
+// Time of day is the sun's elevation: with the sun 5 degrees below the horizon the sky towards it
+// still glows (the upper air is sunlit) and is brighter than the sky opposite the sun.
+TEST(AtmosphereSky, TwilightIsNotBlack) {
+  Sun sun{0, -5};
+  glm::dvec3 d = sun.direction();
+  glm::dvec3 eye(0, 2, 0), flat = glm::normalize(glm::dvec3(d.x, 0.15, d.z));
+  FrameSetup toward = sky_frame(32, 32, 0, -5, eye, eye + flat, 30, {"render.ground=false", "render.density=0", "render.bloom=0"});
+  FrameSetup away = sky_frame(32, 32, 0, -5, eye, eye - glm::dvec3(flat.x, -flat.y, flat.z), 30,
+                              {"render.ground=false", "render.density=0", "render.bloom=0"});
+  glm::dvec3 a = pixel(render_cpu(blob(), toward).linear, 16, 16);
+  glm::dvec3 b = pixel(render_cpu(blob(), away).linear, 16, 16);
+  std::cout << "twilight toward the sun " << a.x << " " << a.y << " " << a.z << ", away " << b.x << " " << b.y << " "
+            << b.z << "\n";
+  EXPECT_GT(a.x + a.y + a.z, 1e-3);
+  EXPECT_GT(a.x + a.y + a.z, b.x + b.y + b.z);
+}
+
+// In the Earth's shadow the clouds get no sunlight: with the ambient term off and the sun 3 degrees
+// below the horizon (the blob is a few km up, where the horizon dips ~1.5 degrees), the blob only
+// hides what is behind it (the region sums to at most the cloud-free sum); with the sun 10 degrees
+// up it adds light.
+TEST(AtmosphereSky, CloudsInTheEarthsShadowGetNoSun) {
+  auto sum = [](double el, bool clouds) {
+    FrameSetup f = sky_frame(48, 27, 180, el, {}, {}, 60,
+                             {"render.ambient=0", "render.bloom=0", "render.ground=false",
+                              clouds ? "render.density=1" : "render.density=0"});
+    FrameImages im = render_cpu(blob(), f);
+    glm::dvec3 s(0.0);
+    for (int y = 10; y < 17; ++y)
+      for (int x = 18; x < 30; ++x) s += pixel(im.linear, x, y);
+    return s.x + s.y + s.z;
+  };
+  double shadow_cloud = sum(-3, true), shadow_sky = sum(-3, false);
+  double lit_cloud = sum(10, true), lit_sky = sum(10, false);
+  std::cout << "sun -3: cloud " << shadow_cloud << " sky " << shadow_sky << "; sun 10: cloud " << lit_cloud << " sky "
+            << lit_sky << "\n";
+  EXPECT_LE(shadow_cloud, shadow_sky * (1 + 1e-9));
+  EXPECT_GT(lit_cloud - lit_sky, 0.02 * lit_sky);  // measured: +5%
+}
