@@ -415,6 +415,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glNamedBufferSubData(m.ubo_frame, 0, sizeof(fb), &fb);
   glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_CLOUD, m.ubo_cloud);
   glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_FRAME, m.ubo_frame);
+  glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_ATMOSPHERE, m.ubo_atmo);
   glBindTextureUnit(CV_UNIT_VOLUME, m.tex_volume);
   glBindTextureUnit(CV_UNIT_OCCUPANCY, m.tex_occ);
   glBindTextureUnit(CV_UNIT_MIE, m.tex_mie);
@@ -422,7 +423,8 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glDisable(GL_BLEND);
   glDisable(GL_CULL_FACE);
   glDisable(GL_FRAMEBUFFER_SRGB);
-  bool atmo_dirty = m.atmosphere_dirty(f.settings.atmosphere);
+  // The analytic sky reads no LUT: skip the precompute (and keep the LUTs' state for later frames).
+  bool atmo_dirty = f.settings.sky == SkyMode::Precomputed && m.atmosphere_dirty(f.settings.atmosphere);
 
   glQueryCounter(m.queries[0], GL_TIMESTAMP);
   for (size_t i = 0; i < m.passes.size(); ++i) {
