@@ -85,9 +85,9 @@ std::vector<AtmosphereParamDef> build() {
   t.push_back(real("rayleigh_height", 5, 1, 1e6, "Rayleigh density scale height (density exp(-h/H)), m"));
   t.push_back(boolean("mie", 1, "Mie scattering and absorption (aerosols) on"));
   t.push_back(real("mie_extinction", 6, 0, 1e-2, "Mie extinction at sea level (all wavelengths), 1/m"));
-  t.push_back(real("mie_scattering", 7, 0, 1e-2, "Mie scattering at sea level (<= extinction), 1/m; used by the sky passes"));
+  t.push_back(real("mie_scattering", 7, 0, 1e-2, "Mie scattering at sea level (<= extinction), 1/m"));
   t.push_back(real("mie_height", 8, 1, 1e6, "Mie density scale height, m"));
-  t.push_back(real("mie_g", 9, -0.999, 0.999, "Mie phase asymmetry (Cornette-Shanks); used by the sky passes"));
+  t.push_back(real("mie_g", 9, -0.999, 0.999, "Mie phase asymmetry (Cornette-Shanks)"));
   t.push_back(boolean("ozone", 2, "ozone absorption on"));
   t.push_back(real("ozone_r", 10, 0, 1e-3, "ozone absorption at the peak, 680 nm, 1/m"));
   t.push_back(real("ozone_g", 11, 0, 1e-3, "ozone absorption at the peak, 550 nm, 1/m"));
@@ -95,8 +95,8 @@ std::vector<AtmosphereParamDef> build() {
   t.push_back(real("ozone_bottom", 13, 0, 1e6, "ozone tent profile: zero below this altitude, m"));
   t.push_back(real("ozone_peak", 14, 0, 1e6, "ozone tent profile: density 1 at this altitude, m"));
   t.push_back(real("ozone_top", 15, 0, 1e6, "ozone tent profile: zero above this altitude, m"));
-  t.push_back(real("ground_albedo", 16, 0, 1, "ground albedo seen by the atmosphere; used by the sky passes"));
-  t.push_back(real("sun_angular_radius", 17, 0.01, 10, "sun angular radius, degrees; used by the sky passes"));
+  t.push_back(real("ground_albedo", 16, 0, 1, "ground albedo of the planet beyond the ground mesh (seen through the air)"));
+  t.push_back(real("sun_angular_radius", 17, 0.01, 10, "sun angular radius, degrees (the disc, and the smooth set of the sunlight below the horizon)"));
   return t;
 }
 

@@ -59,7 +59,7 @@ struct RenderSettings {
   double sun_intensity = 30;       ///< sun radiance scale
   double ambient = 0.8;            ///< ambient sky radiance scale
   // background
-  SkyMode sky = SkyMode::Analytic;  ///< analytic gradient (the thesis) or Bruneton's atmosphere
+  SkyMode sky = SkyMode::Precomputed;  ///< Bruneton's atmosphere, or the analytic gradient (the thesis)
   bool ground = true;
   double ground_height = 0;        ///< m (world y)
   bool ground_height_auto = true;  ///< ground at min(0, volume bottom)
