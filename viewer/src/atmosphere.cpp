@@ -257,6 +257,15 @@ std::shared_ptr<const TransmittanceLut> shared_transmittance_lut(const Atmospher
 }
 
 glm::dvec3 sky_ambient_color(const AtmosphereSettings& s, const glm::dvec3& sun_dir, double solar, double altitude) {
+  // The window calls this every frame: keep the last answer (a deterministic function of these).
+  static std::mutex mutex;
+  static AtmosphereSettings last_s;
+  static glm::dvec3 last_sun(0.0), last_value(0.0);
+  static double last_solar = -1, last_alt = -1;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (last_s == s && last_sun == sun_dir && last_solar == solar && last_alt == altitude) return last_value;
+  }
   std::shared_ptr<const TransmittanceLut> lut = shared_transmittance_lut(s);
   AtmosphereShader sh{lut->params, &lut->texels};
   // Midpoint rule over the hemisphere in (cos theta, phi): E = int L cos theta d(cos theta) d phi.
@@ -272,7 +281,9 @@ glm::dvec3 sky_ambient_color(const AtmosphereSettings& s, const glm::dvec3& sun_
     }
   }
   e *= (1.0 / n_theta) * (2 * M_PI / n_phi);
-  return e / M_PI;
+  std::lock_guard<std::mutex> lock(mutex);
+  last_s = s, last_sun = sun_dir, last_solar = solar, last_alt = altitude, last_value = e / M_PI;
+  return last_value;
 }
 
 std::vector<glm::dvec3> transmittance_dump_cpu(const AtmosphereSettings& s) {
