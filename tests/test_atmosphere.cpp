@@ -435,3 +435,32 @@ TEST(AtmosphereSky, EveryAtmosphereKeyAtTheEndsOfItsRangeRendersAndRecomputes) {
   std::cout << rendered << " atmospheres rendered, " << rejected << " rejected by validate_atmosphere\n";
   EXPECT_GT(rendered, 30);
 }
+
+// LUT size against error (the benchmark, on the CPU): half, the shipped and double the
+// 256x64 size against the brute-force integral at the same random rays. Bilinear interpolation
+// error falls with the texel size, so each doubling must shrink the worst relative error (T > 1e-2).
+TEST(Atmosphere, TransmittanceErrorFallsWithLutSize) {
+  AtmosphereSettings a;
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  std::vector<glm::dvec2> rays;
+  std::vector<glm::dvec3> expect;
+  while (rays.size() < 150) {
+    double r = a.bottom_radius + (a.top_radius - a.bottom_radius) * std::pow(u01(rng), 2.0), mu = -1 + 2 * u01(rng);
+    double mu_horizon = -std::sqrt(std::max(0.0, 1 - (a.bottom_radius / r) * (a.bottom_radius / r)));
+    if (mu < mu_horizon + 1e-4) continue;
+    rays.push_back({r, mu});
+    expect.push_back(brute_force_transmittance(a, r, mu));
+  }
+  double worst[3] = {0, 0, 0};
+  for (int k = 0; k < 3; ++k) {
+    glm::ivec2 size;
+    std::vector<glm::dvec3> got = transmittance_lookups_at_size(make_atmosphere_params(a), k, rays, size);
+    for (size_t i = 0; i < rays.size(); ++i)
+      for (int c = 0; c < 3; ++c)
+        if (expect[i][c] > 1e-2) worst[k] = std::max(worst[k], std::abs(got[i][c] / expect[i][c] - 1));
+    std::cout << "transmittance LUT " << size.x << "x" << size.y << ": worst relative error " << worst[k] << "\n";
+  }
+  EXPECT_LT(worst[1], worst[0]);
+  EXPECT_LT(worst[2], worst[1]);
+}

@@ -224,7 +224,65 @@ struct AtmosphereShader {
 #undef INOUT
 };
 
+// The same header at other LUT sizes (Num/Den times 256x64), for the size-against-error study only.
+template <int Num, int Den>
+struct SizedAtmosphereShader {
+  using Number = double;
+  using vec2 = glm::dvec2;
+  using vec3 = glm::dvec3;
+  using vec4 = glm::dvec4;
+  using ivec2 = glm::ivec2;
+  using uint = uint32_t;
+
+  const ref::AtmosphereParams& u_atmo;
+  const std::vector<glm::dvec3>* lut = nullptr;
+
+#pragma push_macro("CV_TRANSMITTANCE_W")
+#pragma push_macro("CV_TRANSMITTANCE_H")
+#undef CV_TRANSMITTANCE_W
+#undef CV_TRANSMITTANCE_H
+#define CV_TRANSMITTANCE_W (256 * Num / Den)
+#define CV_TRANSMITTANCE_H (64 * Num / Den)
+  static constexpr int W = CV_TRANSMITTANCE_W, H = CV_TRANSMITTANCE_H;
+  vec3 transmittance_texel(ivec2 t) const { return (*lut)[size_t(t.y) * W + size_t(t.x)]; }
+#define IN(x) const x&
+#define OUT(x) x&
+#define INOUT(x) x&
+#include "../shaders/atmosphere.glsl"
+#undef IN
+#undef OUT
+#undef INOUT
+#pragma pop_macro("CV_TRANSMITTANCE_W")
+#pragma pop_macro("CV_TRANSMITTANCE_H")
+};
+
+template <int Num, int Den>
+std::vector<glm::dvec3> sized_lookups(const ref::AtmosphereParams& p, const std::vector<glm::dvec2>& r_mu, glm::ivec2& size) {
+  using S = SizedAtmosphereShader<Num, Den>;
+  std::vector<glm::dvec3> texels(size_t(S::W) * S::H);
+  tbb::parallel_for(0, S::H, [&](int y) {
+    S sh{p};
+    for (int x = 0; x < S::W; ++x) texels[size_t(y) * S::W + size_t(x)] = sh.compute_transmittance_texel(glm::ivec2(x, y));
+  });
+  S sh{p, &texels};
+  std::vector<glm::dvec3> out;
+  for (const glm::dvec2& q : r_mu)
+    out.push_back(sh.ray_intersects_ground(q.x, q.y) ? glm::dvec3(0.0) : sh.transmittance_to_top(q.x, q.y));
+  size = glm::ivec2(S::W, S::H);
+  return out;
+}
+
 }  // namespace
+
+std::vector<glm::dvec3> transmittance_lookups_at_size(const ref::AtmosphereParams& p, int size_index,
+                                                      const std::vector<glm::dvec2>& r_mu, glm::ivec2& size) {
+  switch (size_index) {
+    case 0: return sized_lookups<1, 2>(p, r_mu, size);
+    case 1: return sized_lookups<1, 1>(p, r_mu, size);
+    case 2: return sized_lookups<2, 1>(p, r_mu, size);
+    default: throw std::invalid_argument("transmittance_lookups_at_size: size_index must be 0, 1 or 2");
+  }
+}
 
 TransmittanceLut compute_transmittance_lut(const ref::AtmosphereParams& p) {
   TransmittanceLut lut;

@@ -92,6 +92,11 @@ struct TransmittanceLut {
 };
 TransmittanceLut compute_transmittance_lut(const ref::AtmosphereParams& p);
 
+/// For the size-against-error study: the LUT at half (size_index 0), the shipped (1) or double (2)
+/// the 256x64 size, computed by the same header, looked up at each (r, mu); `size` receives W x H.
+std::vector<glm::dvec3> transmittance_lookups_at_size(const ref::AtmosphereParams& p, int size_index,
+                                                      const std::vector<glm::dvec2>& r_mu, glm::ivec2& size);
+
 /// The LUT of `s` as the renderers use it (parameters rounded to float, what the GPU sees), computed
 /// once per distinct atmosphere and shared (thread-safe).
 std::shared_ptr<const TransmittanceLut> shared_transmittance_lut(const AtmosphereSettings& s);
