@@ -2,6 +2,7 @@
 // against closed forms and an independent brute-force integration, GL against the CPU reference,
 // the atmosphere.* parameter table and `cloudviewer --dump-lut`.
 #include <cmath>
+#include <cstddef>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -463,4 +464,28 @@ TEST(Atmosphere, TransmittanceErrorFallsWithLutSize) {
   }
   EXPECT_LT(worst[1], worst[0]);
   EXPECT_LT(worst[2], worst[1]);
+}
+
+// The std140 AtmosphereBlock as the driver lays it out equals the C++ struct, member by member
+// (the cloud pass reads every member; a member the driver drops is reported as -1 and fails).
+TEST(AtmosphereSky, AtmosphereBlockLayoutMatchesTheCppStruct) {
+  gl_context();
+  GlRenderer r{ShaderSource()};
+  EXPECT_EQ(r.atmosphere_block_size(), int(sizeof(gpu::AtmosphereParams)));
+#define CV_EXPECT_OFFSET(m) EXPECT_EQ(r.atmosphere_block_offset(#m), int(offsetof(gpu::AtmosphereParams, m))) << #m
+  CV_EXPECT_OFFSET(rayleigh_scattering_per_m);
+  CV_EXPECT_OFFSET(bottom_radius_m);
+  CV_EXPECT_OFFSET(mie_scattering_per_m);
+  CV_EXPECT_OFFSET(top_radius_m);
+  CV_EXPECT_OFFSET(mie_extinction_per_m);
+  CV_EXPECT_OFFSET(rayleigh_scale_height_m);
+  CV_EXPECT_OFFSET(ozone_absorption_per_m);
+  CV_EXPECT_OFFSET(mie_scale_height_m);
+  CV_EXPECT_OFFSET(ground_albedo);
+  CV_EXPECT_OFFSET(mie_g);
+  CV_EXPECT_OFFSET(ozone_bottom_m);
+  CV_EXPECT_OFFSET(ozone_peak_m);
+  CV_EXPECT_OFFSET(ozone_top_m);
+  CV_EXPECT_OFFSET(sun_angular_radius);
+#undef CV_EXPECT_OFFSET
 }

@@ -474,6 +474,25 @@ int GlRenderer::cloud_block_offset(const std::string& member) const {
   return offset;
 }
 
+int GlRenderer::atmosphere_block_size() const {
+  const Pass& clouds = impl_->pass("clouds");
+  GLuint index = glGetUniformBlockIndex(clouds.program, "AtmosphereBlock");
+  GLint size = 0;
+  glGetActiveUniformBlockiv(clouds.program, index, GL_UNIFORM_BLOCK_DATA_SIZE, &size);
+  return size;
+}
+
+int GlRenderer::atmosphere_block_offset(const std::string& member) const {
+  const Pass& clouds = impl_->pass("clouds");
+  std::string name = "u_atmo." + member;
+  GLuint index = glGetProgramResourceIndex(clouds.program, GL_UNIFORM, name.c_str());
+  if (index == GL_INVALID_INDEX) return -1;
+  const GLenum prop = GL_OFFSET;
+  GLint offset = -1;
+  glGetProgramResourceiv(clouds.program, GL_UNIFORM, index, 1, &prop, 1, nullptr, &offset);
+  return offset;
+}
+
 std::vector<glm::vec3> GlRenderer::transmittance_dump(const AtmosphereSettings& a, double* precompute_ms) {
   Impl& m = *impl_;
   m.resize(std::max(m.w, 1), std::max(m.h, 1));

@@ -78,6 +78,9 @@ class GlRenderer {
   /// ("volume_min_m"; -1 when the driver does not list it). For the layout test.
   int cloud_block_size() const;
   int cloud_block_offset(const std::string& member) const;
+  /// The same for the atmosphere block as the cloud pass sees it (its size, a member's offset).
+  int atmosphere_block_size() const;
+  int atmosphere_block_offset(const std::string& member) const;
 
  private:
   struct Impl;
