@@ -30,6 +30,8 @@ tmp="$(mktemp)"
 trap 'rm -f "$tmp"' EXIT
 build/bin/cloudviewer --params-markdown > "$tmp"
 replace_block docs/viewer.md render-params "$tmp"
+build/bin/cloudviewer --atmosphere-markdown > "$tmp"
+replace_block docs/viewer.md atmosphere-params "$tmp"
 build/bin/cloudviewer --keys-markdown > "$tmp"
 replace_block docs/viewer.md render-keys "$tmp"
 

@@ -69,5 +69,5 @@ struct CloudParams {
   Number coverage_bias;     // added to the coverage map
   Number cloud_type;        // 0 stratus .. 1 cumulonimbus; -1 = from the map
   Number sky_mode;          // CV_SKY_*
-  Number unused0;
+  Number sky_altitude_m;    // camera altitude above the ground for the atmosphere (both modes)
 };

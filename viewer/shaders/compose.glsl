@@ -15,6 +15,6 @@ vec3 compose_pixel(vec3 rd, ivec2 pixel, Number t_scene, vec3 scene_color) {
   int mode = int(u_cloud.output_mode);
   if (mode == CV_OUTPUT_TRANSMITTANCE) return vec3(m.w, m.w, m.w);
   if (mode == CV_OUTPUT_ITERATIONS) return vec3(Number(iterations), m.w, 0.0);
-  vec3 background = t_scene >= CV_NO_HIT_TEST ? sky_radiance(rd) : scene_color;
+  vec3 background = t_scene >= CV_NO_HIT_TEST ? sky_radiance(rd) : surface_through_air(scene_color, t_scene, rd);
   return vec3(m) + m.w * background;
 }

@@ -23,12 +23,14 @@
 #define CV_LIGHT_OFF 0
 #define CV_LIGHT_MARCH 1
 #define CV_LIGHT_MARCH_SKIP_EMPTY 2
-// Sky model (the only one today; the sky issue adds its atmosphere model beside it).
+// Sky model (CloudParams.sky_mode; render.sky).
 #define CV_SKY_ANALYTIC 0
+#define CV_SKY_PRECOMPUTED 1
 
 // Uniform buffer binding points.
 #define CV_BINDING_CLOUD 0
 #define CV_BINDING_FRAME 1
+#define CV_BINDING_ATMOSPHERE 2
 // Texture units. The two pass inputs are reused by every full-screen pass for its own sources.
 #define CV_UNIT_VOLUME 0
 #define CV_UNIT_OCCUPANCY 1
@@ -36,6 +38,7 @@
 #define CV_UNIT_PASS_INPUT0 3
 #define CV_UNIT_PASS_INPUT1 4
 #define CV_UNIT_COVERAGE 5
+#define CV_UNIT_TRANSMITTANCE 6
 
 // Fixed sizes.
 #define CV_COVERAGE_MAP_SIZE 256   // layer-mode coverage map, texels per side
@@ -43,6 +46,12 @@
 #define CV_GROUND_GRID 96          // ground cells per side in layer mode (curved Earth)
 #define CV_BLOOM_RADIUS 6          // separable Gaussian bloom: taps on each side (half-resolution texels)
 #define CV_BLOOM_SIGMA 3.0         // its standard deviation in texels
+// Atmosphere (atmosphere.glsl): transmittance LUT size (mu x r, as Bruneton's demo) and the
+// trapezoid intervals of its optical-depth integral.
+#define CV_TRANSMITTANCE_W 256
+#define CV_TRANSMITTANCE_H 64
+#define CV_TRANSMITTANCE_SAMPLES 500
+#define CV_SKY_SAMPLES 32           // per-pixel single-scattering samples along a view ray
 
 // Marching.
 #define CV_TRANSMITTANCE_EPSILON 1e-3  // stop marching below this transmittance

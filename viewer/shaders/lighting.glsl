@@ -43,7 +43,7 @@ Number light_optical_depth(vec3 p) {
 vec3 inscattered_radiance(vec3 p, Number phase) {
   Number tau = int(u_cloud.light_mode) != CV_LIGHT_OFF ? light_optical_depth(p) : 0.0;
   Number powder = mix(1.0, powder_term(tau, u_cloud.powder_c), u_cloud.powder_strength);
-  vec3 sun = u_cloud.sun_color * (u_cloud.sun_radiance * phase * beer_lambert(tau) * powder);
+  vec3 sun = sun_color_at(p) * (u_cloud.sun_radiance * phase * beer_lambert(tau) * powder);
   // Isotropic ambient radiance: the phase function integrates to 1, so it scatters as it is.
   vec3 ambient = u_cloud.ambient_color * u_cloud.ambient_scale;
   return sun + ambient;
@@ -76,7 +76,7 @@ vec3 ground_radiance(vec3 p) {
   Number variation = 0.5 + 0.25 * (sin(wx * (CV_PI / 4096.0)) + sin(wz * (CV_PI / 4096.0)));
   vec3 albedo = vec3(0.10, 0.12, 0.07) * (u_cloud.ground_albedo / 0.18) * (0.9 + 0.2 * variation);
   Number shadow = mu > 0.0 ? sun_shadow_transmittance(p) : 0.0;
-  vec3 irradiance = u_cloud.sun_color * (u_cloud.sun_radiance * mu * shadow)
+  vec3 irradiance = sun_color_at(p) * (u_cloud.sun_radiance * mu * shadow)
                   + u_cloud.ambient_color * (u_cloud.ambient_scale * CV_PI);
   return albedo * irradiance / CV_PI;
 }

@@ -1,9 +1,10 @@
-// Background sky and aerial perspective. A simple analytic model today (CV_SKY_ANALYTIC); the sky
-// issue adds a precomputed atmosphere header beside this one and selects it with u_cloud.sky_mode.
-// Needs constants.glsl, medium.glsl (layer_mode) and `u_cloud`.
+// Background sky and aerial perspective: the analytic model (render.sky=analytic, CV_SKY_ANALYTIC)
+// or the precomputed atmosphere (sky_atmosphere.glsl, CV_SKY_PRECOMPUTED), chosen by u_cloud.sky_mode.
+// Needs constants.glsl, medium.glsl (layer_mode), sky_atmosphere.glsl and `u_cloud`.
 
 // Horizon-to-zenith gradient and a soft sun disc.
 vec3 sky_radiance(vec3 rd) {
+  if (sky_precomputed()) return precomputed_sky_radiance(rd);
   vec3 sun = u_cloud.sun_dir;
   vec3 zenith = u_cloud.sky_zenith;
   vec3 horizon = mix(zenith, vec3(1.0), 0.55);
@@ -19,6 +20,13 @@ vec3 sky_radiance(vec3 rd) {
 // (Beer-Lambert of a clear atmosphere's haze), which also hides their sampling noise at the horizon.
 // `cloud` is (radiance, transmittance) from march_clouds; returns the faded pair.
 vec4 aerial_perspective(vec4 cloud, Number t_mean, vec3 rd) {
+  if (sky_precomputed()) {  // both modes: the atmosphere between the camera and the clouds' mean depth
+    if (cloud.w >= 1.0) return cloud;
+    vec3 inscattered = vec3(0.0);
+    vec3 transmittance = vec3(1.0);
+    air_segment(rd, t_mean, inscattered, transmittance);
+    return vec4(vec3(cloud) * transmittance + inscattered * (1.0 - cloud.w), cloud.w);
+  }
   if (!layer_mode() || cloud.w >= 1.0) return cloud;
   Number haze = 1.0 - exp(-t_mean / 30000.0);
   vec3 sky = sky_radiance(vec3(rd.x, max(rd.y, 0.0), rd.z));

@@ -84,13 +84,37 @@ std::string params_help() {
   RenderSettings d;
   for (const ParamDef& p : render_params())
     s += "  " + p.key + " (" + p.type + ", " + p.range + ", default " + p.get(d) + "): " + p.doc + "\n";
-  return s;
+  return s + atmosphere_params_help();
+}
+
+// --dump-lut transmittance: the LUT through the shaders' lookup, from the GPU textures (gl) or the
+// double-precision reference (cpu), as `h_m,mu,r,g,b` rows.
+int dump_atmosphere_lut(const Options& o, std::ostream& out) {
+  if (o.out.empty()) throw InputError("--dump-lut needs --out FILE.csv");
+  std::vector<glm::dvec3> values;
+  auto t0 = std::chrono::steady_clock::now();
+  if (o.backend == "cpu") {
+    values = transmittance_dump_cpu(o.settings.atmosphere);
+    out << "cpu reference: transmittance LUT " << CV_TRANSMITTANCE_W << "x" << CV_TRANSMITTANCE_H << " in "
+        << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s\n";
+  } else {
+    HeadlessContext ctx;
+    GlRenderer renderer{ShaderSource(o.shader_dir)};
+    double ms = 0;
+    for (const glm::vec3& v : renderer.transmittance_dump(o.settings.atmosphere, &ms)) values.emplace_back(v);
+    out << ctx.description() << "\ngpu: transmittance LUT " << CV_TRANSMITTANCE_W << "x" << CV_TRANSMITTANCE_H
+        << " in " << ms << " ms\n";
+  }
+  write_transmittance_csv(o.out, o.settings.atmosphere, values);
+  out << "wrote " << o.out << "\n";
+  return 0;
 }
 
 int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   Options o;
   std::string size_text, camera_text, sun_text;
-  bool help_params = false, params_md = false, keys_md = false;
+  bool help_params = false, params_md = false, keys_md = false, atmo_md = false;
+  std::string dump_lut;
   CLI::App app{"cloudviewer: real-time volumetric cloud ray marcher (OpenGL 4.5) with a CPU reference"};
   app.add_option("input", o.input,
                  "volume to view: .vdb, .raw/.json, .ktx2 (cloudgen), a preset .json, or synthetic:sphere|slab|blob|noise");
@@ -100,7 +124,9 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   std::string fov_text;
   app.add_option("--fov", fov_text, "vertical field of view in degrees, 1..170 (default 60)");
   app.add_option("--sun", sun_text, "sun AZIMUTH,ELEVATION in degrees (azimuth clockwise from -z; default behind the viewer)");
-  app.add_option("--set", o.sets, "render.KEY=VALUE (see --help-params)")->take_all();
+  app.add_option("--set", o.sets, "render.KEY=VALUE or atmosphere.KEY=VALUE (see --help-params)")->take_all();
+  app.add_option("--dump-lut", dump_lut, "write an atmosphere LUT read through the shaders' lookup to --out as CSV (no INPUT needed)")
+      ->check(CLI::IsMember({"transmittance"}));
   app.add_option("--out", o.out, "headless output image (.png tone-mapped sRGB, .exr linear HDR)");
   app.add_option("--backend", o.backend, "gl (OpenGL) or cpu (double-precision reference)")->check(CLI::IsMember({"gl", "cpu"}));
   app.add_option("--shader-dir", o.shader_dir, "read shaders from this directory instead of the embedded copies (hot reload)");
@@ -111,6 +137,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   app.add_option("--bench-repeat", o.bench_repeat, "timing rounds over all configurations and frames (best of N per frame)")->check(CLI::Range(1, 100));
   app.add_flag("--help-params", help_params, "list every render.KEY with type, range, default and meaning");
   app.add_flag("--params-markdown", params_md, "the render.KEY table as Markdown (docs/viewer.md)");
+  app.add_flag("--atmosphere-markdown", atmo_md, "the atmosphere.KEY table as Markdown (docs/viewer.md)");
   app.add_flag("--keys-markdown", keys_md, "the window's parameter key bindings as Markdown (docs/viewer.md)");
   std::vector<std::string> argv_rest(args.begin() + (args.empty() ? 0 : 1), args.end());
   std::reverse(argv_rest.begin(), argv_rest.end());
@@ -124,13 +151,19 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
     out << params_help();
     return 0;
   }
+  if (atmo_md) {
+    out << atmosphere_params_markdown();
+    return 0;
+  }
   if (params_md || keys_md) {
     out << (params_md ? params_markdown() : key_help_markdown());
     return 0;
   }
+  for (const std::string& s : o.sets) apply_setting(o.settings, s);
+  validate_atmosphere(o.settings.atmosphere);
+  if (!dump_lut.empty()) return dump_atmosphere_lut(o, out);
   if (o.input.empty()) throw InputError("no INPUT given (try --help)");
   if (!fov_text.empty()) o.fov = parse_numbers("--fov", fov_text, 1, 1, 170)[0];
-  for (const std::string& s : o.sets) apply_setting(o.settings, s);
   if (!o.mie_table.empty()) load_mie_table(o.mie_table);
   if (!size_text.empty()) parse_size(size_text, o.width, o.height);
   else if (o.headless) o.width = 320, o.height = 180;
@@ -178,7 +211,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
     renderer.render(frame, &t);
     img = renderer.read_back();
     out << ctx.description() << "\n"
-        << "gpu: " << o.width << "x" << o.height << " total " << t.total_ms << " ms (ground " << t.ground_ms
+        << "gpu: " << o.width << "x" << o.height << " total " << t.total_ms << " ms (atmosphere LUTs " << t.atmosphere_ms << ", ground " << t.ground_ms
         << ", clouds " << t.cloud_ms << ", post " << t.post_ms << ")\n";
   }
   ImageStats st = image_stats(img.linear);

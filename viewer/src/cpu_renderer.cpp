@@ -10,6 +10,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include "cloudviewer/atmosphere.h"
 #include "cloudviewer/constants.h"
 #include "cloudviewer/renderer.h"
 
@@ -31,9 +32,13 @@ struct CpuShader {
   const ref::CloudParams& u_cloud;
   const PreparedVolume& vol;
   const std::vector<float>& mie;
+  const TransmittanceLut& lut;
+  const ref::AtmosphereParams& u_atmo;
 
-  CpuShader(const ref::CloudParams& p, const PreparedVolume& v, const std::vector<float>& m)
-      : u_cloud(p), vol(v), mie(m) {}
+  CpuShader(const ref::CloudParams& p, const PreparedVolume& v, const std::vector<float>& m, const TransmittanceLut& t)
+      : u_cloud(p), vol(v), mie(m), lut(t), u_atmo(t.params) {}
+
+  vec3 transmittance_texel(ivec2 t) const { return lut.texels[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
 
   vec4 volume_texel(ivec3 t) const {
     const float* v = &vol.rgba[((size_t(t.z) * vol.dims[1] + t.y) * vol.dims[0] + t.x) * 4];
@@ -58,6 +63,8 @@ struct CpuShader {
 #include "../shaders/phase.glsl"
 #include "cloudgen/cloud_type.glsl"
 #include "../shaders/medium.glsl"
+#include "../shaders/atmosphere.glsl"
+#include "../shaders/sky_atmosphere.glsl"
 #include "../shaders/lighting.glsl"
 #include "../shaders/march.glsl"
 #include "../shaders/sky.glsl"
@@ -102,6 +109,12 @@ void blur(CpuShader& sh, const Buffer& src, Buffer& dst, ivec2 direction) {
     }
 }
 
+// A LUT for CpuShaders that never read it (the analytic sky, the phase and gradient helpers).
+const TransmittanceLut& no_lut() {
+  static const TransmittanceLut empty{};
+  return empty;
+}
+
 }  // namespace
 
 double reference_phase(PhaseMode mode, double g, double cos_theta) {
@@ -110,14 +123,14 @@ double reference_phase(PhaseMode mode, double g, double cos_theta) {
   p.hg_g = g;
   p.mie_table_size = double(mie_phase_table().size());
   PreparedVolume empty;
-  CpuShader sh(p, empty, mie_phase_table());
+  CpuShader sh(p, empty, mie_phase_table(), no_lut());
   return sh.phase_function(cos_theta);
 }
 
 double reference_cloud_type_gradient(double h, double type) {
   ref::CloudParams p{};
   PreparedVolume empty;
-  CpuShader sh(p, empty, mie_phase_table());
+  CpuShader sh(p, empty, mie_phase_table(), no_lut());
   return sh.cloud_type_gradient(h, type);
 }
 
@@ -125,9 +138,12 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
   const int w = frame.width, h = frame.height;
   const std::vector<float>& mie = mie_phase_table();
   const ref::CloudParams& P = frame.params;
+  std::shared_ptr<const TransmittanceLut> shared =
+      int(P.sky_mode) == CV_SKY_PRECOMPUTED ? shared_transmittance_lut(frame.settings.atmosphere) : nullptr;
+  const TransmittanceLut& lut = shared ? *shared : no_lut();
   Buffer hdr(w, h);
   tbb::parallel_for(0, h, [&](int y) {
-    CpuShader sh(P, vol, mie);
+    CpuShader sh(P, vol, mie, lut);
     for (int x = 0; x < w; ++x) {
       dvec3 rd = sh.pixel_ray(frame.inv_view_proj, dvec2(x + 0.5, y + 0.5), dvec2(w, h));
       double t_scene = CV_NO_HIT;
@@ -160,7 +176,7 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
   const int op = int(frame.settings.tonemap);
   const int bw = std::max(1, w / 2), bh = std::max(1, h / 2);
   Buffer bright(bw, bh), blur_h(bw, bh), blur_v(bw, bh);
-  CpuShader sh(P, vol, mie);
+  CpuShader sh(P, vol, mie, lut);
   if (strength > 0) {
     for (int y = 0; y < bh; ++y)
       for (int x = 0; x < bw; ++x)

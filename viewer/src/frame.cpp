@@ -93,7 +93,14 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   p.sky_zenith = glm::dvec3(0.12, 0.24, 0.55);
   p.sun_disc_scale = 40.0;
   p.earth_radius_m = s.earth_radius;
-  p.sky_mode = CV_SKY_ANALYTIC;
+  p.sky_mode = s.sky == SkyMode::Precomputed ? CV_SKY_PRECOMPUTED : CV_SKY_ANALYTIC;
+  p.sky_altitude_m = cam.eye.y - gh;
+  if (s.sky == SkyMode::Precomputed) {
+    // The atmosphere colours the sunlight: white at the top of the atmosphere, and the ambient
+    // sky light from the atmosphere's sky irradiance at the camera (sky_ambient_color).
+    p.sun_color = glm::dvec3(1.0);
+    p.ambient_color = sky_ambient_color(s.atmosphere, sun.direction(), s.sun_intensity, cam.eye.y - gh);
+  }
   if (layer) {
     double period = size.x * s.coverage_tiles;
     p.layer_on = 1.0;

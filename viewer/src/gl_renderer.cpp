@@ -10,6 +10,7 @@
 
 #include <epoxy/gl.h>
 
+#include "cloudviewer/atmosphere.h"
 #include "cloudviewer/constants.h"
 #include "cloudviewer/errors.h"
 #include "cloudviewer/renderer.h"
@@ -80,7 +81,7 @@ struct Target {
   GLuint depth_tex[2] = {0, 0};
 };
 
-enum class Group { Ground, Clouds, Post };
+enum class Group { Atmosphere, Ground, Clouds, Post };
 
 struct Pass {
   std::string name;
@@ -92,22 +93,31 @@ struct Pass {
   std::vector<std::array<float, 4>> clear;           // per colour attachment; empty = no clear
   std::function<bool(const FrameSetup&)> enabled;    // null = always
   std::function<void(GLuint program)> uniforms;      // per-pass uniforms, null = none
+  bool precompute = false;                           // an atmosphere LUT: runs only when atmosphere.* changed
   GLuint program = 0;
 };
 
 std::vector<Target> make_targets() {
-  std::vector<Target> t(5);
+  std::vector<Target> t(6);
   t[0].name = "scene", t[0].colors = {GL_RGBA32F, GL_R32F}, t[0].depth = true;  // ground radiance, distance
   t[1].name = "hdr", t[1].colors = {GL_RGBA32F};                                 // clouds over the scene
   t[2].name = "bloom_a", t[2].colors = {GL_RGBA32F}, t[2].divisor = 2;
   t[3].name = "bloom_b", t[3].colors = {GL_RGBA32F}, t[3].divisor = 2;
   t[4].name = "final", t[4].colors = {GL_RGBA32F, GL_RGBA32F};                 // display, linear
+  t[5].name = "transmittance", t[5].colors = {GL_RGBA32F};                        // atmosphere LUT T(r, mu)
+  t[5].fixed_w = CV_TRANSMITTANCE_W, t[5].fixed_h = CV_TRANSMITTANCE_H;
   return t;
 }
 
 std::vector<Pass> make_passes() {
   auto bloom_on = [](const FrameSetup& f) { return f.settings.bloom > 0; };
   std::vector<Pass> p;
+  // Atmosphere LUTs (atmosphere.glsl), recomputed only when an atmosphere.* key changes.
+  Pass transmittance;
+  transmittance.name = "atmosphere_transmittance", transmittance.vs = "fullscreen.vert";
+  transmittance.fs = "atmosphere_transmittance.frag", transmittance.target = "transmittance";
+  transmittance.group = Group::Atmosphere, transmittance.precompute = true;
+  p.push_back(transmittance);
   Pass ground;
   ground.name = "ground", ground.vs = "ground.vert", ground.fs = "ground.frag", ground.target = "scene";
   ground.group = Group::Ground, ground.mesh = true;
@@ -162,7 +172,9 @@ struct GlRenderer::Impl {
   std::vector<Target> targets = make_targets();
   std::vector<Pass> passes = make_passes();
   GLuint tex_volume = 0, tex_occ = 0, tex_mie = 0, tex_coverage = 0;
-  GLuint ubo_cloud = 0, ubo_frame = 0;
+  GLuint ubo_cloud = 0, ubo_frame = 0, ubo_atmo = 0;
+  bool atmo_valid = false;            // the LUT targets hold `atmo_done`'s tables
+  AtmosphereSettings atmo_done;
   GLuint vao_empty = 0, vao_ground = 0, vbo_ground = 0;
   GLint quad_first = 0, grid_first = 0;
   GLsizei quad_count = 0, grid_count = 0;
@@ -214,6 +226,7 @@ struct GlRenderer::Impl {
         t.fbo[c] = t.depth_tex[c] = 0;
         t.tex[c].clear();
       }
+    atmo_valid = false;
   }
   void resize(int width, int height) {
     if (width == w && height == h) return;
@@ -269,6 +282,22 @@ struct GlRenderer::Impl {
       glDrawArrays(GL_TRIANGLES, 0, 3);
     }
   }
+  const Pass& pass(const std::string& name) const {
+    for (const Pass& p : passes)
+      if (p.name == name) return p;
+    throw GlError("no render pass '" + name + "'");
+  }
+  // Uploads the atmosphere block; true when the LUTs must be recomputed (a key changed, or the
+  // targets were recreated).
+  bool atmosphere_dirty(const AtmosphereSettings& a) {
+    gpu::AtmosphereParams ap = to_gpu(make_atmosphere_params(a));
+    glNamedBufferSubData(ubo_atmo, 0, sizeof(ap), &ap);
+    glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_ATMOSPHERE, ubo_atmo);
+    bool dirty = !atmo_valid || a != atmo_done;
+    atmo_valid = true, atmo_done = a;
+    return dirty;
+  }
+  void bind_luts() { glBindTextureUnit(CV_UNIT_TRANSMITTANCE, target("transmittance").tex[0][0]); }
   void swap_history() {
     for (Target& t : targets)
       if (t.history) {
@@ -287,6 +316,8 @@ GlRenderer::GlRenderer(ShaderSource shaders) : impl_(std::make_unique<Impl>()) {
   glNamedBufferStorage(m.ubo_cloud, sizeof(gpu::CloudParams), nullptr, GL_DYNAMIC_STORAGE_BIT);
   glCreateBuffers(1, &m.ubo_frame);
   glNamedBufferStorage(m.ubo_frame, sizeof(FrameBlock), nullptr, GL_DYNAMIC_STORAGE_BIT);
+  glCreateBuffers(1, &m.ubo_atmo);
+  glNamedBufferStorage(m.ubo_atmo, sizeof(gpu::AtmosphereParams), nullptr, GL_DYNAMIC_STORAGE_BIT);
   glCreateVertexArrays(1, &m.vao_empty);
   glCreateVertexArrays(1, &m.vao_ground);
   glCreateBuffers(1, &m.vbo_ground);
@@ -323,6 +354,7 @@ GlRenderer::~GlRenderer() {
     if (t) glDeleteTextures(1, &t);
   glDeleteBuffers(1, &m.ubo_cloud);
   glDeleteBuffers(1, &m.ubo_frame);
+  glDeleteBuffers(1, &m.ubo_atmo);
   glDeleteBuffers(1, &m.vbo_ground);
   glDeleteVertexArrays(1, &m.vao_empty);
   glDeleteVertexArrays(1, &m.vao_ground);
@@ -383,6 +415,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glNamedBufferSubData(m.ubo_frame, 0, sizeof(fb), &fb);
   glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_CLOUD, m.ubo_cloud);
   glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_FRAME, m.ubo_frame);
+  glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_ATMOSPHERE, m.ubo_atmo);
   glBindTextureUnit(CV_UNIT_VOLUME, m.tex_volume);
   glBindTextureUnit(CV_UNIT_OCCUPANCY, m.tex_occ);
   glBindTextureUnit(CV_UNIT_MIE, m.tex_mie);
@@ -390,10 +423,17 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glDisable(GL_BLEND);
   glDisable(GL_CULL_FACE);
   glDisable(GL_FRAMEBUFFER_SRGB);
+  // The analytic sky reads no LUT: skip the precompute (and keep the LUTs' state for later frames).
+  bool atmo_dirty = f.settings.sky == SkyMode::Precomputed && m.atmosphere_dirty(f.settings.atmosphere);
 
   glQueryCounter(m.queries[0], GL_TIMESTAMP);
   for (size_t i = 0; i < m.passes.size(); ++i) {
-    m.run(m.passes[i], f);
+    if (m.passes[i].precompute) {
+      if (atmo_dirty) m.run(m.passes[i], f);
+      if (i + 1 < m.passes.size() && !m.passes[i + 1].precompute) m.bind_luts();
+    } else {
+      m.run(m.passes[i], f);
+    }
     glQueryCounter(m.queries[i + 1], GL_TIMESTAMP);
   }
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
@@ -408,22 +448,15 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
       double ms = double(t[i + 1] - t[i]) * 1e-6;
       timings->passes.push_back({m.passes[i].name, ms});
       Group g = m.passes[i].group;
-      (g == Group::Ground ? timings->ground_ms : g == Group::Clouds ? timings->cloud_ms : timings->post_ms) += ms;
+      (g == Group::Atmosphere ? timings->atmosphere_ms : g == Group::Ground ? timings->ground_ms
+       : g == Group::Clouds ? timings->cloud_ms : timings->post_ms) += ms;
     }
     timings->total_ms = double(t.back() - t.front()) * 1e-6;
   }
 }
 
-namespace {
-const Pass& pass_named(const std::vector<Pass>& passes, const std::string& name) {
-  for (const Pass& p : passes)
-    if (p.name == name) return p;
-  throw GlError("no render pass '" + name + "'");
-}
-}  // namespace
-
 int GlRenderer::cloud_block_size() const {
-  const Pass& clouds = pass_named(impl_->passes, "clouds");
+  const Pass& clouds = impl_->pass("clouds");
   GLuint index = glGetUniformBlockIndex(clouds.program, "CloudBlock");
   GLint size = 0;
   glGetActiveUniformBlockiv(clouds.program, index, GL_UNIFORM_BLOCK_DATA_SIZE, &size);
@@ -431,7 +464,7 @@ int GlRenderer::cloud_block_size() const {
 }
 
 int GlRenderer::cloud_block_offset(const std::string& member) const {
-  const Pass& clouds = pass_named(impl_->passes, "clouds");
+  const Pass& clouds = impl_->pass("clouds");
   std::string name = "u_cloud." + member;
   GLuint index = glGetProgramResourceIndex(clouds.program, GL_UNIFORM, name.c_str());
   if (index == GL_INVALID_INDEX) return -1;
@@ -439,6 +472,73 @@ int GlRenderer::cloud_block_offset(const std::string& member) const {
   GLint offset = -1;
   glGetProgramResourceiv(clouds.program, GL_UNIFORM, index, 1, &prop, 1, nullptr, &offset);
   return offset;
+}
+
+int GlRenderer::atmosphere_block_size() const {
+  const Pass& clouds = impl_->pass("clouds");
+  GLuint index = glGetUniformBlockIndex(clouds.program, "AtmosphereBlock");
+  GLint size = 0;
+  glGetActiveUniformBlockiv(clouds.program, index, GL_UNIFORM_BLOCK_DATA_SIZE, &size);
+  return size;
+}
+
+int GlRenderer::atmosphere_block_offset(const std::string& member) const {
+  const Pass& clouds = impl_->pass("clouds");
+  std::string name = "u_atmo." + member;
+  GLuint index = glGetProgramResourceIndex(clouds.program, GL_UNIFORM, name.c_str());
+  if (index == GL_INVALID_INDEX) return -1;
+  const GLenum prop = GL_OFFSET;
+  GLint offset = -1;
+  glGetProgramResourceiv(clouds.program, GL_UNIFORM, index, 1, &prop, 1, nullptr, &offset);
+  return offset;
+}
+
+std::vector<glm::vec3> GlRenderer::transmittance_dump(const AtmosphereSettings& a, double* precompute_ms) {
+  Impl& m = *impl_;
+  m.resize(std::max(m.w, 1), std::max(m.h, 1));
+  bool dirty = m.atmosphere_dirty(a);
+  FrameSetup none;
+  GLuint q[2];
+  glCreateQueries(GL_TIMESTAMP, 2, q);
+  glQueryCounter(q[0], GL_TIMESTAMP);
+  for (Pass& p : m.passes)
+    if (p.precompute && dirty) m.run(p, none);
+  glQueryCounter(q[1], GL_TIMESTAMP);
+  m.bind_luts();
+  // The grid through the shaders' lookup (atmosphere_dump.frag) into a scratch target.
+  GLuint prog = link_program(m.shaders, "fullscreen.vert", "atmosphere_dump.frag");
+  GLuint tex = make_texture_2d(GL_RGBA32F, kDumpMus, kDumpAltitudes), fbo = 0;
+  glCreateFramebuffers(1, &fbo);
+  glNamedFramebufferTexture(fbo, GL_COLOR_ATTACHMENT0, tex, 0);
+  std::vector<glm::vec4> px(size_t(kDumpMus) * kDumpAltitudes);
+  try {
+    check_fbo(fbo, "transmittance dump");
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    glViewport(0, 0, kDumpMus, kDumpAltitudes);
+    glUseProgram(prog);
+    glProgramUniform2i(prog, 0, kDumpMus, kDumpAltitudes);
+    glBindVertexArray(m.vao_empty);
+    glDisable(GL_BLEND);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    glReadPixels(0, 0, kDumpMus, kDumpAltitudes, GL_RGBA, GL_FLOAT, px.data());
+  } catch (...) {
+    glDeleteFramebuffers(1, &fbo), glDeleteTextures(1, &tex), glDeleteProgram(prog), glDeleteQueries(2, q);
+    throw;
+  }
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  glDeleteFramebuffers(1, &fbo), glDeleteTextures(1, &tex), glDeleteProgram(prog);
+  GLuint64 t[2] = {0, 0};
+  glGetQueryObjectui64v(q[0], GL_QUERY_RESULT, &t[0]);
+  glGetQueryObjectui64v(q[1], GL_QUERY_RESULT, &t[1]);
+  glDeleteQueries(2, q);
+  if (precompute_ms) *precompute_ms = double(t[1] - t[0]) * 1e-6;
+  GLenum err = glGetError();
+  if (err != GL_NO_ERROR) throw GlError("OpenGL error 0x" + std::to_string(err) + " in the transmittance dump");
+  std::vector<glm::vec3> out;
+  for (const glm::vec4& v : px) out.emplace_back(v);
+  return out;
 }
 
 std::vector<std::string> GlRenderer::pass_names() const {

@@ -1,9 +1,11 @@
 // Dear ImGui panel: every entry of the render parameter table as a slider, checkbox or list with its
 // range and default, the table's doc line as the tooltip, and per-pass GPU times. The widgets come
 // from panel_widgets(), so a key added to the table (the sky's, the motion's) appears here with no
-// code of its own. Follows imgui's examples/example_glfw_opengl3/main.cpp.
+// code of its own; the atmosphere.* table has a section of its own, with the last LUT recompute's
+// GPU time. Follows imgui's examples/example_glfw_opengl3/main.cpp.
 #include "panel.h"
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -119,6 +121,39 @@ void Panel::draw(RenderSettings& s, const GpuTimings& t, const std::string& hint
         }
       }
       tooltip(w);
+    }
+    ImGui::PopItemWidth();
+  }
+  // The atmosphere model: a change re-runs the LUT passes on the next frame (timed below).
+  if (t.atmosphere_ms > 0.01) last_lut_ms_ = t.atmosphere_ms;
+  if (ImGui::CollapsingHeader("atmosphere.*")) {
+    ImGui::Text("LUT precompute (last run) %8.2f ms", last_lut_ms_);
+    ImGui::PushItemWidth(150);
+    AtmosphereSettings defaults;
+    for (const AtmosphereParamDef& p : atmosphere_params()) {
+      const std::string value = p.get(s.atmosphere), label = "atmosphere." + p.key;
+      const std::string tip = p.doc + " (" + p.type + ", " + p.range + ", default " + p.get(defaults) + ")";
+      AtmosphereSettings next = s.atmosphere;
+      bool changed = false;
+      try {
+        if (p.type == "bool") {
+          bool b = value == "true";
+          if (ImGui::Checkbox(label.c_str(), &b)) p.set(next, b ? "true" : "false"), changed = true;
+        } else {
+          float v = std::stof(value);
+          const bool log_scale = p.lo >= 0 && p.hi / std::max(p.lo, 1e-12) > 1e3;
+          // Per-metre coefficients are ~1e-6: the slider shows them in those units' own exponent.
+          if (ImGui::SliderFloat(label.c_str(), &v, float(p.lo), float(p.hi), "%.4g",
+                                 log_scale ? ImGuiSliderFlags_Logarithmic : 0))
+            p.set(next, text(v)), changed = true;
+        }
+        if (changed) {
+          validate_atmosphere(next);  // e.g. top above bottom; an invalid combination is not applied
+          s.atmosphere = next;
+        }
+      } catch (const InputError&) {
+      }
+      if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", tip.c_str());
     }
     ImGui::PopItemWidth();
   }

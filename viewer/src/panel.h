@@ -24,6 +24,9 @@ class Panel {
   static bool wants_keyboard();
   static bool wants_mouse();
   bool visible = true;
+
+ private:
+  double last_lut_ms_ = 0;  ///< GPU time of the last atmosphere LUT recompute
 };
 
 }  // namespace cloudviewer

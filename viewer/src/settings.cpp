@@ -111,6 +111,7 @@ std::vector<ParamDef> build() {
   t.push_back(real("powder_c", &RenderSettings::powder_c, 0, 100, "c of the powder term"));
   t.push_back(real("sun_intensity", &RenderSettings::sun_intensity, 0, 1e6, "sun radiance scale"));
   t.push_back(real("ambient", &RenderSettings::ambient, 0, 1e6, "ambient sky radiance scale"));
+  t.push_back(enumeration("sky", &RenderSettings::sky, {"analytic", "precomputed"}, "sky and sky light: analytic gradient and constant ambient (the thesis), or Bruneton's precomputed atmosphere (atmosphere.* keys; single scattering, docs/sky.md)"));
   t.push_back(boolean("ground", &RenderSettings::ground, "draw the ground pass"));
   t.push_back({"ground_height", "float", "[-1e+07, 1e+07] or auto", "ground plane height, m (auto = min(0, volume bottom); 0 in layer mode)",
                [](RenderSettings& s, const std::string& v) {
@@ -147,6 +148,7 @@ void apply_setting(RenderSettings& s, const std::string& assignment) {
     throw InputError("--set " + assignment + ": expected render.key=value");
   std::string key = assignment.substr(0, eq);
   std::string value = assignment.substr(eq + 1);
+  if (key.rfind("atmosphere.", 0) == 0) return apply_atmosphere_setting(s.atmosphere, assignment);
   if (key.rfind("render.", 0) == 0) key = key.substr(7);
   std::string known;
   for (const ParamDef& p : render_params()) {

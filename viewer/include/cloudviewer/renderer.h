@@ -18,6 +18,7 @@ struct FrameImages {
 
 struct GpuTimings {
   double ground_ms = 0, cloud_ms = 0, post_ms = 0, total_ms = 0;
+  double atmosphere_ms = 0;  ///< the atmosphere LUT passes (0 unless an atmosphere.* key changed)
   std::vector<std::pair<std::string, double>> passes;  ///< every pass in order, ms
 };
 
@@ -66,12 +67,20 @@ class GlRenderer {
   /// Reads the default framebuffer's back buffer (what present() drew), 8-bit display values.
   Image read_window(int window_width, int window_height);
   std::string renderer_string() const;
+  /// Computes the transmittance LUT on the GPU (if `atmosphere` differs from the last) and reads it
+  /// back on the --dump-lut grid (kDumpAltitudes x kDumpMus, altitude-major) through the shaders'
+  /// lookup; rays that hit the ground hold 0. `precompute_ms`: GPU time of the LUT passes (0 when
+  /// nothing changed). Works before set_volume.
+  std::vector<glm::vec3> transmittance_dump(const AtmosphereSettings& atmosphere, double* precompute_ms = nullptr);
   /// The passes in execution order (their names label GpuTimings::passes).
   std::vector<std::string> pass_names() const;
   /// The driver's std140 layout of the cloud block: its size in bytes, and a member's byte offset
   /// ("volume_min_m"; -1 when the driver does not list it). For the layout test.
   int cloud_block_size() const;
   int cloud_block_offset(const std::string& member) const;
+  /// The same for the atmosphere block as the cloud pass sees it (its size, a member's offset).
+  int atmosphere_block_size() const;
+  int atmosphere_block_offset(const std::string& member) const;
 
  private:
   struct Impl;

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "cloudviewer/atmosphere.h"
 #include "cloudviewer/constants.h"
 
 namespace cloudviewer {
@@ -18,6 +19,7 @@ enum class OutputMode {
   Iterations = CV_OUTPUT_ITERATIONS
 };
 enum class PlaceMode { Box = 0, Layer = 1 };
+enum class SkyMode { Analytic = CV_SKY_ANALYTIC, Precomputed = CV_SKY_PRECOMPUTED };
 
 struct RenderSettings {
   // placement
@@ -57,6 +59,7 @@ struct RenderSettings {
   double sun_intensity = 30;       ///< sun radiance scale
   double ambient = 0.8;            ///< ambient sky radiance scale
   // background
+  SkyMode sky = SkyMode::Precomputed;  ///< Bruneton's atmosphere, or the analytic gradient (the thesis)
   bool ground = true;
   double ground_height = 0;        ///< m (world y)
   bool ground_height_auto = true;  ///< ground at min(0, volume bottom)
@@ -69,6 +72,8 @@ struct RenderSettings {
   double bloom_threshold = 1.0;
   OutputMode output = OutputMode::Radiance;
   int frame = 0;                   ///< frame index (jitter pattern)
+  // The atmosphere model (`--set atmosphere.KEY=VALUE`; its own table in atmosphere.h).
+  AtmosphereSettings atmosphere;
 };
 
 enum class ParamKind { Bool, Int, Float, Enum, FloatOrAuto };
@@ -90,8 +95,8 @@ const std::vector<ParamDef>& render_params();
 /// The entry for `key` (without "render."); throws InputError listing the known keys.
 const ParamDef& render_param(const std::string& key);
 
-/// Applies one `render.key=value` (the "render." prefix is optional). Throws InputError naming the
-/// key, the value and what is allowed.
+/// Applies one `render.key=value` (the "render." prefix is optional) or `atmosphere.key=value`.
+/// Throws InputError naming the key, the value and what is allowed.
 void apply_setting(RenderSettings& s, const std::string& assignment);
 
 /// One line per parameter: "render.key=value".

@@ -1,0 +1,118 @@
+// The atmosphere model (Bruneton & Neyret's precomputed atmospheric scattering): its parameters,
+// declared once in a table that drives `--set atmosphere.KEY=VALUE`, `--help-params` and
+// docs/viewer.md, the std140 block the GL passes read (shaders/atmosphere_params.glsl), and the
+// CPU reference of the LUTs (the shared header shaders/atmosphere.glsl compiled as C++ in double).
+#pragma once
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "cloudviewer/constants.h"
+
+namespace cloudviewer {
+
+/// Earth-like defaults of Bruneton's 2017 demo (issue 9). Lengths in metres, coefficients per metre
+/// at 680 / 550 / 440 nm (R, G, B).
+struct AtmosphereSettings {
+  double bottom_radius = 6360e3;
+  double top_radius = 6420e3;
+  bool rayleigh = true;
+  glm::dvec3 rayleigh_scattering{5.802e-6, 13.558e-6, 33.1e-6};
+  double rayleigh_height = 8000;
+  bool mie = true;
+  double mie_extinction = 4.44e-6;
+  double mie_scattering = 3.996e-6;
+  double mie_height = 1200;
+  double mie_g = 0.8;
+  bool ozone = true;
+  glm::dvec3 ozone_absorption{0.650e-6, 1.881e-6, 0.085e-6};
+  double ozone_bottom = 10e3;
+  double ozone_peak = 25e3;
+  double ozone_top = 40e3;
+  double ground_albedo = 0.1;
+  double sun_angular_radius_deg = 0.2678;
+  bool operator==(const AtmosphereSettings& o) const;
+  bool operator!=(const AtmosphereSettings& o) const { return !(*this == o); }
+};
+
+/// One atmosphere.* parameter (the same shape as the render.* ParamDef, over AtmosphereSettings).
+struct AtmosphereParamDef {
+  std::string key;    ///< after "atmosphere."
+  std::string type;   ///< bool, float
+  std::string range;  ///< allowed values, as text
+  std::string doc;
+  std::function<void(AtmosphereSettings&, const std::string&)> set;  ///< throws InputError
+  std::function<std::string(const AtmosphereSettings&)> get;
+  double lo = 0, hi = 0;
+};
+
+/// The table, in documentation order.
+const std::vector<AtmosphereParamDef>& atmosphere_params();
+/// Applies one `atmosphere.key=value` (the prefix is optional here). Throws InputError naming the
+/// key, the value and what is allowed.
+void apply_atmosphere_setting(AtmosphereSettings& s, const std::string& assignment);
+/// Checks what single keys cannot: top above bottom, the ozone tent ordered and inside the
+/// atmosphere. Throws InputError naming the keys and values.
+void validate_atmosphere(const AtmosphereSettings& s);
+/// The atmosphere.KEY table as Markdown (docs/viewer.md, `cloudviewer --atmosphere-markdown`).
+std::string atmosphere_params_markdown();
+/// `--help-params` lines: "  KEY (type, range, default D): doc".
+std::string atmosphere_params_help();
+
+namespace gpu {
+using Number = float;
+using vec3 = glm::vec3;
+#include "../../shaders/atmosphere_params.glsl"
+}  // namespace gpu
+namespace ref {
+using Number = double;
+using vec3 = glm::dvec3;
+#include "../../shaders/atmosphere_params.glsl"
+}  // namespace ref
+constexpr int kAtmosphereParamsScalars = 24;
+static_assert(sizeof(gpu::AtmosphereParams) == kAtmosphereParamsScalars * 4, "std140 AtmosphereBlock size");
+static_assert(sizeof(ref::AtmosphereParams) == kAtmosphereParamsScalars * 8, "double AtmosphereParams size");
+
+/// The block's values (constituents turned off get zero coefficients).
+ref::AtmosphereParams make_atmosphere_params(const AtmosphereSettings& s);
+gpu::AtmosphereParams to_gpu(const ref::AtmosphereParams& d);
+/// The double parameters the GPU sees (each value rounded to float).
+ref::AtmosphereParams rounded_to_float(const ref::AtmosphereParams& d);
+
+/// The transmittance LUT (CV_TRANSMITTANCE_W x CV_TRANSMITTANCE_H, RGB, row-major from (0, 0)) as
+/// the CPU reference computes it, and the shaders' lookup over it.
+struct TransmittanceLut {
+  ref::AtmosphereParams params;
+  std::vector<glm::dvec3> texels;
+  /// transmittance_to_top(r, mu) of atmosphere.glsl (bilinear by hand); rays that hit the ground: 0.
+  glm::dvec3 to_top(double r, double mu) const;
+};
+TransmittanceLut compute_transmittance_lut(const ref::AtmosphereParams& p);
+
+/// For the size-against-error study: the LUT at half (size_index 0), the shipped (1) or double (2)
+/// the 256x64 size, computed by the same header, looked up at each (r, mu); `size` receives W x H.
+std::vector<glm::dvec3> transmittance_lookups_at_size(const ref::AtmosphereParams& p, int size_index,
+                                                      const std::vector<glm::dvec2>& r_mu, glm::ivec2& size);
+
+/// The LUT of `s` as the renderers use it (parameters rounded to float, what the GPU sees), computed
+/// once per distinct atmosphere and shared (thread-safe).
+std::shared_ptr<const TransmittanceLut> shared_transmittance_lut(const AtmosphereSettings& s);
+
+/// The sky's irradiance at `altitude` (m above the ground) from the upper hemisphere, divided by pi:
+/// the isotropic radiance with the same irradiance, the clouds' ambient colour with
+/// render.sky=precomputed. `sun_dir` unit, world +y up; `solar`: the sun's irradiance scale.
+glm::dvec3 sky_ambient_color(const AtmosphereSettings& s, const glm::dvec3& sun_dir, double solar, double altitude);
+
+/// The --dump-lut grid: kDumpAltitudes altitudes 0..top, kDumpMus values of mu -1..1.
+constexpr int kDumpAltitudes = 33;
+constexpr int kDumpMus = 129;
+/// Row-major (altitude-major) values of the grid, from the CPU LUT.
+std::vector<glm::dvec3> transmittance_dump_cpu(const AtmosphereSettings& s);
+/// Writes `h_m,mu,r,g,b` rows (a header line, then altitude-major) atomically.
+void write_transmittance_csv(const std::string& path, const AtmosphereSettings& s,
+                             const std::vector<glm::dvec3>& values);
+
+}  // namespace cloudviewer

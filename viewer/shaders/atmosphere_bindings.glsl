@@ -1,0 +1,6 @@
+// The atmosphere block and LUT samplers, GLSL side (the CPU reference defines the same lookups
+// over its arrays in src/atmosphere.cpp).
+layout(std140, binding = CV_BINDING_ATMOSPHERE) uniform AtmosphereBlock { AtmosphereParams u_atmo; };
+layout(binding = CV_UNIT_TRANSMITTANCE) uniform sampler2D s_transmittance;  // RGBA32F, CV_TRANSMITTANCE_W x _H
+
+vec3 transmittance_texel(ivec2 texel) { return texelFetch(s_transmittance, texel, 0).rgb; }

@@ -1,0 +1,48 @@
+// The precomputed atmosphere (atmosphere.glsl) as the cloud passes use it with render.sky=precomputed:
+// the sky behind everything, the sun's colour at a cloud or ground point, and the ambient sky
+// light. The camera sits at altitude u_cloud.sky_altitude_m with the planet's centre straight below
+// (world +y is the local zenith). Needs atmosphere.glsl and `u_cloud`.
+
+bool sky_precomputed() { return int(u_cloud.sky_mode) == CV_SKY_PRECOMPUTED; }
+
+// Sun colour reaching camera-relative point p (top-of-atmosphere colour u_cloud.sun_color times
+// the transmittance from p to the sun; 0 in the Earth's shadow). The analytic sky: the constant.
+vec3 sun_color_at(vec3 p) {
+  if (!sky_precomputed()) return u_cloud.sun_color;
+  vec3 c = p + vec3(0.0, u_atmo.bottom_radius_m + u_cloud.sky_altitude_m, 0.0);  // from the planet's centre
+  Number r = clamp(length(c), u_atmo.bottom_radius_m, u_atmo.top_radius_m);
+  Number mu_s = clamp(dot(c, u_cloud.sun_dir) / max(length(c), 1.0), -1.0, 1.0);
+  return u_cloud.sun_color * transmittance_to_sun(r, mu_s);
+}
+
+// Background radiance along camera ray rd: single scattering, the ground beyond the ground pass's
+// mesh (sunlit, albedo atmosphere.ground_albedo) seen through the air, and the sun's disc.
+vec3 precomputed_sky_radiance(vec3 rd) {
+  vec3 solar = u_cloud.sun_color * u_cloud.sun_radiance;
+  vec3 transmittance = vec3(1.0);
+  vec3 ground = vec3(0.0);
+  Number t_end = 0.0;
+  vec3 sky = atmosphere_scattering(u_cloud.sky_altitude_m, rd, u_cloud.sun_dir, solar, CV_NO_HIT, transmittance,
+                                   t_end, ground);
+  vec3 disc = atmosphere_sun_disc(u_cloud.sky_altitude_m, rd, u_cloud.sun_dir, solar * u_cloud.sun_disc_scale);
+  return sky + transmittance * ground + disc;
+}
+
+// Aerial perspective: the light the air scatters towards the camera over the first t metres of
+// camera ray rd (`inscattered`) and the air's transmittance over them (RGB: `transmittance`).
+void air_segment(vec3 rd, Number t, OUT(vec3) inscattered, OUT(vec3) transmittance) {
+  vec3 solar = u_cloud.sun_color * u_cloud.sun_radiance;
+  vec3 ground = vec3(0.0);
+  Number t_end = 0.0;
+  inscattered = atmosphere_scattering(u_cloud.sky_altitude_m, rd, u_cloud.sun_dir, solar, t, transmittance, t_end,
+                                      ground);
+}
+
+// A surface at distance t along rd (the ground pass's ground) seen through the air.
+vec3 surface_through_air(vec3 radiance, Number t, vec3 rd) {
+  if (!sky_precomputed()) return radiance;
+  vec3 inscattered = vec3(0.0);
+  vec3 transmittance = vec3(1.0);
+  air_segment(rd, t, inscattered, transmittance);
+  return radiance * transmittance + inscattered;
+}

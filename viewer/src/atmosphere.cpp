@@ -1,0 +1,376 @@
+// The atmosphere parameter table and the CPU reference of the atmosphere LUTs: shaders/atmosphere.glsl
+// compiled as C++ in double precision inside a class (as cpu_renderer.cpp does for the cloud
+// headers; Bruneton's reference/functions.cc pattern).
+#include "cloudviewer/atmosphere.h"
+
+#include <cmath>
+#include <cstdint>
+#include <iomanip>
+#include <mutex>
+#include <sstream>
+
+#include <tbb/parallel_for.h>
+
+#include "cloudgen/output.h"
+#include "cloudviewer/errors.h"
+
+namespace cloudviewer {
+namespace {
+
+std::string fmt(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+[[noreturn]] void bad(const std::string& key, const std::string& value, const std::string& allowed) {
+  throw InputError("--set atmosphere." + key + "=" + value + ": invalid value, allowed: " + allowed);
+}
+
+double parse_number(const std::string& key, const std::string& v, double lo, double hi) {
+  size_t used = 0;
+  double d = 0;
+  try {
+    d = std::stod(v, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != v.size() || v.empty() || !std::isfinite(d) || d < lo || d > hi)
+    bad(key, v, "a number in [" + fmt(lo) + ", " + fmt(hi) + "]");
+  return d;
+}
+
+// Members by index: the table stores an index so one setter/getter pair serves every float key.
+double* real_member(AtmosphereSettings& s, int i) {
+  double* m[] = {&s.bottom_radius, &s.top_radius, &s.rayleigh_scattering.x, &s.rayleigh_scattering.y,
+                 &s.rayleigh_scattering.z, &s.rayleigh_height, &s.mie_extinction, &s.mie_scattering,
+                 &s.mie_height, &s.mie_g, &s.ozone_absorption.x, &s.ozone_absorption.y, &s.ozone_absorption.z,
+                 &s.ozone_bottom, &s.ozone_peak, &s.ozone_top, &s.ground_albedo, &s.sun_angular_radius_deg};
+  return m[i];
+}
+bool* bool_member(AtmosphereSettings& s, int i) {
+  bool* m[] = {&s.rayleigh, &s.mie, &s.ozone};
+  return m[i];
+}
+
+AtmosphereParamDef real(const std::string& key, int index, double lo, double hi, const std::string& doc) {
+  AtmosphereParamDef d;
+  d.key = key, d.type = "float", d.range = "[" + fmt(lo) + ", " + fmt(hi) + "]", d.doc = doc, d.lo = lo, d.hi = hi;
+  d.set = [=](AtmosphereSettings& s, const std::string& v) { *real_member(s, index) = parse_number(key, v, lo, hi); };
+  d.get = [=](const AtmosphereSettings& s) { return fmt(*real_member(const_cast<AtmosphereSettings&>(s), index)); };
+  return d;
+}
+AtmosphereParamDef boolean(const std::string& key, int index, const std::string& doc) {
+  AtmosphereParamDef d;
+  d.key = key, d.type = "bool", d.range = "true|false", d.doc = doc, d.lo = 0, d.hi = 1;
+  d.set = [=](AtmosphereSettings& s, const std::string& v) {
+    if (v == "true" || v == "1" || v == "on" || v == "yes") *bool_member(s, index) = true;
+    else if (v == "false" || v == "0" || v == "off" || v == "no") *bool_member(s, index) = false;
+    else bad(key, v, "true|false");
+  };
+  d.get = [=](const AtmosphereSettings& s) {
+    return std::string(*bool_member(const_cast<AtmosphereSettings&>(s), index) ? "true" : "false");
+  };
+  return d;
+}
+
+std::vector<AtmosphereParamDef> build() {
+  std::vector<AtmosphereParamDef> t;
+  t.push_back(real("bottom_radius", 0, 1e3, 1e9, "planet radius (the ground), m"));
+  t.push_back(real("top_radius", 1, 1e3, 1e9, "radius of the top of the atmosphere, m (> bottom_radius)"));
+  t.push_back(boolean("rayleigh", 0, "Rayleigh scattering (air molecules) on"));
+  t.push_back(real("rayleigh_r", 2, 0, 1e-3, "Rayleigh scattering at sea level, 680 nm, 1/m"));
+  t.push_back(real("rayleigh_g", 3, 0, 1e-3, "Rayleigh scattering at sea level, 550 nm, 1/m"));
+  t.push_back(real("rayleigh_b", 4, 0, 1e-3, "Rayleigh scattering at sea level, 440 nm, 1/m"));
+  t.push_back(real("rayleigh_height", 5, 1, 1e6, "Rayleigh density scale height (density exp(-h/H)), m"));
+  t.push_back(boolean("mie", 1, "Mie scattering and absorption (aerosols) on"));
+  t.push_back(real("mie_extinction", 6, 0, 1e-2, "Mie extinction at sea level (all wavelengths), 1/m"));
+  t.push_back(real("mie_scattering", 7, 0, 1e-2, "Mie scattering at sea level (<= extinction), 1/m"));
+  t.push_back(real("mie_height", 8, 1, 1e6, "Mie density scale height, m"));
+  t.push_back(real("mie_g", 9, -0.999, 0.999, "Mie phase asymmetry (Cornette-Shanks)"));
+  t.push_back(boolean("ozone", 2, "ozone absorption on"));
+  t.push_back(real("ozone_r", 10, 0, 1e-3, "ozone absorption at the peak, 680 nm, 1/m"));
+  t.push_back(real("ozone_g", 11, 0, 1e-3, "ozone absorption at the peak, 550 nm, 1/m"));
+  t.push_back(real("ozone_b", 12, 0, 1e-3, "ozone absorption at the peak, 440 nm, 1/m"));
+  t.push_back(real("ozone_bottom", 13, 0, 1e6, "ozone tent profile: zero below this altitude, m"));
+  t.push_back(real("ozone_peak", 14, 0, 1e6, "ozone tent profile: density 1 at this altitude, m"));
+  t.push_back(real("ozone_top", 15, 0, 1e6, "ozone tent profile: zero above this altitude, m"));
+  t.push_back(real("ground_albedo", 16, 0, 1, "ground albedo of the planet beyond the ground mesh (seen through the air)"));
+  t.push_back(real("sun_angular_radius", 17, 0.01, 10, "sun angular radius, degrees (the disc, and the smooth set of the sunlight below the horizon)"));
+  return t;
+}
+
+}  // namespace
+
+bool AtmosphereSettings::operator==(const AtmosphereSettings& o) const {
+  for (int i = 0; i < 18; ++i)
+    if (*real_member(const_cast<AtmosphereSettings&>(*this), i) != *real_member(const_cast<AtmosphereSettings&>(o), i))
+      return false;
+  return rayleigh == o.rayleigh && mie == o.mie && ozone == o.ozone;
+}
+
+const std::vector<AtmosphereParamDef>& atmosphere_params() {
+  static const std::vector<AtmosphereParamDef> table = build();
+  return table;
+}
+
+void apply_atmosphere_setting(AtmosphereSettings& s, const std::string& assignment) {
+  auto eq = assignment.find('=');
+  if (eq == std::string::npos) throw InputError("--set " + assignment + ": expected atmosphere.key=value");
+  std::string key = assignment.substr(0, eq), value = assignment.substr(eq + 1);
+  if (key.rfind("atmosphere.", 0) == 0) key = key.substr(11);
+  std::string known;
+  for (const AtmosphereParamDef& p : atmosphere_params()) {
+    if (p.key == key) {
+      p.set(s, value);
+      return;
+    }
+    known += (known.empty() ? "" : ", ") + p.key;
+  }
+  throw InputError("--set " + assignment + ": unknown key atmosphere." + key + " (known: " + known + ")");
+}
+
+void validate_atmosphere(const AtmosphereSettings& s) {
+  if (!(s.top_radius > s.bottom_radius))
+    throw InputError("atmosphere.top_radius=" + fmt(s.top_radius) + " must exceed atmosphere.bottom_radius=" +
+                     fmt(s.bottom_radius));
+  if (!(s.ozone_bottom < s.ozone_peak && s.ozone_peak < s.ozone_top))
+    throw InputError("atmosphere.ozone_bottom=" + fmt(s.ozone_bottom) + ", ozone_peak=" + fmt(s.ozone_peak) +
+                     ", ozone_top=" + fmt(s.ozone_top) + ": need bottom < peak < top");
+  if (s.mie_scattering > s.mie_extinction)
+    throw InputError("atmosphere.mie_scattering=" + fmt(s.mie_scattering) + " exceeds atmosphere.mie_extinction=" +
+                     fmt(s.mie_extinction) + " (scattering is part of extinction)");
+}
+
+std::string atmosphere_params_markdown() {
+  std::string md = "| key | type | range | default | meaning |\n|---|---|---|---|---|\n";
+  AtmosphereSettings d;
+  for (const AtmosphereParamDef& p : atmosphere_params()) {
+    std::string range = p.range;
+    for (size_t i = 0; (i = range.find('|', i)) != std::string::npos; i += 2) range.replace(i, 1, "\\|");
+    md += "| atmosphere." + p.key + " | " + p.type + " | " + range + " | " + p.get(d) + " | " + p.doc + " |\n";
+  }
+  return md;
+}
+
+std::string atmosphere_params_help() {
+  std::string s = "atmosphere parameters (--set atmosphere.KEY=VALUE):\n";
+  AtmosphereSettings d;
+  for (const AtmosphereParamDef& p : atmosphere_params())
+    s += "  " + p.key + " (" + p.type + ", " + p.range + ", default " + p.get(d) + "): " + p.doc + "\n";
+  return s;
+}
+
+ref::AtmosphereParams make_atmosphere_params(const AtmosphereSettings& s) {
+  ref::AtmosphereParams p{};
+  p.bottom_radius_m = s.bottom_radius;
+  p.top_radius_m = s.top_radius;
+  p.rayleigh_scattering_per_m = s.rayleigh ? s.rayleigh_scattering : glm::dvec3(0.0);
+  p.rayleigh_scale_height_m = s.rayleigh_height;
+  p.mie_scattering_per_m = glm::dvec3(s.mie ? s.mie_scattering : 0.0);
+  p.mie_extinction_per_m = glm::dvec3(s.mie ? s.mie_extinction : 0.0);
+  p.mie_scale_height_m = s.mie_height;
+  p.ozone_absorption_per_m = s.ozone ? s.ozone_absorption : glm::dvec3(0.0);
+  p.ground_albedo = glm::dvec3(s.ground_albedo);
+  p.mie_g = s.mie_g;
+  p.ozone_bottom_m = s.ozone_bottom;
+  p.ozone_peak_m = s.ozone_peak;
+  p.ozone_top_m = s.ozone_top;
+  p.sun_angular_radius = s.sun_angular_radius_deg * M_PI / 180.0;
+  return p;
+}
+
+gpu::AtmosphereParams to_gpu(const ref::AtmosphereParams& d) {
+  gpu::AtmosphereParams f;
+  const double* src = reinterpret_cast<const double*>(&d);
+  float* dst = reinterpret_cast<float*>(&f);
+  for (int i = 0; i < kAtmosphereParamsScalars; ++i) dst[i] = float(src[i]);
+  return f;
+}
+
+ref::AtmosphereParams rounded_to_float(const ref::AtmosphereParams& d) {
+  gpu::AtmosphereParams f = to_gpu(d);
+  ref::AtmosphereParams r;
+  const float* src = reinterpret_cast<const float*>(&f);
+  double* dst = reinterpret_cast<double*>(&r);
+  for (int i = 0; i < kAtmosphereParamsScalars; ++i) dst[i] = double(src[i]);
+  return r;
+}
+
+namespace {
+
+using namespace glm;
+
+// atmosphere.glsl in double precision; the LUT lookup reads `lut` (may be empty while computing).
+struct AtmosphereShader {
+  using Number = double;
+  using vec2 = glm::dvec2;
+  using vec3 = glm::dvec3;
+  using vec4 = glm::dvec4;
+  using ivec2 = glm::ivec2;
+  using uint = uint32_t;
+
+  const ref::AtmosphereParams& u_atmo;
+  const std::vector<glm::dvec3>* lut = nullptr;
+
+  vec3 transmittance_texel(ivec2 t) const { return (*lut)[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
+
+#define IN(x) const x&
+#define OUT(x) x&
+#define INOUT(x) x&
+#include "../shaders/atmosphere.glsl"
+#undef IN
+#undef OUT
+#undef INOUT
+};
+
+// The same header at other LUT sizes (Num/Den times 256x64), for the size-against-error study only.
+template <int Num, int Den>
+struct SizedAtmosphereShader {
+  using Number = double;
+  using vec2 = glm::dvec2;
+  using vec3 = glm::dvec3;
+  using vec4 = glm::dvec4;
+  using ivec2 = glm::ivec2;
+  using uint = uint32_t;
+
+  const ref::AtmosphereParams& u_atmo;
+  const std::vector<glm::dvec3>* lut = nullptr;
+
+#pragma push_macro("CV_TRANSMITTANCE_W")
+#pragma push_macro("CV_TRANSMITTANCE_H")
+#undef CV_TRANSMITTANCE_W
+#undef CV_TRANSMITTANCE_H
+#define CV_TRANSMITTANCE_W (256 * Num / Den)
+#define CV_TRANSMITTANCE_H (64 * Num / Den)
+  static constexpr int W = CV_TRANSMITTANCE_W, H = CV_TRANSMITTANCE_H;
+  vec3 transmittance_texel(ivec2 t) const { return (*lut)[size_t(t.y) * W + size_t(t.x)]; }
+#define IN(x) const x&
+#define OUT(x) x&
+#define INOUT(x) x&
+#include "../shaders/atmosphere.glsl"
+#undef IN
+#undef OUT
+#undef INOUT
+#pragma pop_macro("CV_TRANSMITTANCE_W")
+#pragma pop_macro("CV_TRANSMITTANCE_H")
+};
+
+template <int Num, int Den>
+std::vector<glm::dvec3> sized_lookups(const ref::AtmosphereParams& p, const std::vector<glm::dvec2>& r_mu, glm::ivec2& size) {
+  using S = SizedAtmosphereShader<Num, Den>;
+  std::vector<glm::dvec3> texels(size_t(S::W) * S::H);
+  tbb::parallel_for(0, S::H, [&](int y) {
+    S sh{p};
+    for (int x = 0; x < S::W; ++x) texels[size_t(y) * S::W + size_t(x)] = sh.compute_transmittance_texel(glm::ivec2(x, y));
+  });
+  S sh{p, &texels};
+  std::vector<glm::dvec3> out;
+  for (const glm::dvec2& q : r_mu)
+    out.push_back(sh.ray_intersects_ground(q.x, q.y) ? glm::dvec3(0.0) : sh.transmittance_to_top(q.x, q.y));
+  size = glm::ivec2(S::W, S::H);
+  return out;
+}
+
+}  // namespace
+
+std::vector<glm::dvec3> transmittance_lookups_at_size(const ref::AtmosphereParams& p, int size_index,
+                                                      const std::vector<glm::dvec2>& r_mu, glm::ivec2& size) {
+  switch (size_index) {
+    case 0: return sized_lookups<1, 2>(p, r_mu, size);
+    case 1: return sized_lookups<1, 1>(p, r_mu, size);
+    case 2: return sized_lookups<2, 1>(p, r_mu, size);
+    default: throw std::invalid_argument("transmittance_lookups_at_size: size_index must be 0, 1 or 2");
+  }
+}
+
+TransmittanceLut compute_transmittance_lut(const ref::AtmosphereParams& p) {
+  TransmittanceLut lut;
+  lut.params = p;
+  lut.texels.resize(size_t(CV_TRANSMITTANCE_W) * CV_TRANSMITTANCE_H);
+  tbb::parallel_for(0, CV_TRANSMITTANCE_H, [&](int y) {
+    AtmosphereShader sh{lut.params};
+    for (int x = 0; x < CV_TRANSMITTANCE_W; ++x)
+      lut.texels[size_t(y) * CV_TRANSMITTANCE_W + size_t(x)] = sh.compute_transmittance_texel(glm::ivec2(x, y));
+  });
+  return lut;
+}
+
+glm::dvec3 TransmittanceLut::to_top(double r, double mu) const {
+  AtmosphereShader sh{params, &texels};
+  if (sh.ray_intersects_ground(r, mu)) return glm::dvec3(0.0);
+  return sh.transmittance_to_top(r, mu);
+}
+
+std::shared_ptr<const TransmittanceLut> shared_transmittance_lut(const AtmosphereSettings& s) {
+  static std::mutex mutex;
+  static AtmosphereSettings last;
+  static std::shared_ptr<const TransmittanceLut> lut;
+  std::lock_guard<std::mutex> lock(mutex);
+  if (!lut || last != s) {
+    lut = std::make_shared<const TransmittanceLut>(compute_transmittance_lut(rounded_to_float(make_atmosphere_params(s))));
+    last = s;
+  }
+  return lut;
+}
+
+glm::dvec3 sky_ambient_color(const AtmosphereSettings& s, const glm::dvec3& sun_dir, double solar, double altitude) {
+  // The window calls this every frame: keep the last answer (a deterministic function of these).
+  static std::mutex mutex;
+  static AtmosphereSettings last_s;
+  static glm::dvec3 last_sun(0.0), last_value(0.0);
+  static double last_solar = -1, last_alt = -1;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (last_s == s && last_sun == sun_dir && last_solar == solar && last_alt == altitude) return last_value;
+  }
+  std::shared_ptr<const TransmittanceLut> lut = shared_transmittance_lut(s);
+  AtmosphereShader sh{lut->params, &lut->texels};
+  // Midpoint rule over the hemisphere in (cos theta, phi): E = int L cos theta d(cos theta) d phi.
+  const int n_theta = 16, n_phi = 32;
+  glm::dvec3 e(0.0);
+  for (int i = 0; i < n_theta; ++i) {
+    double c = (i + 0.5) / n_theta, sn = std::sqrt(1 - c * c);
+    for (int j = 0; j < n_phi; ++j) {
+      double phi = 2 * M_PI * (j + 0.5) / n_phi;
+      glm::dvec3 v(sn * std::cos(phi), c, sn * std::sin(phi)), t, g;
+      double t_end = 0;
+      e += sh.atmosphere_scattering(altitude, v, sun_dir, glm::dvec3(solar), CV_NO_HIT, t, t_end, g) * c;
+    }
+  }
+  e *= (1.0 / n_theta) * (2 * M_PI / n_phi);
+  std::lock_guard<std::mutex> lock(mutex);
+  last_s = s, last_sun = sun_dir, last_solar = solar, last_alt = altitude, last_value = e / M_PI;
+  return last_value;
+}
+
+std::vector<glm::dvec3> transmittance_dump_cpu(const AtmosphereSettings& s) {
+  TransmittanceLut lut = compute_transmittance_lut(make_atmosphere_params(s));
+  std::vector<glm::dvec3> v;
+  for (int j = 0; j < kDumpAltitudes; ++j)
+    for (int i = 0; i < kDumpMus; ++i) {
+      double mu = -1.0 + 2.0 * i / (kDumpMus - 1);
+      double h = (s.top_radius - s.bottom_radius) * j / (kDumpAltitudes - 1);
+      v.push_back(lut.to_top(s.bottom_radius + h, mu));
+    }
+  return v;
+}
+
+void write_transmittance_csv(const std::string& path, const AtmosphereSettings& s,
+                             const std::vector<glm::dvec3>& values) {
+  if (values.size() != size_t(kDumpAltitudes) * kDumpMus)
+    throw std::logic_error("write_transmittance_csv: expected " + std::to_string(kDumpAltitudes * kDumpMus) + " values");
+  cloudgen::atomic_write(path, [&](const std::string& tmp) {
+    cloudgen::write_file_stream(tmp, [&](std::ostream& os) {
+      os << "h_m,mu,r,g,b\n" << std::setprecision(9);
+      for (int j = 0; j < kDumpAltitudes; ++j)
+        for (int i = 0; i < kDumpMus; ++i) {
+          const glm::dvec3& t = values[size_t(j) * kDumpMus + size_t(i)];
+          os << (s.top_radius - s.bottom_radius) * j / (kDumpAltitudes - 1) << ","
+             << -1.0 + 2.0 * i / (kDumpMus - 1) << "," << t.x << "," << t.y << "," << t.z << "\n";
+        }
+    });
+  });
+}
+
+}  // namespace cloudviewer
