@@ -70,8 +70,9 @@ void add_view_metadata(std::vector<std::pair<std::string, std::string>>& metadat
 
 Look look_of_view(const View& v, const std::string& source) {
   Look l;
-  for (auto& [k, val] : v.render) {
-    auto num = [&] { return number_of(k, val, source); };
+  for (const auto& kv : v.render) {
+    const std::string& k = kv.first;  // a structured binding cannot be captured in C++17 (clang refuses)
+    auto num = [&] { return number_of(k, kv.second, source); };
     if (k == "sigma_t") l.sigma_t = num();
     else if (k == "density") l.density = num();
     else if (k == "erosion") l.erosion = num();
@@ -81,9 +82,9 @@ Look look_of_view(const View& v, const std::string& source) {
     else if (k == "ambient") l.ambient = num();
     else if (k == "exposure") l.exposure = num();
     else if (k == "ground_albedo") l.ground_albedo = num();
-    else if (k == "ground") l.ground = val == "true" || val == "1";
-    else if (k == "phase") l.phase = val;
-    else if (k == "tonemap") l.tonemap = val;
+    else if (k == "ground") l.ground = kv.second == "true" || kv.second == "1";
+    else if (k == "phase") l.phase = kv.second;
+    else if (k == "tonemap") l.tonemap = kv.second;
   }
   return l;
 }
