@@ -112,8 +112,9 @@ void remove_stale_temporaries(const fs::path& dir, const std::string& name) {
       const std::string rest = f.substr(prefix.size());
       const size_t dash = rest.find('-');
       if (dash == std::string::npos || dash == 0) continue;
+      const std::string pid_text = rest.substr(0, dash);  // endp points into it: keep it alive
       char* endp = nullptr;
-      const long pid = std::strtol(rest.substr(0, dash).c_str(), &endp, 10);
+      const long pid = std::strtol(pid_text.c_str(), &endp, 10);
       if (!endp || *endp != '\0' || pid == long(::getpid()) || pid_alive(pid)) continue;
       std::error_code rm;
       fs::remove(it->path(), rm);
