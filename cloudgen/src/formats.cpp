@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "cloudgen/io.h"
+#include "cloudgen/json_checked.h"
 #include "format_internal.h"
 
 namespace cloudgen {
@@ -340,17 +341,17 @@ void FieldReader::fail(const std::string& key, const std::string& what) const {
 }
 std::string FieldReader::string(const char* key) const {
   const json& v = at(key);
-  if (!v.is_string()) fail(key, "should be a string, got " + printable(v.dump().substr(0, 60)));
+  if (!v.is_string()) fail(key, "should be a string, got " + json_excerpt(v));
   return v.get<std::string>();
 }
 bool FieldReader::boolean(const char* key, bool def) const {
   if (!has(key)) return def;
   const json& v = at(key);
-  if (!v.is_boolean()) fail(key, "should be true or false, got " + printable(v.dump().substr(0, 60)));
+  if (!v.is_boolean()) fail(key, "should be true or false, got " + json_excerpt(v));
   return v.get<bool>();
 }
 double FieldReader::number_value(const json& v, const std::string& key, double lo, double hi) const {
-  if (!v.is_number()) fail(key, "should be a number, got " + printable(v.dump().substr(0, 60)));
+  if (!v.is_number()) fail(key, "should be a number, got " + json_excerpt(v));
   const double d = v.get<double>();
   if (!std::isfinite(d) || d < lo || d > hi) {
     std::ostringstream r;
@@ -362,10 +363,10 @@ double FieldReader::number_value(const json& v, const std::string& key, double l
 uint32_t FieldReader::integer_value(const json& v, const std::string& key, uint32_t lo, uint32_t hi) const {
   const std::string allowed = "; allowed: an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
   if (!v.is_number_integer())
-    fail(key, "should be an integer, got " + printable(v.dump().substr(0, 60)) + allowed);
+    fail(key, "should be an integer, got " + json_excerpt(v) + allowed);
   const bool ok = v.is_number_unsigned() ? v.get<uint64_t>() >= lo && v.get<uint64_t>() <= hi
                                          : v.get<int64_t>() >= int64_t(lo) && v.get<int64_t>() <= int64_t(hi);
-  if (!ok) fail(key, "is " + v.dump() + allowed);
+  if (!ok) fail(key, "is " + json_excerpt(v) + allowed);
   return uint32_t(v.get<int64_t>());
 }
 double FieldReader::number(const char* key, double def, double lo, double hi) const {
@@ -377,7 +378,7 @@ uint32_t FieldReader::integer(const char* key, uint32_t def, uint32_t lo, uint32
 std::array<uint32_t, 3> FieldReader::ivec3(const char* key, uint32_t lo, uint32_t hi) const {
   const json& v = at(key);
   if (!v.is_array() || v.size() != 3)
-    fail(key, "should be an array of 3 integers, got " + printable(v.dump().substr(0, 60)));
+    fail(key, "should be an array of 3 integers, got " + json_excerpt(v));
   std::array<uint32_t, 3> out{};
   for (int a = 0; a < 3; ++a) out[a] = integer_value(v[a], std::string(key) + "[" + std::to_string(a) + "]", lo, hi);
   return out;
@@ -385,7 +386,7 @@ std::array<uint32_t, 3> FieldReader::ivec3(const char* key, uint32_t lo, uint32_
 std::array<double, 3> FieldReader::vec3(const char* key, double lo, double hi) const {
   const json& v = at(key);
   if (!v.is_array() || v.size() != 3)
-    fail(key, "should be an array of 3 numbers, got " + printable(v.dump().substr(0, 60)));
+    fail(key, "should be an array of 3 numbers, got " + json_excerpt(v));
   std::array<double, 3> out{};
   for (int a = 0; a < 3; ++a) out[a] = number_value(v[a], std::string(key) + "[" + std::to_string(a) + "]", lo, hi);
   return out;

@@ -88,6 +88,12 @@ class StructureCheck : public json::json_sax_t {
 
 }  // namespace
 
+std::string json_excerpt(const json& j, size_t max_chars) {
+  std::string s = j.dump(-1, ' ', false, json::error_handler_t::replace);
+  if (s.size() > max_chars) s = s.substr(0, max_chars > 3 ? max_chars - 3 : 0) + "...";
+  return printable(s);
+}
+
 std::string json_line_col(const std::string& text, size_t byte) {
   size_t line = 1, col = 1;
   for (size_t i = 0; i < byte && i < text.size(); ++i) {

@@ -274,10 +274,7 @@ size_t edit_distance(const std::string& a, const std::string& b) {
   return d[b.size()];
 }
 
-std::string dump(const json& j) {  // safe: parse_json_checked bounded the depth
-  std::string s = printable(j.dump(-1, ' ', false, json::error_handler_t::replace));
-  return s.size() > 60 ? s.substr(0, 57) + "..." : s;
-}
+std::string dump(const json& j) { return json_excerpt(j); }
 
 class Reader {
  public:

@@ -21,11 +21,14 @@
 namespace cloudviewer {
 namespace {
 
-// The value as short text for messages (the depth was bounded when the track was parsed; invalid
-// UTF-8 is replaced instead of throwing).
+// The value as short text for messages (the depth was bounded when the track was parsed).
 std::string shown(const nlohmann::json& j) {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+  return cloudgen::json_excerpt(j);
+#else
   std::string t = j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
   return t.size() > 60 ? t.substr(0, 57) + "..." : t;
+#endif
 }
 
 // A number from the track: present, a number, finite and in [lo, hi]; else InputError naming the
