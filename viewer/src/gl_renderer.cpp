@@ -455,42 +455,31 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   }
 }
 
-int GlRenderer::cloud_block_size() const {
-  const Pass& clouds = impl_->pass("clouds");
-  GLuint index = glGetUniformBlockIndex(clouds.program, "CloudBlock");
+namespace {
+// std140 layout as the driver sees it in the cloud program (tests compare it with the C++ structs).
+int block_size(GLuint program, const char* block) {
+  GLuint index = glGetUniformBlockIndex(program, block);
   GLint size = 0;
-  glGetActiveUniformBlockiv(clouds.program, index, GL_UNIFORM_BLOCK_DATA_SIZE, &size);
+  glGetActiveUniformBlockiv(program, index, GL_UNIFORM_BLOCK_DATA_SIZE, &size);
   return size;
 }
+int member_offset(GLuint program, const std::string& name) {
+  GLuint index = glGetProgramResourceIndex(program, GL_UNIFORM, name.c_str());
+  if (index == GL_INVALID_INDEX) return -1;
+  const GLenum prop = GL_OFFSET;
+  GLint offset = -1;
+  glGetProgramResourceiv(program, GL_UNIFORM, index, 1, &prop, 1, nullptr, &offset);
+  return offset;
+}
+}  // namespace
 
+int GlRenderer::cloud_block_size() const { return block_size(impl_->pass("clouds").program, "CloudBlock"); }
 int GlRenderer::cloud_block_offset(const std::string& member) const {
-  const Pass& clouds = impl_->pass("clouds");
-  std::string name = "u_cloud." + member;
-  GLuint index = glGetProgramResourceIndex(clouds.program, GL_UNIFORM, name.c_str());
-  if (index == GL_INVALID_INDEX) return -1;
-  const GLenum prop = GL_OFFSET;
-  GLint offset = -1;
-  glGetProgramResourceiv(clouds.program, GL_UNIFORM, index, 1, &prop, 1, nullptr, &offset);
-  return offset;
+  return member_offset(impl_->pass("clouds").program, "u_cloud." + member);
 }
-
-int GlRenderer::atmosphere_block_size() const {
-  const Pass& clouds = impl_->pass("clouds");
-  GLuint index = glGetUniformBlockIndex(clouds.program, "AtmosphereBlock");
-  GLint size = 0;
-  glGetActiveUniformBlockiv(clouds.program, index, GL_UNIFORM_BLOCK_DATA_SIZE, &size);
-  return size;
-}
-
+int GlRenderer::atmosphere_block_size() const { return block_size(impl_->pass("clouds").program, "AtmosphereBlock"); }
 int GlRenderer::atmosphere_block_offset(const std::string& member) const {
-  const Pass& clouds = impl_->pass("clouds");
-  std::string name = "u_atmo." + member;
-  GLuint index = glGetProgramResourceIndex(clouds.program, GL_UNIFORM, name.c_str());
-  if (index == GL_INVALID_INDEX) return -1;
-  const GLenum prop = GL_OFFSET;
-  GLint offset = -1;
-  glGetProgramResourceiv(clouds.program, GL_UNIFORM, index, 1, &prop, 1, nullptr, &offset);
-  return offset;
+  return member_offset(impl_->pass("clouds").program, "u_atmo." + member);
 }
 
 std::vector<glm::vec3> GlRenderer::transmittance_dump(const AtmosphereSettings& a, double* precompute_ms) {
