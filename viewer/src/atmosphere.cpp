@@ -13,31 +13,14 @@
 
 #include "cloudgen/output.h"
 #include "cloudviewer/errors.h"
+#include "param_parse.h"
 
 namespace cloudviewer {
 namespace {
 
-std::string fmt(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
-
-[[noreturn]] void bad(const std::string& key, const std::string& value, const std::string& allowed) {
-  throw InputError("--set atmosphere." + key + "=" + value + ": invalid value, allowed: " + allowed);
-}
-
+using param::fmt;
 double parse_number(const std::string& key, const std::string& v, double lo, double hi) {
-  size_t used = 0;
-  double d = 0;
-  try {
-    d = std::stod(v, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != v.size() || v.empty() || !std::isfinite(d) || d < lo || d > hi)
-    bad(key, v, "a number in [" + fmt(lo) + ", " + fmt(hi) + "]");
-  return d;
+  return param::parse_number("atmosphere", key, v, lo, hi);
 }
 
 // Members by index: the table stores an index so one setter/getter pair serves every float key.
@@ -63,11 +46,7 @@ AtmosphereParamDef real(const std::string& key, int index, double lo, double hi,
 AtmosphereParamDef boolean(const std::string& key, int index, const std::string& doc) {
   AtmosphereParamDef d;
   d.key = key, d.type = "bool", d.range = "true|false", d.doc = doc, d.lo = 0, d.hi = 1;
-  d.set = [=](AtmosphereSettings& s, const std::string& v) {
-    if (v == "true" || v == "1" || v == "on" || v == "yes") *bool_member(s, index) = true;
-    else if (v == "false" || v == "0" || v == "off" || v == "no") *bool_member(s, index) = false;
-    else bad(key, v, "true|false");
-  };
+  d.set = [=](AtmosphereSettings& s, const std::string& v) { *bool_member(s, index) = param::parse_bool("atmosphere", key, v); };
   d.get = [=](const AtmosphereSettings& s) {
     return std::string(*bool_member(const_cast<AtmosphereSettings&>(s), index) ? "true" : "false");
   };

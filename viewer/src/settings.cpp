@@ -5,37 +5,18 @@
 #include <sstream>
 
 #include "cloudviewer/errors.h"
+#include "param_parse.h"
 
 namespace cloudviewer {
 namespace {
 
-std::string fmt(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
-
+using param::fmt;
 [[noreturn]] void bad(const std::string& key, const std::string& value, const std::string& allowed) {
-  throw InputError("--set render." + key + "=" + value + ": invalid value, allowed: " + allowed);
+  param::bad("render", key, value, allowed);
 }
-
-bool parse_bool(const std::string& key, const std::string& v) {
-  if (v == "true" || v == "1" || v == "on" || v == "yes") return true;
-  if (v == "false" || v == "0" || v == "off" || v == "no") return false;
-  bad(key, v, "true|false");
-}
-
+bool parse_bool(const std::string& key, const std::string& v) { return param::parse_bool("render", key, v); }
 double parse_double(const std::string& key, const std::string& v, double lo, double hi) {
-  size_t used = 0;
-  double d = 0;
-  try {
-    d = std::stod(v, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != v.size() || v.empty() || !std::isfinite(d) || d < lo || d > hi)
-    bad(key, v, "a number in [" + fmt(lo) + ", " + fmt(hi) + "]");
-  return d;
+  return param::parse_number("render", key, v, lo, hi);
 }
 
 int parse_int(const std::string& key, const std::string& v, int lo, int hi) {
