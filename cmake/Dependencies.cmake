@@ -34,6 +34,10 @@ if(CLOUD_BUILD_CLOUDGEN)
   cloud_require(PNG_FOUND "libpng" "libpng-dev")
 endif()
 
+# GLM: cloudgen compiles the motion formulas (cloudgen/motion.glsl) with its GLSL-named types.
+find_package(glm CONFIG QUIET)
+cloud_require(glm_FOUND "GLM" "libglm-dev")
+
 if(CLOUD_BUILD_VIEWER)
   find_package(glfw3 3.3 CONFIG QUIET)
   cloud_require(glfw3_FOUND "GLFW 3" "libglfw3-dev")
@@ -43,8 +47,6 @@ if(CLOUD_BUILD_VIEWER)
   cloud_require(EPOXY_FOUND "libepoxy" "libepoxy-dev")
   pkg_check_modules(EGL QUIET IMPORTED_TARGET egl)
   cloud_require(EGL_FOUND "EGL" "libegl-dev")
-  find_package(glm CONFIG QUIET)
-  cloud_require(glm_FOUND "GLM" "libglm-dev")
 endif()
 
 if(CLOUD_BUILD_TESTS)

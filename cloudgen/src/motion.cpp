@@ -1,0 +1,78 @@
+#include "cloudgen/motion.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+
+#include "cloudgen/cli_parse.h"
+#include "cloudgen/volume.h"
+
+namespace cloudgen {
+namespace {
+std::string fmt(double v) {
+  std::ostringstream s;
+  s.precision(6);
+  s << v;
+  return s.str();
+}
+std::string range(const MotionKey& k) { return "[" + fmt(k.lo) + ", " + fmt(k.hi) + "]"; }
+}  // namespace
+
+const std::vector<MotionKey>& motion_keys() {
+  static const std::vector<MotionKey> keys = {
+      {"wind_speed", &MotionParams::wind_speed, 0, 200, "m/s", "wind speed at the cloud base (0 = no drift)"},
+      {"wind_direction", &MotionParams::wind_direction, -360, 360, "deg",
+       "azimuth the wind blows toward, clockwise from -z (the sun's convention)"},
+      {"wind_shear", &MotionParams::wind_shear, 0, 10, "",
+       "height shear: the top of the layer moves (1 + shear) times faster than its base"},
+      {"flow_speed", &MotionParams::flow_speed, 0, 10, "1/s",
+       "flow-map cycles per second (seed 003's speed; the flow repeats every 1/speed seconds)"},
+      {"flow_up", &MotionParams::flow_up, 0, 1e5, "m",
+       "flow-map amplitude along up at the top of the layer (scaled by the height fraction)"},
+      {"flow_forward", &MotionParams::flow_forward, 0, 1e5, "m",
+       "flow-map amplitude along the wind at the top of the layer (scaled by the height fraction)"},
+  };
+  return keys;
+}
+
+void set_motion_key(MotionParams& m, const std::string& key, const std::string& value, const std::string& where) {
+  for (const MotionKey& k : motion_keys()) {
+    if (k.key != key) continue;
+    char* end = nullptr;
+    errno = 0;
+    double v = std::strtod(value.c_str(), &end);
+    if (value.empty() || end != value.c_str() + value.size() || errno == ERANGE || !std::isfinite(v) || v < k.lo ||
+        v > k.hi)
+      throw InputError(where + " motion." + key + "=" + value + ": expected a number in " + range(k) +
+                       (k.unit.empty() ? "" : " " + k.unit));
+    m.*k.member = v;
+    return;
+  }
+  std::string known;
+  for (const MotionKey& k : motion_keys()) known += (known.empty() ? "" : ", ") + k.key;
+  throw InputError(where + " motion." + key + ": unknown key (known: " + known + ")");
+}
+
+bool motion_moves(const MotionParams& m) {
+  return m.wind_speed > 0 || (m.flow_speed > 0 && (m.flow_up > 0 || m.flow_forward > 0));
+}
+
+std::string motion_help() {
+  MotionParams d;
+  std::string s = "motion parameters (--set motion.KEY=VALUE; seed 003 flow map + wind):\n";
+  for (const MotionKey& k : motion_keys())
+    s += "  motion." + k.key + " " + range(k) + (k.unit.empty() ? "" : " " + k.unit) + " (default " +
+         fmt(d.*k.member) + "): " + k.doc + "\n";
+  return s;
+}
+
+std::string motion_markdown() {
+  MotionParams d;
+  std::string md = "| key | range | unit | default | meaning |\n|---|---|---|---|---|\n";
+  for (const MotionKey& k : motion_keys())
+    md += "| motion." + k.key + " | " + range(k) + " | " + k.unit + " | " + fmt(d.*k.member) + " | " + k.doc + " |\n";
+  return md;
+}
+
+}  // namespace cloudgen
