@@ -667,6 +667,13 @@ TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
   CV_EXPECT_OFFSET(coverage_period_m);
   CV_EXPECT_OFFSET(camera_coverage_z_m);
   CV_EXPECT_OFFSET(cloud_type);
+  CV_EXPECT_OFFSET(march_min_m);
+  CV_EXPECT_OFFSET(time_s);
+  CV_EXPECT_OFFSET(march_size_m);
+  CV_EXPECT_OFFSET(motion_on);
+  CV_EXPECT_OFFSET(wind_dir_x);
+  CV_EXPECT_OFFSET(flow_speed_hz);
+  CV_EXPECT_OFFSET(motion_pad);
 #undef CV_EXPECT_OFFSET
   EXPECT_EQ(r.pass_names().front(), "atmosphere_transmittance");  // the LUT precompute comes first
   EXPECT_EQ(r.pass_names().at(1), "ground");

@@ -10,6 +10,7 @@
 #include "common.glsl"
 #include "phase.glsl"
 #include "cloud_type.glsl"
+#include "motion.glsl"
 #include "medium.glsl"
 #include "atmosphere.glsl"
 #include "sky_atmosphere.glsl"

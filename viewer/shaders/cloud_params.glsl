@@ -70,4 +70,16 @@ struct CloudParams {
   Number cloud_type;        // 0 stratus .. 1 cumulonimbus; -1 = from the map
   Number sky_mode;          // CV_SKY_*
   Number sky_altitude_m;    // camera altitude above the ground for the atmosphere (both modes)
+  // Motion (cloudgen/motion.glsl): what is seen at p is the static volume at p - D(h, time_s).
+  // Box mode marches the box grown by the motion's reach at this time (march_*; = the box when still).
+  vec3 march_min_m;         Number time_s;     // seconds
+  vec3 march_size_m;        Number motion_on;  // 1 when the clouds move (time != 0 and motion_moves)
+  Number wind_dir_x;        // unit wind direction in x-z
+  Number wind_dir_z;
+  Number wind_speed_mps;
+  Number wind_shear;
+  Number flow_speed_hz;
+  Number flow_up_m;
+  Number flow_forward_m;
+  Number motion_pad;
 };

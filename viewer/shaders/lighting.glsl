@@ -52,8 +52,8 @@ vec3 inscattered_radiance(vec3 p, Number phase) {
 // Transmittance of the clouds toward the sun from a ground point p (fixed-step march, for shadows).
 Number sun_shadow_transmittance(vec3 p) {
   vec3 sun = u_cloud.sun_dir;
-  vec3 bmin = u_cloud.volume_min_m - p;
-  vec3 bmax = bmin + u_cloud.volume_size_m;
+  vec3 bmin = u_cloud.march_min_m - p;
+  vec3 bmax = bmin + u_cloud.march_size_m;
   vec2 tb = layer_mode() ? shell_interval(p, sun) : ray_box(sun, bmin, bmax);
   if (layer_mode()) tb.y = min(tb.y, tb.x + 20000.0);  // shadows from within 20 km
   if (!(tb.y > tb.x)) return 1.0;

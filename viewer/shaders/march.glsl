@@ -41,8 +41,8 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, O
   iterations = 0;
   t_mean = 0.0;
   Number t_weighted = 0.0;
-  vec3 bmin = u_cloud.volume_min_m;
-  vec3 bmax = bmin + u_cloud.volume_size_m;
+  vec3 bmin = u_cloud.march_min_m;  // the box, grown by the motion's reach
+  vec3 bmax = bmin + u_cloud.march_size_m;
   vec2 tb = layer_mode() ? shell_interval(vec3(0.0), rd) : ray_box(rd, bmin, bmax);
   Number t0 = tb.x;
   Number t1 = min(tb.y, min(t_scene, u_cloud.max_distance_m));

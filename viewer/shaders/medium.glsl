@@ -96,12 +96,33 @@ vec3 volume_uvw(vec3 p) {
   return (p - u_cloud.volume_min_m) / u_cloud.volume_size_m;
 }
 
-// Cloud density (dimensionless, >= 0) at camera-relative position p: base shape R, eroded by the
+// The metres one unit of volume_uvw spans along each axis.
+vec3 volume_uvw_extent_m() {
+  if (layer_mode()) return vec3(u_cloud.tile_x_m, u_cloud.layer_top_m - u_cloud.layer_bottom_m, u_cloud.tile_z_m);
+  return u_cloud.volume_size_m;
+}
+
+// Motion (cloudgen/motion.glsl, seed 003): the displacement D of the clouds seen at p at the frame's
+// time, from p's height fraction in the layer (or box). Zero when the clouds are still.
+vec3 motion_at(vec3 p) {
+  if (u_cloud.motion_on < 0.5) return vec3(0.0);
+  return motion_displacement(u_cloud.time_s, volume_uvw(p).y, vec2(u_cloud.wind_dir_x, u_cloud.wind_dir_z),
+                             u_cloud.wind_speed_mps, u_cloud.wind_shear, u_cloud.flow_speed_hz,
+                             u_cloud.flow_up_m, u_cloud.flow_forward_m);
+}
+
+// Volume coordinates of the static volume seen at p: volume_uvw(p - D). Shifted in uvw rather than
+// recomputed at p - D so that a horizontal displacement never moves the layer altitude (the
+// parabolic Earth term of layer_altitude depends on the horizontal distance).
+vec3 moving_uvw(vec3 p, vec3 motion) { return volume_uvw(p) - motion / volume_uvw_extent_m(); }
+
+// Cloud density (dimensionless, >= 0) at camera-relative position p (moved by the motion): base shape R, eroded by the
 // G/B/A detail fBm (HZD remap), scaled by the density multiplier. Zero outside the box (x and z
 // repeat for tileable volumes). Erosion only lowers density, so the occupancy grid built from R
 // stays conservative.
 Number cloud_density(vec3 p) {
-  vec3 uvw = volume_uvw(p);
+  vec3 motion = motion_at(p);
+  vec3 uvw = moving_uvw(p, motion);
   if (uvw.y < 0.0 || uvw.y > 1.0) return 0.0;
   bool tiles = u_cloud.tiles_xz > 0.5;
   if (!tiles && (uvw.x < 0.0 || uvw.x > 1.0 || uvw.z < 0.0 || uvw.z > 1.0)) return 0.0;
@@ -110,7 +131,7 @@ Number cloud_density(vec3 p) {
   if (layer_mode()) {
     // Coverage remap (HZD): raise the threshold where coverage is low, then scale by coverage.
     // Like erosion it only lowers density, so the texture's occupancy grid stays conservative.
-    vec2 cov = coverage_at(p);
+    vec2 cov = coverage_at(p - motion);  // the weather map travels with the clouds
     Number c = clamp(cov.x + u_cloud.coverage_bias, 0.0, 1.0);
     Number type = u_cloud.cloud_type >= 0.0 ? u_cloud.cloud_type : cov.y;
     Number x = base * cloud_type_gradient(uvw.y, type);
@@ -127,12 +148,12 @@ Number cloud_density(vec3 p) {
   return max(base, 0.0) * u_cloud.density_scale;
 }
 
-// Occupancy of the coarse cell that holds camera-relative position p. The march only asks about
+// Occupancy of the coarse cell that holds the static position seen at camera-relative p. The march only asks about
 // points inside the box, so indices are clamped (wrapped in x/z for tiling volumes): a ray entering
 // through a face must see that face's cell even when rounding puts the point a hair outside, or a
 // large step could skip a whole corner of a dense boundary cell.
 bool occupied(vec3 p) {
-  vec3 c = volume_uvw(p) * u_cloud.volume_dims / u_cloud.occ_cell_voxels;
+  vec3 c = moving_uvw(p, motion_at(p)) * u_cloud.volume_dims / u_cloud.occ_cell_voxels;
   ivec3 cell = ivec3(floor(c));
   ivec3 n = ivec3(u_cloud.occ_dims);
   bool tiles = u_cloud.tiles_xz > 0.5;

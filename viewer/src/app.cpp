@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
+#include <memory>
 #include <sstream>
 
 #include <CLI/CLI.hpp>
@@ -79,12 +80,43 @@ void parse_size(const std::string& text, int& w, int& h) {
     throw InputError("--size " + text + ": expected WIDTHxHEIGHT, each 1..16384");
 }
 
+// --out for frame i: a printf-style "%d" / "%0Nd" (one, N <= 9) becomes the frame number; "%%" is a
+// literal percent; a name without a pattern is used as it is. Throws InputError on anything else.
+std::string frame_file_name(const std::string& out, int frame) {
+  std::string r;
+  int conversions = 0;
+  for (size_t i = 0; i < out.size(); ++i) {
+    if (out[i] != '%') {
+      r += out[i];
+      continue;
+    }
+    if (i + 1 < out.size() && out[i + 1] == '%') {
+      r += '%';
+      ++i;
+      continue;
+    }
+    size_t j = i + 1;
+    int width = 0;
+    bool zero = j < out.size() && out[j] == '0';
+    if (zero) ++j;
+    if (j < out.size() && out[j] >= '1' && out[j] <= '9') width = out[j++] - '0';
+    if (j >= out.size() || out[j] != 'd' || ++conversions > 1)
+      throw InputError("--out " + out + ": the frame pattern must be one %d or %0Nd (N = 1..9); write %% for a "
+                       "literal percent");
+    std::string num = std::to_string(frame);
+    if (int(num.size()) < width) num = std::string(size_t(width) - num.size(), zero ? '0' : ' ') + num;
+    r += num;
+    i = j;
+  }
+  return r;
+}
+
 std::string params_help() {
   std::string s = "render parameters (--set render.KEY=VALUE):\n";
   RenderSettings d;
   for (const ParamDef& p : render_params())
     s += "  " + p.key + " (" + p.type + ", " + p.range + ", default " + p.get(d) + "): " + p.doc + "\n";
-  return s + atmosphere_params_help();
+  return s + atmosphere_params_help() + cloudgen::motion_help();
 }
 
 // --dump-lut transmittance: the LUT through the shaders' lookup, from the GPU textures (gl) or the
@@ -112,8 +144,8 @@ int dump_atmosphere_lut(const Options& o, std::ostream& out) {
 
 int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   Options o;
-  std::string size_text, camera_text, sun_text;
-  bool help_params = false, params_md = false, keys_md = false, atmo_md = false;
+  std::string size_text, camera_text, sun_text, time_text;
+  bool help_params = false, params_md = false, keys_md = false, atmo_md = false, motion_md = false;
   std::string dump_lut;
   CLI::App app{"cloudviewer: real-time volumetric cloud ray marcher (OpenGL 4.5) with a CPU reference"};
   app.add_option("input", o.input,
@@ -124,10 +156,17 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   std::string fov_text;
   app.add_option("--fov", fov_text, "vertical field of view in degrees, 1..170 (default 60)");
   app.add_option("--sun", sun_text, "sun AZIMUTH,ELEVATION in degrees (azimuth clockwise from -z; default behind the viewer)");
-  app.add_option("--set", o.sets, "render.KEY=VALUE or atmosphere.KEY=VALUE (see --help-params)")->take_all();
+  app.add_option("--set", o.sets, "render.KEY=VALUE, atmosphere.KEY=VALUE or motion.KEY=VALUE (see --help-params)")->take_all();
   app.add_option("--dump-lut", dump_lut, "write an atmosphere LUT read through the shaders' lookup to --out as CSV (no INPUT needed)")
       ->check(CLI::IsMember({"transmittance"}));
-  app.add_option("--out", o.out, "headless output image (.png tone-mapped sRGB, .exr linear HDR)");
+  app.add_option("--out", o.out, "headless output image (.png tone-mapped sRGB, .exr linear HDR); with --frames, a "
+                 "printf pattern such as frame_%04d.png writes every frame, a plain name only the last");
+  app.add_option("--time", time_text, "the clouds' time in seconds: wind and flow map move them (motion.*, see "
+                 "--help-params); 0 = the static volume");
+  app.add_option("--frames", o.frames, "headless: render N frames, the time advancing 1/FPS per frame from --time "
+                 "and the jitter pattern per frame")->check(CLI::Range(1, 1000000));
+  app.add_option("--fps", o.fps, "frames per second for --frames (0 holds the time still, e.g. to converge "
+                 "render.temporal; default 24)")->check(CLI::Range(0.0, 10000.0));
   app.add_option("--backend", o.backend, "gl (OpenGL) or cpu (double-precision reference)")->check(CLI::IsMember({"gl", "cpu"}));
   app.add_option("--shader-dir", o.shader_dir, "read shaders from this directory instead of the embedded copies (hot reload)");
   app.add_option("--mie-table", o.mie_table, "Mie phase table to use for render.phase=mie (text: one value per line over 0..180 degrees, or 'theta value' columns)");
@@ -138,6 +177,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   app.add_flag("--help-params", help_params, "list every render.KEY with type, range, default and meaning");
   app.add_flag("--params-markdown", params_md, "the render.KEY table as Markdown (docs/viewer.md)");
   app.add_flag("--atmosphere-markdown", atmo_md, "the atmosphere.KEY table as Markdown (docs/viewer.md)");
+  app.add_flag("--motion-markdown", motion_md, "the motion.KEY table as Markdown (docs/viewer.md, docs/motion.md)");
   app.add_flag("--keys-markdown", keys_md, "the window's parameter key bindings as Markdown (docs/viewer.md)");
   std::vector<std::string> argv_rest(args.begin() + (args.empty() ? 0 : 1), args.end());
   std::reverse(argv_rest.begin(), argv_rest.end());
@@ -153,6 +193,10 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   }
   if (atmo_md) {
     out << atmosphere_params_markdown();
+    return 0;
+  }
+  if (motion_md) {
+    out << cloudgen::motion_markdown();
     return 0;
   }
   if (params_md || keys_md) {
@@ -175,9 +219,11 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
     o.sun = Sun{v[0], v[1]};
   }
   if (o.bench.empty()) apply_input_view(o, app.count("--fov") > 0);  // the input's preset/metadata view
+  if (!time_text.empty()) o.settings.time = parse_numbers("--time", time_text, 1, -1e7, 1e7)[0];
   if (!o.headless) return run_window(o, out, err);
   if (o.out.empty() && o.bench.empty()) throw InputError("--headless needs --out FILE or --bench TRACK.json");
-  if (!o.out.empty()) {  // fail on a bad extension before rendering
+  if (!o.out.empty()) {  // fail on a bad extension or pattern before rendering
+    frame_file_name(o.out, 0);
     std::string lower = o.out;
     for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
     if (!(lower.size() > 4 && (lower.substr(lower.size() - 4) == ".png" || lower.substr(lower.size() - 4) == ".exr")))
@@ -195,29 +241,44 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
 
   Camera cam = resolve_camera(o, vol, o.width, o.height);
   Sun sun = resolve_sun(o, cam);
-  FrameSetup frame = make_frame(vol, o.settings, cam, sun, o.width, o.height);
-  FrameImages img;
-  auto r0 = std::chrono::steady_clock::now();
-  if (o.backend == "cpu") {
-    img = render_cpu(vol, frame);
-    auto r1 = std::chrono::steady_clock::now();
-    out << "cpu reference: " << o.width << "x" << o.height << " in "
-        << std::chrono::duration<double>(r1 - r0).count() << " s\n";
-  } else {
-    HeadlessContext ctx;
-    GlRenderer renderer{ShaderSource(o.shader_dir)};
-    renderer.set_volume(vol);
-    GpuTimings t;
-    renderer.render(frame, &t);
-    img = renderer.read_back();
-    out << ctx.description() << "\n"
-        << "gpu: " << o.width << "x" << o.height << " total " << t.total_ms << " ms (atmosphere LUTs " << t.atmosphere_ms << ", ground " << t.ground_ms
-        << ", clouds " << t.cloud_ms << ", post " << t.post_ms << ")\n";
+  const bool pattern = o.out.find('%') != std::string::npos;
+  std::unique_ptr<HeadlessContext> ctx;
+  std::unique_ptr<GlRenderer> renderer;
+  if (o.backend != "cpu") {
+    ctx = std::make_unique<HeadlessContext>();
+    renderer = std::make_unique<GlRenderer>(ShaderSource(o.shader_dir));
+    renderer->set_volume(vol);
+    out << ctx->description() << "\n";
   }
-  ImageStats st = image_stats(img.linear);
-  if (st.nonfinite) err << "warning: " << st.nonfinite << " non-finite values in the image\n";
-  write_image(o.out, img.display, img.linear);
-  out << "wrote " << o.out << "\n";
+  RenderSettings s = o.settings;
+  for (int i = 0; i < o.frames; ++i) {
+    // Frame i: the clouds' time advances 1/fps per frame, the jitter (and temporal) pattern by one.
+    s.time = o.settings.time + (o.fps > 0 ? double(i) / o.fps : 0.0);
+    s.frame = o.settings.frame + i;
+    FrameSetup frame = make_frame(vol, s, cam, sun, o.width, o.height);
+    FrameImages img;
+    auto r0 = std::chrono::steady_clock::now();
+    std::string label = o.frames > 1 ? "frame " + std::to_string(i) + " (t = " + format_number(s.time) + " s): " : "";
+    if (!renderer) {
+      img = render_cpu(vol, frame);
+      auto r1 = std::chrono::steady_clock::now();
+      out << label << "cpu reference: " << o.width << "x" << o.height << " in "
+          << std::chrono::duration<double>(r1 - r0).count() << " s\n";
+    } else {
+      GpuTimings t;
+      renderer->render(frame, &t);
+      img = renderer->read_back();
+      out << label << "gpu: " << o.width << "x" << o.height << " total " << t.total_ms << " ms (atmosphere LUTs "
+          << t.atmosphere_ms << ", ground " << t.ground_ms << ", clouds " << t.cloud_ms << ", post " << t.post_ms
+          << ")\n";
+    }
+    if (!pattern && i + 1 < o.frames) continue;  // a plain --out keeps only the last frame
+    ImageStats st = image_stats(img.linear);
+    if (st.nonfinite) err << "warning: " << st.nonfinite << " non-finite values in the image\n";
+    std::string path = frame_file_name(o.out, i);
+    write_image(path, img.display, img.linear);
+    out << "wrote " << path << "\n";
+  }
   return 0;
 }
 

@@ -62,6 +62,7 @@ struct CpuShader {
 #include "../shaders/common.glsl"
 #include "../shaders/phase.glsl"
 #include "cloudgen/cloud_type.glsl"
+#include "cloudgen/motion.glsl"
 #include "../shaders/medium.glsl"
 #include "../shaders/atmosphere.glsl"
 #include "../shaders/sky_atmosphere.glsl"
@@ -132,6 +133,11 @@ double reference_cloud_type_gradient(double h, double type) {
   PreparedVolume empty;
   CpuShader sh(p, empty, mie_phase_table(), no_lut());
   return sh.cloud_type_gradient(h, type);
+}
+
+double reference_density(const PreparedVolume& vol, const FrameSetup& frame, const glm::dvec3& p) {
+  CpuShader sh(frame.params, vol, mie_phase_table(), no_lut());
+  return sh.cloud_density(p);
 }
 
 FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {

@@ -3,12 +3,64 @@
 #include <algorithm>
 #include <cmath>
 
+#include "cloudgen/motion.h"
 #include "cloudgen/view.h"
 #include "cloudviewer/constants.h"
 #include "cloudviewer/errors.h"
 #include "cloudviewer/scene.h"
 
 namespace cloudviewer {
+
+namespace {
+
+// Motion (cloudgen/motion.glsl): the parameters, the box the march must cover at this time and the
+// large step that keeps occupancy skipping exact while the clouds are displaced.
+void apply_motion(const RenderSettings& s, const glm::dvec3& extent, ref::CloudParams& p) {
+  p.march_min_m = p.volume_min_m;
+  p.march_size_m = p.volume_size_m;
+  p.time_s = s.time;
+  const cloudgen::MotionParams& m = s.motion;
+  glm::dvec2 wind = cloudgen::motion_glsl::wind_direction_xz(m.wind_direction);
+  p.wind_dir_x = wind.x;
+  p.wind_dir_z = wind.y;
+  p.wind_speed_mps = m.wind_speed;
+  p.wind_shear = m.wind_shear;
+  p.flow_speed_hz = m.flow_speed;
+  p.flow_up_m = m.flow_up;
+  p.flow_forward_m = m.flow_forward;
+  p.motion_on = s.time != 0 && cloudgen::motion_moves(m) ? 1 : 0;
+  if (p.motion_on < 0.5) return;
+  // D over the height fraction h in [0, 1], sampled finely: its range (the box grows by it) and its
+  // steepest slope G = max |dD/dh| (metres per unit h), both padded by a quarter for what falls
+  // between samples.
+  const int n = 512;
+  glm::dvec3 lo(0.0), hi(0.0), prev = cloudgen::motion_displacement(m, s.time, 0.0);
+  double slope = 0;
+  for (int i = 0; i <= n; ++i) {
+    glm::dvec3 d = cloudgen::motion_displacement(m, s.time, double(i) / n);
+    lo = glm::min(lo, d);
+    hi = glm::max(hi, d);
+    if (i > 0) slope = std::max(slope, glm::length(d - prev) * n);
+    prev = d;
+  }
+  slope *= 1.25;
+  glm::dvec3 pad(slope / n);
+  if (p.tiles_xz > 0.5) {  // a tileable volume scrolls through its box (x and z wrap): the box stays
+    lo.x = hi.x = lo.z = hi.z = 0.0;
+    pad.x = pad.z = 0.0;
+  }
+  p.march_min_m = p.volume_min_m + lo - pad;
+  p.march_size_m = p.volume_size_m + (hi - lo) + 2.0 * pad;
+  // Occupancy skipping looks cells up at the displaced position q = p - D(h(p)). Along a large step
+  // of length L, h changes by at most L / H (H: the height the volume spans), so q moves at most
+  // L (1 + G / H): shorten the large step by that factor and the proof in make_frame still holds.
+  double stretch = 1.0 + slope / extent.y;
+  p.large_step_count = std::max(1.0, std::floor(p.large_step_count / stretch));
+  double diag = glm::length(p.march_size_m);
+  if (p.layer_on < 0.5) p.max_iterations = std::max(p.max_iterations, 4.0 * std::ceil(diag / p.step_m) + 64.0);
+}
+
+}  // namespace
 
 FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const Camera& cam,
                       const Sun& sun, int width, int height) {
@@ -117,6 +169,7 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
     p.coverage_bias = s.coverage;
     p.cloud_type = s.cloud_type;
   }
+  apply_motion(s, size, p);
   f.params = rounded_to_float(p);
   f.view_proj = view_projection(cam, width, height);
   f.inv_view_proj = glm::dmat4(glm::mat4(glm::inverse(f.view_proj)));

@@ -130,6 +130,7 @@ void apply_setting(RenderSettings& s, const std::string& assignment) {
   std::string key = assignment.substr(0, eq);
   std::string value = assignment.substr(eq + 1);
   if (key.rfind("atmosphere.", 0) == 0) return apply_atmosphere_setting(s.atmosphere, assignment);
+  if (key.rfind("motion.", 0) == 0) return cloudgen::set_motion_key(s.motion, key.substr(7), value, "--set");
   if (key.rfind("render.", 0) == 0) key = key.substr(7);
   std::string known;
   for (const ParamDef& p : render_params()) {
@@ -153,6 +154,8 @@ const ParamDef& render_param(const std::string& key) {
 std::string describe_settings(const RenderSettings& s) {
   std::string out;
   for (const ParamDef& p : render_params()) out += "render." + p.key + "=" + p.get(s) + "\n";
+  for (const cloudgen::MotionKey& k : cloudgen::motion_keys())
+    out += "motion." + k.key + "=" + param::fmt(s.motion.*k.member) + "\n";
   return out;
 }
 

@@ -48,6 +48,10 @@ struct ViewState {
   bool dragging = false;
   bool save_requested = false;
   bool reload_requested = false;
+  // The clouds' clock (motion.*): plays at time_scale x real time from --time.
+  bool playing = true;
+  double time_scale = 1;
+  double start_time = 0;
   RenderSettings* settings = nullptr;
   Sun* sun = nullptr;
   std::ostream* out = nullptr;
@@ -82,9 +86,18 @@ const char* kWindowKeys =
     "| `F` | orbit / fly; fly: W A S D, Q E down/up, Shift fast |\n"
     "| arrows | sun azimuth / elevation |\n"
     "| `F1` | on-screen panel on / off |\n"
+    "| `Space` | play / pause the clouds' motion (`motion.*`; starts at `--time`) |\n"
+    "| `,` / `.` | motion time runs half / twice as fast (1/64x .. 1024x real time) |\n"
+    "| `Backspace` | motion time back to `--time` |\n"
     "| `R` | reload shaders (from `--shader-dir`) and the input |\n"
     "| `F12` | save `cloudviewer_N.png` (tone-mapped) and `cloudviewer_N.exr` (linear HDR) |\n"
     "| `H`, `Esc` | this list, quit |\n";
+
+std::string format_scale(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
 
 void on_key(GLFWwindow* w, int key, int, int action, int mods) {
   if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
@@ -111,6 +124,10 @@ void on_key(GLFWwindow* w, int key, int, int action, int mods) {
       if (v->panel) v->panel->visible = !v->panel->visible;
       break;
     case GLFW_KEY_F12: v->save_requested = true; break;
+    case GLFW_KEY_SPACE: v->playing = !v->playing; break;
+    case GLFW_KEY_COMMA: v->time_scale = std::max(1.0 / 64, v->time_scale / 2); break;
+    case GLFW_KEY_PERIOD: v->time_scale = std::min(1024.0, v->time_scale * 2); break;
+    case GLFW_KEY_BACKSPACE: s.time = v->start_time; break;
     case GLFW_KEY_H: *v->out << kWindowKeys << key_help_markdown(); break;
     default: break;
   }
@@ -182,6 +199,7 @@ int run_window(const Options& o, std::ostream& out, std::ostream& err) {
   ViewState view;
   view.settings = &settings;
   view.sun = &sun;
+  view.start_time = settings.time;
   view.out = &out;
   view.pivot = start.target;
   glm::dvec3 d = start.target - start.eye;
@@ -218,6 +236,7 @@ int run_window(const Options& o, std::ostream& out, std::ostream& err) {
     auto now = std::chrono::steady_clock::now();
     double dt = std::chrono::duration<double>(now - last_frame).count();
     last_frame = now;
+    if (view.playing && auto_frames == 0) settings.time += dt * view.time_scale;
     if (view.fly) {
       glm::dvec3 f = forward_of(view.fly_yaw, view.fly_pitch);
       glm::dvec3 r = glm::normalize(glm::cross(f, glm::dvec3(0, 1, 0)));
@@ -267,6 +286,7 @@ int run_window(const Options& o, std::ostream& out, std::ostream& err) {
       std::ostringstream hint;
       hint.precision(3);
       hint << "sun " << sun.azimuth_deg << ", " << sun.elevation_deg << (view.fly ? " | fly" : " | orbit")
+           << " | t " << settings.time << " s" << (view.playing ? " x" + format_scale(view.time_scale) : " paused")
            << " | H keys, F1 hide";
       panel.draw(settings, t, hint.str());
     }
@@ -288,7 +308,8 @@ int run_window(const Options& o, std::ostream& out, std::ostream& err) {
             << " light:" << (settings.light_march ? "on" : "off") << " phase:" << value_of(settings, "phase")
             << " g:" << settings.g << " tone:" << value_of(settings, "tonemap") << " bloom:" << settings.bloom
             << " density:" << settings.density << " exp:" << settings.exposure << " | sun " << sun.azimuth_deg
-            << "," << sun.elevation_deg << (view.fly ? " | fly" : " | orbit");
+            << "," << sun.elevation_deg << (view.fly ? " | fly" : " | orbit") << " | t " << settings.time << " s"
+            << (view.playing ? "" : " paused");
       glfwSetWindowTitle(window, title.str().c_str());
     }
     auto_save = auto_frames > 0 && frame == auto_frames;

@@ -92,6 +92,9 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame);
 
 /// The shared header's phase function (1/sr) evaluated in double precision (for tests and docs).
 double reference_phase(PhaseMode mode, double g, double cos_theta);
+/// medium.glsl's cloud_density at camera-relative p (metres) with the frame's parameters, motion
+/// included, in double precision (for tests: the moving volume against the static one).
+double reference_density(const PreparedVolume& vol, const FrameSetup& frame, const glm::dvec3& p);
 /// The shared cloud-type height gradient (cloudgen/cloud_type.glsl) as the CPU reference compiles
 /// it: normalised layer height h in [0, 1], type 0 stratus .. 0.5 cumulus .. 1 cumulonimbus.
 double reference_cloud_type_gradient(double h, double type);

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "cloudgen/motion.h"
 #include "cloudviewer/atmosphere.h"
 #include "cloudviewer/constants.h"
 
@@ -72,6 +73,9 @@ struct RenderSettings {
   double bloom_threshold = 1.0;
   OutputMode output = OutputMode::Radiance;
   int frame = 0;                   ///< frame index (jitter pattern)
+  double time = 0;                 ///< s: the clouds' time (`--time`; the window's clock)
+  // Cloud motion (`--set motion.KEY=VALUE`; its table is cloudgen's, shared with its sequence bake).
+  cloudgen::MotionParams motion;
   // The atmosphere model (`--set atmosphere.KEY=VALUE`; its own table in atmosphere.h).
   AtmosphereSettings atmosphere;
 };
@@ -95,7 +99,8 @@ const std::vector<ParamDef>& render_params();
 /// The entry for `key` (without "render."); throws InputError listing the known keys.
 const ParamDef& render_param(const std::string& key);
 
-/// Applies one `render.key=value` (the "render." prefix is optional) or `atmosphere.key=value`.
+/// Applies one `render.key=value` (the "render." prefix is optional), `atmosphere.key=value` or
+/// `motion.key=value`.
 /// Throws InputError naming the key, the value and what is allowed.
 void apply_setting(RenderSettings& s, const std::string& assignment);
 

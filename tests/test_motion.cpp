@@ -1,0 +1,255 @@
+// Cloud motion (issue 11, seed 003): the shared formula cloudgen/motion.glsl (wind with height
+// shear, the two-phase flow map) and the viewer's use of it: the moving volume is the static one
+// sampled at displaced positions, occupancy skipping stays exact while the clouds move, time 0 is
+// the static image, and --time / --frames / --fps / --out patterns on the command line.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "cloudgen/motion.h"
+#include "cloudviewer/app.h"
+#include "cloudviewer/errors.h"
+#include "cloudviewer/renderer.h"
+#include "cloudviewer/scene.h"
+#include "cloudviewer/settings.h"
+#include "test_util.h"
+
+namespace fs = std::filesystem;
+using namespace cloudviewer;
+using cloudgen::MotionParams;
+using cloudgen::motion_displacement;
+
+namespace {
+
+MotionParams flow_only() {
+  MotionParams m;
+  m.wind_speed = 0;
+  return m;
+}
+
+HeadlessContext& context() {
+  static std::unique_ptr<HeadlessContext> ctx = std::make_unique<HeadlessContext>();
+  ctx->make_current();
+  return *ctx;
+}
+
+FrameImages render_gl(const PreparedVolume& vol, const FrameSetup& f) {
+  context();
+  GlRenderer r{ShaderSource()};
+  r.set_volume(vol);
+  r.render(f);
+  return r.read_back();
+}
+
+FrameSetup frame_at(const PreparedVolume& vol, RenderSettings s, double t, int w = 160, int h = 90) {
+  s.time = t;
+  Camera cam = default_camera(vol, 60, double(w) / h);
+  return make_frame(vol, s, cam, default_sun(cam), w, h);
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+int run(std::vector<std::string> args, std::string* err_text = nullptr) {
+  args.insert(args.begin(), "cloudviewer");
+  std::ostringstream out, err;
+  int code = run_cli(args, out, err);
+  if (err_text) *err_text = err.str();
+  return code;
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------------------ the formula
+
+TEST(MotionFormula, TimeZeroIsTheStaticVolumeExactly) {
+  MotionParams m;
+  for (int i = 0; i <= 100; ++i) {
+    glm::dvec3 d = motion_displacement(m, 0.0, i / 100.0);
+    EXPECT_EQ(d.x, 0.0);
+    EXPECT_EQ(d.y, 0.0);
+    EXPECT_EQ(d.z, 0.0);
+  }
+}
+
+// The seed's two phases hide each lookup's wrap: stepping across P0 = 0 (t = k / speed) and
+// P0 = 0.5 must move the clouds no more than an ordinary frame step does. A one-phase flow map
+// would jump by up to the whole amplitude there (hundreds of metres; the frame step is ~0.1 m).
+TEST(MotionFormula, FlowOffsetIsContinuousAcrossThePhaseWraps) {
+  MotionParams m = flow_only();
+  const double period = 1.0 / m.flow_speed, dt = 1.0 / 240.0;
+  for (double h : {0.25, 0.6, 1.0}) {
+    double ordinary = 0, across = 0;
+    for (double t = 0.3 * period; t < 2.3 * period; t += dt) {
+      double step = glm::length(motion_displacement(m, t + dt, h) - motion_displacement(m, t, h));
+      double ph0 = std::fmod(t / period, 1.0), ph1 = std::fmod((t + dt) / period, 1.0);
+      bool wraps = ph1 < ph0 || (ph0 < 0.5 && ph1 >= 0.5);
+      (wraps ? across : ordinary) = std::max(wraps ? across : ordinary, step);
+    }
+    EXPECT_GT(ordinary, 0.0) << "the flow must move at h " << h;
+    EXPECT_LE(across, ordinary * 1.01) << "jump at a phase wrap, h " << h;
+  }
+}
+
+// |flow part| <= 2 x amplitude (a difference of two offsets in [-1, 1]) scaled by h, along up and
+// along the wind only; the wind part is speed * t * (1 + shear * h) along its direction.
+TEST(MotionFormula, DisplacementIsBoundedAndSplitsIntoWindAndFlow) {
+  MotionParams m;
+  glm::dvec2 w = cloudgen::motion_glsl::wind_direction_xz(m.wind_direction);
+  glm::dvec3 fwd(w.x, 0, w.y);
+  for (double t : {0.5, 17.0, 133.3, 1000.0, 86400.0})
+    for (int i = 0; i <= 20; ++i) {
+      double h = i / 20.0;
+      glm::dvec3 d = motion_displacement(m, t, h);
+      glm::dvec3 wind = fwd * (m.wind_speed * t * (1 + m.wind_shear * h));
+      glm::dvec3 flow = d - wind;
+      double tol = 1e-9 * (1 + glm::length(wind));
+      EXPECT_LE(std::abs(flow.y), 2 * m.flow_up * h + tol) << "t " << t << " h " << h;
+      glm::dvec3 horizontal(flow.x, 0, flow.z);
+      EXPECT_LE(glm::length(horizontal), 2 * m.flow_forward * h + tol) << "t " << t << " h " << h;
+      EXPECT_NEAR(glm::length(glm::cross(horizontal, fwd)), 0.0, tol) << "flow leaves the wind's plane";
+    }
+  // h = 0 (the cloud base) only drifts with the wind.
+  glm::dvec3 base = motion_displacement(m, 50, 0.0);
+  EXPECT_NEAR(glm::length(base - fwd * (m.wind_speed * 50)), 0.0, 1e-9);
+}
+
+TEST(MotionFormula, ZeroStrengthMeansNoMotion) {
+  MotionParams m;
+  m.wind_speed = 0;
+  m.flow_up = m.flow_forward = 0;
+  EXPECT_FALSE(cloudgen::motion_moves(m));
+  for (double t : {0.1, 7.0, 1e4})
+    for (double h : {0.0, 0.5, 1.0}) EXPECT_EQ(glm::length(motion_displacement(m, t, h)), 0.0);
+  MotionParams f = flow_only();
+  f.flow_speed = 0;  // a still flow map and no wind
+  EXPECT_FALSE(cloudgen::motion_moves(f));
+  for (double t : {0.1, 7.0, 1e4}) EXPECT_EQ(glm::length(motion_displacement(f, t, 0.8)), 0.0);
+  EXPECT_TRUE(cloudgen::motion_moves(MotionParams{}));
+}
+
+TEST(MotionFormula, TableRejectsBadValuesWithTheRange) {
+  MotionParams m;
+  cloudgen::set_motion_key(m, "wind_speed", "3.5", "--set");
+  EXPECT_EQ(m.wind_speed, 3.5);
+  for (const char* bad : {"-1", "nan", "1e9", "fast", ""}) {
+    try {
+      cloudgen::set_motion_key(m, "wind_speed", bad, "--set");
+      ADD_FAILURE() << "accepted " << bad;
+    } catch (const cloudgen::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("[0, 200]"), std::string::npos) << e.what();
+    }
+  }
+  try {
+    cloudgen::set_motion_key(m, "gusts", "1", "--set");
+    ADD_FAILURE();
+  } catch (const cloudgen::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("wind_shear"), std::string::npos) << e.what();
+  }
+}
+
+// ------------------------------------------------------------------------------ the viewer
+
+// What the viewer sees at p and time t is the static volume at p - D(h(p), t), h the height
+// fraction in the box: checked point by point through the CPU reference's cloud_density, for a
+// box cloud (zero outside) and a tileable one (x, z wrap).
+TEST(ViewerMotion, MovingDensityIsTheStaticDensityAtDisplacedPositions) {
+  for (const char* kind : {"blob", "noise"}) {
+    PreparedVolume vol = prepare_volume(synthetic_volume(kind), 8);
+    RenderSettings s;
+    s.motion.wind_shear = 1.5;
+    s.motion.wind_speed = 3.0;  // the grown box stays small enough for random points to find the cloud
+    const double t = 95.0;
+    FrameSetup moving = frame_at(vol, s, t), still = frame_at(vol, s, 0.0);
+    ASSERT_EQ(moving.params.motion_on, 1.0);
+    ASSERT_EQ(still.params.motion_on, 0.0);
+    const glm::dvec3 lo = moving.params.march_min_m, ext = moving.params.march_size_m;
+    uint32_t state = 7;
+    auto next = [&] { return ((state = state * 1664525u + 1013904223u) >> 8) / double(1u << 24); };
+    int nonzero = 0;
+    for (int i = 0; i < 8000; ++i) {
+      glm::dvec3 p = lo + ext * glm::dvec3(next(), next(), next());
+      double h = (p.y - still.params.volume_min_m.y) / still.params.volume_size_m.y;
+      glm::dvec3 q = p - motion_displacement(s.motion, t, h);
+      double a = reference_density(vol, moving, p), b = reference_density(vol, still, q);
+      EXPECT_NEAR(a, b, 1e-6 * (1 + b)) << kind << " at p (" << p.x << ", " << p.y << ", " << p.z << ")";
+      if (b > 0) ++nonzero;
+      if (HasFailure()) return;
+    }
+    EXPECT_GT(nonzero, 100) << kind << ": the samples must reach the cloud";
+  }
+}
+
+// Occupancy skipping looks cells up at displaced positions; make_frame shortens the large step by
+// the displacement's slope so the samples kept are still those of the plain march. Strong shear
+// (tops 4x faster) at a late time makes the slope large.
+TEST(ViewerMotion, OccupancySkippingStaysExactWhileMoving) {
+  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8, 1);
+  RenderSettings on;
+  on.steps = 128;
+  on.motion.wind_shear = 3.0;
+  on.motion.wind_speed = 6.0;
+  RenderSettings off = on;
+  off.occupancy = false;
+  for (bool gl : {true, false}) {
+    FrameSetup fon = frame_at(vol, on, 240.0), foff = frame_at(vol, off, 240.0);
+    EXPECT_LT(fon.params.large_step_count, frame_at(vol, on, 0.0).params.large_step_count)
+        << "the large step must shrink while the displacement is steep";
+    FrameImages a = gl ? render_gl(vol, fon) : render_cpu(vol, fon);
+    FrameImages b = gl ? render_gl(vol, foff) : render_cpu(vol, foff);
+    EXPECT_LE(max_abs_diff(a.linear, b.linear), 1e-5) << (gl ? "GL" : "CPU");
+  }
+}
+
+// Time 0 with the default (moving) parameters, and any time with the motion switched off, are the
+// static image bit for bit; the defaults move the clouds by time 60.
+TEST(ViewerMotion, TimeZeroIsStaticAndTheDefaultsMove) {
+  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
+  RenderSettings s;
+  RenderSettings still = s;
+  still.motion.wind_speed = 0;
+  still.motion.flow_speed = 0;
+  FrameImages zero = render_gl(vol, frame_at(vol, s, 0.0));
+  FrameImages off = render_gl(vol, frame_at(vol, still, 100.0));
+  EXPECT_EQ(max_abs_diff(zero.linear, off.linear), 0.0);
+  FrameImages later = render_gl(vol, frame_at(vol, s, 60.0));
+  int changed = 0;
+  for (int y = 0; y < 90; ++y)
+    for (int x = 0; x < 160; ++x)
+      if (std::abs(later.display.at(x, y)[0] - zero.display.at(x, y)[0]) > 0.02) ++changed;
+  EXPECT_GT(changed, 160 * 90 / 50) << "the default wind and flow must visibly move the cloud in 60 s";
+}
+
+TEST(ViewerMotionCli, FramesWriteAPatternOrOnlyTheLastFrame) {
+  testutil::TempDir dir;
+  std::string err;
+  std::vector<std::string> common = {"synthetic:blob", "--headless", "--size", "48x27", "--time", "10",
+                                     "--frames", "3", "--fps", "0.05"};
+  auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> a = common;
+    a.insert(a.end(), extra.begin(), extra.end());
+    return a;
+  };
+  ASSERT_EQ(run(with({"--out", (dir.path / "f_%03d.png").string()}), &err), 0) << err;
+  for (const char* f : {"f_000.png", "f_001.png", "f_002.png"}) EXPECT_TRUE(fs::exists(dir.path / f)) << f;
+  EXPECT_FALSE(fs::exists(dir.path / "f_003.png"));
+  EXPECT_NE(slurp(dir.path / "f_000.png"), slurp(dir.path / "f_002.png")) << "time must advance";
+  ASSERT_EQ(run(with({"--out", (dir.path / "last.png").string()}), &err), 0) << err;
+  EXPECT_EQ(slurp(dir.path / "last.png"), slurp(dir.path / "f_002.png")) << "a plain --out is the last frame";
+  for (const char* bad : {"x_%s.png", "x_%d_%d.png", "x_%10d.png", "x_%"}) {
+    EXPECT_EQ(run(with({"--out", (dir.path / bad).string()}), &err), 1) << bad;
+    EXPECT_NE(err.find("frame pattern"), std::string::npos) << err;
+  }
+  EXPECT_EQ(run({"synthetic:blob", "--headless", "--time", "fast", "--out", (dir.path / "y.png").string()}, &err), 1);
+  EXPECT_NE(err.find("--time"), std::string::npos) << err;
+  EXPECT_EQ(run({"synthetic:blob", "--headless", "--set", "motion.wind_speed=-3", "--out",
+                 (dir.path / "y.png").string()}, &err), 1);
+  EXPECT_NE(err.find("motion.wind_speed"), std::string::npos) << err;
+}
