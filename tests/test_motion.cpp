@@ -2,6 +2,7 @@
 // shear, the two-phase flow map) and the viewer's use of it: the moving volume is the static one
 // sampled at displaced positions, occupancy skipping stays exact while the clouds move, time 0 is
 // the static image, and --time / --frames / --fps / --out patterns on the command line.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +14,7 @@
 
 #include "cloudgen/motion.h"
 #include "cloudviewer/app.h"
+#include "cloudviewer/constants.h"
 #include "cloudviewer/errors.h"
 #include "cloudviewer/renderer.h"
 #include "cloudviewer/scene.h"
@@ -157,9 +159,36 @@ TEST(MotionFormula, TableRejectsBadValuesWithTheRange) {
 
 // ------------------------------------------------------------------------------ the viewer
 
+// The frame's motion table (D at CV_MOTION_LUT_SIZE heights), interpolated linearly at h.
+glm::dvec3 table_displacement(const FrameSetup& f, double h) {
+  const int n = CV_MOTION_LUT_SIZE;
+  double x = std::clamp(h, 0.0, 1.0) * (n - 1);
+  int i = std::min(int(std::floor(x)), n - 2);
+  return glm::mix(f.motion_table[size_t(i)], f.motion_table[size_t(i + 1)], x - i);
+}
+
+// The table the shaders interpolate is motion_displacement to within a centimetre at any height
+// (the default flow, strong shear, at several times).
+TEST(ViewerMotion, MotionTableFollowsTheFormulaWithinACentimetre) {
+  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
+  RenderSettings s;
+  s.motion.wind_shear = 1.5;
+  for (double t : {3.0, 95.0, 1000.0}) {
+    FrameSetup f = frame_at(vol, s, t);
+    ASSERT_EQ(f.motion_table.size(), size_t(2 * CV_MOTION_LUT_SIZE));
+    double worst = 0;
+    for (int i = 0; i <= 10000; ++i) {
+      double h = i / 10000.0;
+      worst = std::max(worst, glm::length(table_displacement(f, h) - motion_displacement(s.motion, t, h)));
+    }
+    EXPECT_LT(worst, 0.01) << "t " << t;
+  }
+}
+
 // What the viewer sees at p and time t is the static volume at p - D(h(p), t), h the height
-// fraction in the box: checked point by point through the CPU reference's cloud_density, for a
-// box cloud (zero outside) and a tileable one (x, z wrap).
+// fraction in the box, D from the frame's motion table (the test above bounds it against the
+// formula): checked point by point through the CPU reference's cloud_density, for a box cloud
+// (zero outside) and a tileable one (x, z wrap).
 TEST(ViewerMotion, MovingDensityIsTheStaticDensityAtDisplacedPositions) {
   for (const char* kind : {"blob", "noise"}) {
     PreparedVolume vol = prepare_volume(synthetic_volume(kind), 8);
@@ -177,7 +206,7 @@ TEST(ViewerMotion, MovingDensityIsTheStaticDensityAtDisplacedPositions) {
     for (int i = 0; i < 8000; ++i) {
       glm::dvec3 p = lo + ext * glm::dvec3(next(), next(), next());
       double h = (p.y - still.params.volume_min_m.y) / still.params.volume_size_m.y;
-      glm::dvec3 q = p - motion_displacement(s.motion, t, h);
+      glm::dvec3 q = p - table_displacement(moving, h);
       double a = reference_density(vol, moving, p), b = reference_density(vol, still, q);
       EXPECT_NEAR(a, b, 1e-6 * (1 + b)) << kind << " at p (" << p.x << ", " << p.y << ", " << p.z << ")";
       if (b > 0) ++nonzero;
@@ -252,4 +281,126 @@ TEST(ViewerMotionCli, FramesWriteAPatternOrOnlyTheLastFrame) {
   EXPECT_EQ(run({"synthetic:blob", "--headless", "--set", "motion.wind_speed=-3", "--out",
                  (dir.path / "y.png").string()}, &err), 1);
   EXPECT_NE(err.find("motion.wind_speed"), std::string::npos) << err;
+}
+
+// ------------------------------------------------------------------------------ temporal upsampling
+
+namespace {
+
+// Pixels whose display value differs from the full render's by more than `bound` in any channel.
+int ghost_pixels(const Image& a, const Image& b, double bound) {
+  int n = 0;
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x) {
+      double d = 0;
+      for (int c = 0; c < 3; ++c) d = std::max(d, double(std::abs(a.at(x, y)[c] - b.at(x, y)[c])));
+      if (d > bound) ++n;
+    }
+  return n;
+}
+
+// A camera orbiting the volume's centre: `yaw` degrees around y from the default view.
+Camera orbit(const PreparedVolume& vol, double yaw, double aspect) {
+  Camera c = default_camera(vol, 60, aspect);
+  glm::dvec3 d = c.eye - c.target;
+  double a = glm::radians(yaw);
+  c.eye = c.target + glm::dvec3(d.x * std::cos(a) - d.z * std::sin(a), d.y, d.x * std::sin(a) + d.z * std::cos(a));
+  return c;
+}
+
+}  // namespace
+
+TEST(TemporalUpsampling, CrossMatrixIsTheSeedsAndVisitsEveryPixelOnceIn16Frames) {
+  const int m[4][4] = {{0, 8, 2, 10}, {12, 4, 14, 6}, {3, 11, 1, 9}, {15, 7, 13, 5}};
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) EXPECT_EQ(reference_cross_matrix(x, y), m[y][x]) << x << "," << y;
+  for (int start : {0, 5, 1000}) {
+    int visits[4][4] = {};
+    for (int f = start; f < start + 16; ++f) {
+      glm::ivec2 o = reference_cross_matrix_offset(f);
+      ASSERT_TRUE(o.x >= 0 && o.x < 4 && o.y >= 0 && o.y < 4);
+      EXPECT_EQ(m[o.y][o.x], f % 16);
+      ++visits[o.y][o.x];
+    }
+    for (auto& row : visits)
+      for (int v : row) EXPECT_EQ(v, 1) << "16 frames from " << start;
+  }
+}
+
+// A still camera over still clouds: after 16 frames every pixel has been marched once and the
+// history maps pixel to pixel, so the image is the full-resolution render's (the jitter of the
+// frame each pixel was marched in is the only difference). Also after a resize-free settings
+// change the history is dropped (the first frame is the spatial upsample, visibly worse).
+TEST(TemporalUpsampling, StillViewConvergesToTheFullRenderIn16Frames) {
+  context();
+  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
+  const int w = 160, h = 96;
+  Camera cam = default_camera(vol, 60, double(w) / h);
+  Sun sun = default_sun(cam);
+  RenderSettings s;
+  RenderSettings t = s;
+  t.temporal = true;
+  GlRenderer full{ShaderSource()}, temporal{ShaderSource()};
+  full.set_volume(vol);
+  temporal.set_volume(vol);
+  double first = 0;
+  for (int f = 0; f < 16; ++f) {
+    t.frame = f;
+    temporal.render(make_frame(vol, t, cam, sun, w, h));
+    if (f == 0) {
+      s.frame = 0;
+      full.render(make_frame(vol, s, cam, sun, w, h));
+      first = psnr(temporal.read_back().display, full.read_back().display);
+    }
+  }
+  s.frame = 15;
+  full.render(make_frame(vol, s, cam, sun, w, h));
+  FrameImages a = temporal.read_back(), b = full.read_back();
+  double converged = psnr(a.display, b.display);
+  std::cout << "temporal vs full PSNR: frame 0 " << first << " dB, frame 15 " << converged << " dB\n";
+  EXPECT_GE(converged, 40.0);
+  EXPECT_GT(converged, first + 3.0) << "the history must add detail the spatial upsample lacks";
+}
+
+// A camera pan and moving clouds: the reprojected, neighbourhood-clamped history must not leave
+// ghosts. Each frame is compared with the full render of the same camera, time and frame index;
+// a pixel off by more than 0.1 (display units, any channel) counts as a ghost.
+TEST(TemporalUpsampling, PanAndMovingCloudsLeaveNoGhosts) {
+  context();
+  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
+  const int w = 160, h = 96;
+  GlRenderer full{ShaderSource()}, temporal{ShaderSource()};
+  full.set_volume(vol);
+  temporal.set_volume(vol);
+  struct Case { const char* name; double yaw_per_frame, seconds_per_frame; };
+  for (Case c : {Case{"pan", 0.75, 0.0}, Case{"wind", 0.0, 4.0}, Case{"both", 0.75, 4.0}}) {
+    RenderSettings s;
+    s.motion.wind_speed = 15;
+    int worst = 0;
+    double worst_rmse = 0;
+    for (int f = 0; f < 40; ++f) {
+      int moving = std::max(0, f - 16);  // 16 still frames to converge, then move
+      Camera cam = orbit(vol, moving * c.yaw_per_frame, double(w) / h);
+      s.frame = f;
+      s.time = moving * c.seconds_per_frame;
+      RenderSettings t = s;
+      t.temporal = true;
+      Sun sun = default_sun(default_camera(vol, 60, double(w) / h));
+      temporal.render(make_frame(vol, t, cam, sun, w, h));
+      if (f < 16) continue;
+      full.render(make_frame(vol, s, cam, sun, w, h));
+      FrameImages a = temporal.read_back(), b = full.read_back();
+      int ghosts = ghost_pixels(a.display, b.display, 0.1);
+      if (ghosts > worst && getenv("CV_DUMP")) {
+        write_png(std::string("/tmp/mv/g_") + c.name + "_t.png", a.display);
+        write_png(std::string("/tmp/mv/g_") + c.name + "_f.png", b.display);
+        std::cout << c.name << " frame " << f << " ghosts " << ghosts << "\n";
+      }
+      worst = std::max(worst, ghosts);
+      worst_rmse = std::max(worst_rmse, rmse(a.display, b.display));
+    }
+    std::cout << c.name << ": worst frame " << worst << " ghost pixels of " << w * h << ", worst RMSE "
+              << worst_rmse << "\n";
+    EXPECT_LE(worst, w * h / 100) << c.name << ": more than 1% of the pixels ghost";
+  }
 }

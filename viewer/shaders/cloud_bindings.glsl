@@ -11,4 +11,6 @@ vec4 volume_filtered(vec3 uvw) { return texture(s_volume, uvw); }
 Number occupancy_texel(ivec3 cell) { return texelFetch(s_occupancy, cell, 0).r; }
 Number mie_table_value(int i) { return texelFetch(s_mie, i, 0).r; }
 vec2 coverage_texel(ivec2 texel) { return texelFetch(s_coverage, texel, 0).rg; }
+layout(binding = CV_UNIT_MOTION) uniform sampler2D s_motion;        // RGBA32F: D(h) for this and the last frame
+vec3 motion_texel(int i, int row) { return texelFetch(s_motion, ivec2(i, row), 0).xyz; }
 ivec2 coverage_size() { return textureSize(s_coverage, 0); }

@@ -18,3 +18,4 @@
 #include "march.glsl"
 #include "sky.glsl"
 #include "compose.glsl"
+#include "temporal.glsl"

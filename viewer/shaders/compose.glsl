@@ -4,17 +4,32 @@
 // outputs, the CPU reference with its own ground intersection: one compose for both.
 // Needs every header up to sky.glsl.
 
+// The cloud layer seen along `rd` (camera-relative, unit) up to the scene distance `t_scene`:
+// (in-scattered radiance after aerial perspective, transmittance). `pixel` picks the jitter;
+// `t_mean` is the cloud's opacity-weighted distance (0: no cloud), `iterations` the loop trips.
+vec4 cloud_layer(vec3 rd, ivec2 pixel, Number t_scene, OUT(Number) t_mean, OUT(int) iterations) {
+  Number jitter = u_cloud.jitter > 0.5 ? jitter_offset(pixel, int(u_cloud.frame_index)) : 0.5;
+  iterations = 0;
+  t_mean = 0.0;
+  vec4 m = march_clouds(rd, t_scene, jitter, iterations, t_mean);
+  return aerial_perspective(m, t_mean, rd);
+}
+
+// The cloud layer `m` composited over what lies behind it: the sky, or the ground at `t_scene`
+// (>= CV_NO_HIT_TEST: none) with radiance `scene_color` seen through the air. Linear HDR; the
+// transmittance output writes T instead.
+vec3 compose_over(vec4 m, vec3 rd, Number t_scene, vec3 scene_color) {
+  if (int(u_cloud.output_mode) == CV_OUTPUT_TRANSMITTANCE) return vec3(m.w, m.w, m.w);
+  vec3 background = t_scene >= CV_NO_HIT_TEST ? sky_radiance(rd) : surface_through_air(scene_color, t_scene, rd);
+  return vec3(m) + m.w * background;
+}
+
 // `rd`: unit camera-relative ray; `pixel`: window pixel (jitter pattern); `t_scene`: distance to the
 // ground (>= CV_NO_HIT_TEST: none); `scene_color`: ground radiance there. Returns linear HDR.
 vec3 compose_pixel(vec3 rd, ivec2 pixel, Number t_scene, vec3 scene_color) {
-  Number jitter = u_cloud.jitter > 0.5 ? jitter_offset(pixel, int(u_cloud.frame_index)) : 0.5;
   int iterations = 0;
   Number t_mean = 0.0;
-  vec4 m = march_clouds(rd, t_scene, jitter, iterations, t_mean);
-  m = aerial_perspective(m, t_mean, rd);
-  int mode = int(u_cloud.output_mode);
-  if (mode == CV_OUTPUT_TRANSMITTANCE) return vec3(m.w, m.w, m.w);
-  if (mode == CV_OUTPUT_ITERATIONS) return vec3(Number(iterations), m.w, 0.0);
-  vec3 background = t_scene >= CV_NO_HIT_TEST ? sky_radiance(rd) : surface_through_air(scene_color, t_scene, rd);
-  return vec3(m) + m.w * background;
+  vec4 m = cloud_layer(rd, pixel, t_scene, t_mean, iterations);
+  if (int(u_cloud.output_mode) == CV_OUTPUT_ITERATIONS) return vec3(Number(iterations), m.w, 0.0);
+  return compose_over(m, rd, t_scene, scene_color);
 }

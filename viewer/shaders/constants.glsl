@@ -39,9 +39,13 @@
 #define CV_UNIT_PASS_INPUT1 4
 #define CV_UNIT_COVERAGE 5
 #define CV_UNIT_TRANSMITTANCE 6
+#define CV_UNIT_PASS_INPUT2 7
+#define CV_UNIT_PASS_INPUT3 8
+#define CV_UNIT_MOTION 9
 
 // Fixed sizes.
 #define CV_COVERAGE_MAP_SIZE 256   // layer-mode coverage map, texels per side
+#define CV_MOTION_LUT_SIZE 1024    // motion displacement D(h) per frame, entries over h in [0, 1]
 #define CV_MIE_TABLE_SIZE 1801     // Mie phase table entries over theta = 0..180 degrees (0.1 degree)
 #define CV_GROUND_GRID 96          // ground cells per side in layer mode (curved Earth)
 #define CV_BLOOM_RADIUS 6          // separable Gaussian bloom: taps on each side (half-resolution texels)

@@ -20,6 +20,7 @@
 //   Number mie_table_value(int i)        i-th entry of the Mie phase table over theta in [0, pi]
 //   vec2   coverage_texel(ivec2 texel)   layer coverage map: R coverage, G cloud type, in [0, 1]
 //   ivec2  coverage_size()               size of the coverage map in texels
+//   vec3   motion_texel(int i, int row)  motion table D(h_i): row 0 this frame, row 1 the last (medium.glsl)
 // Constants are macros, not globals, so that the files also work inside a C++ class body.
 //
 // Implements R. Hogfeldt, "Convincing Cloud Rendering", and R. Olajos, "Real-Time Rendering of

@@ -102,13 +102,25 @@ vec3 volume_uvw_extent_m() {
   return u_cloud.volume_size_m;
 }
 
-// Motion (cloudgen/motion.glsl, seed 003): the displacement D of the clouds seen at p at the frame's
-// time, from p's height fraction in the layer (or box). Zero when the clouds are still.
+// Motion (cloudgen/motion.glsl, seed 003): the displacement D of the clouds seen at p, from p's
+// height fraction in the layer (or box). Within a frame D depends on the height alone, so the
+// renderer evaluates motion_displacement at CV_MOTION_LUT_SIZE heights (in C++, from the same
+// text; src/frame.cpp motion_table_row) and every lookup interpolates that table linearly: two
+// texel reads instead of six cosines per density sample (interpolation error under 1 cm with the
+// default flow; tests/test_motion.cpp). Row 0 is this frame's time, row 1 the previous frame's (temporal reprojection).
+vec3 motion_table_value(Number h, int row) {
+  Number x = clamp(h, 0.0, 1.0) * Number(CV_MOTION_LUT_SIZE - 1);
+  int i = min(int(floor(x)), CV_MOTION_LUT_SIZE - 2);
+  Number f = x - Number(i);
+  return mix(motion_texel(i, row), motion_texel(i + 1, row), f);
+}
 vec3 motion_at(vec3 p) {
   if (u_cloud.motion_on < 0.5) return vec3(0.0);
-  return motion_displacement(u_cloud.time_s, volume_uvw(p).y, vec2(u_cloud.wind_dir_x, u_cloud.wind_dir_z),
-                             u_cloud.wind_speed_mps, u_cloud.wind_shear, u_cloud.flow_speed_hz,
-                             u_cloud.flow_up_m, u_cloud.flow_forward_m);
+  return motion_table_value(volume_uvw(p).y, 0);
+}
+vec3 motion_at_previous(vec3 p) {
+  if (u_cloud.motion_on < 0.5) return vec3(0.0);
+  return motion_table_value(volume_uvw(p).y, 1);
 }
 
 // Volume coordinates of the static volume seen at p: volume_uvw(p - D). Shifted in uvw rather than

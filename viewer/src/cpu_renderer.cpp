@@ -34,9 +34,11 @@ struct CpuShader {
   const std::vector<float>& mie;
   const TransmittanceLut& lut;
   const ref::AtmosphereParams& u_atmo;
+  const std::vector<dvec3>* motion = nullptr;  // FrameSetup::motion_table (2 rows)
 
-  CpuShader(const ref::CloudParams& p, const PreparedVolume& v, const std::vector<float>& m, const TransmittanceLut& t)
-      : u_cloud(p), vol(v), mie(m), lut(t), u_atmo(t.params) {}
+  CpuShader(const ref::CloudParams& p, const PreparedVolume& v, const std::vector<float>& m, const TransmittanceLut& t,
+            const std::vector<dvec3>* motion_table = nullptr)
+      : u_cloud(p), vol(v), mie(m), lut(t), u_atmo(t.params), motion(motion_table) {}
 
   vec3 transmittance_texel(ivec2 t) const { return lut.texels[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
 
@@ -54,6 +56,7 @@ struct CpuShader {
     return vec2(c[0], c[1]);
   }
   ivec2 coverage_size() const { return ivec2(CV_COVERAGE_MAP_SIZE, CV_COVERAGE_MAP_SIZE); }
+  vec3 motion_texel(int i, int row) const { return (*motion)[size_t(row) * CV_MOTION_LUT_SIZE + size_t(i)]; }
 
 #define IN(x) const x&
 #define OUT(x) x&
@@ -70,6 +73,7 @@ struct CpuShader {
 #include "../shaders/march.glsl"
 #include "../shaders/sky.glsl"
 #include "../shaders/compose.glsl"
+#include "../shaders/temporal.glsl"
 #include "../shaders/post.glsl"
 #undef IN
 #undef OUT
@@ -135,8 +139,22 @@ double reference_cloud_type_gradient(double h, double type) {
   return sh.cloud_type_gradient(h, type);
 }
 
+glm::ivec2 reference_cross_matrix_offset(int frame) {
+  ref::CloudParams p{};
+  PreparedVolume empty;
+  CpuShader sh(p, empty, mie_phase_table(), no_lut());
+  return sh.cross_matrix_offset(frame);
+}
+
+int reference_cross_matrix(int x, int y) {
+  ref::CloudParams p{};
+  PreparedVolume empty;
+  CpuShader sh(p, empty, mie_phase_table(), no_lut());
+  return sh.cross_matrix(x, y);
+}
+
 double reference_density(const PreparedVolume& vol, const FrameSetup& frame, const glm::dvec3& p) {
-  CpuShader sh(frame.params, vol, mie_phase_table(), no_lut());
+  CpuShader sh(frame.params, vol, mie_phase_table(), no_lut(), &frame.motion_table);
   return sh.cloud_density(p);
 }
 
@@ -149,7 +167,7 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
   const TransmittanceLut& lut = shared ? *shared : no_lut();
   Buffer hdr(w, h);
   tbb::parallel_for(0, h, [&](int y) {
-    CpuShader sh(P, vol, mie, lut);
+    CpuShader sh(P, vol, mie, lut, &frame.motion_table);
     for (int x = 0; x < w; ++x) {
       dvec3 rd = sh.pixel_ray(frame.inv_view_proj, dvec2(x + 0.5, y + 0.5), dvec2(w, h));
       double t_scene = CV_NO_HIT;

@@ -62,6 +62,13 @@ void apply_motion(const RenderSettings& s, const glm::dvec3& extent, ref::CloudP
 
 }  // namespace
 
+std::vector<glm::dvec3> motion_table_row(const RenderSettings& s, double t) {
+  std::vector<glm::dvec3> row(CV_MOTION_LUT_SIZE);
+  for (int i = 0; i < CV_MOTION_LUT_SIZE; ++i)
+    row[size_t(i)] = cloudgen::motion_displacement(s.motion, t, double(i) / (CV_MOTION_LUT_SIZE - 1));
+  return row;
+}
+
 FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const Camera& cam,
                       const Sun& sun, int width, int height) {
   FrameSetup f;
@@ -170,6 +177,10 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
     p.cloud_type = s.cloud_type;
   }
   apply_motion(s, size, p);
+  if (p.motion_on > 0.5) {
+    f.motion_table = motion_table_row(s, s.time);
+    f.motion_table.insert(f.motion_table.end(), f.motion_table.begin(), f.motion_table.end());
+  }
   f.params = rounded_to_float(p);
   f.view_proj = view_projection(cam, width, height);
   f.inv_view_proj = glm::dmat4(glm::mat4(glm::inverse(f.view_proj)));

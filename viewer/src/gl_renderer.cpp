@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <epoxy/gl.h>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include "cloudviewer/atmosphere.h"
 #include "cloudviewer/constants.h"
@@ -66,12 +67,13 @@ GLuint link_program(const ShaderSource& src, const std::string& vs, const std::s
 //  - a Target sized by the viewport (divisor 1 or 2) or fixed (a LUT: `fixed_w`/`fixed_h`), with
 //    `history` to keep last frame's copy readable as "NAME@prev" (swapped after every frame);
 //  - a Pass naming its program, the target it writes, the attachments it reads (bound in order to
-//    CV_UNIT_PASS_INPUT0, 1, ...), when it runs, and its timing group.
+//    CV_UNIT_PASS_INPUT0 .. 3), when it runs, and its timing group.
 struct Target {
   std::string name;
   std::vector<GLenum> colors;  // internal format of each colour attachment
   bool depth = false;
   int divisor = 1;             // viewport / divisor (at least 1 pixel)
+  bool round_up = false;       // ceil(viewport / divisor): every pixel has its block (temporal)
   int fixed_w = 0, fixed_h = 0;  // > 0: a fixed size (LUTs), independent of the viewport
   bool history = false;        // keep the previous frame's copy ("NAME@prev")
   // GL objects: [0] the current frame, [1] the previous one when `history`.
@@ -98,7 +100,7 @@ struct Pass {
 };
 
 std::vector<Target> make_targets() {
-  std::vector<Target> t(6);
+  std::vector<Target> t(8);
   t[0].name = "scene", t[0].colors = {GL_RGBA32F, GL_R32F}, t[0].depth = true;  // ground radiance, distance
   t[1].name = "hdr", t[1].colors = {GL_RGBA32F};                                 // clouds over the scene
   t[2].name = "bloom_a", t[2].colors = {GL_RGBA32F}, t[2].divisor = 2;
@@ -106,8 +108,16 @@ std::vector<Target> make_targets() {
   t[4].name = "final", t[4].colors = {GL_RGBA32F, GL_RGBA32F};                 // display, linear
   t[5].name = "transmittance", t[5].colors = {GL_RGBA32F};                        // atmosphere LUT T(r, mu)
   t[5].fixed_w = CV_TRANSMITTANCE_W, t[5].fixed_h = CV_TRANSMITTANCE_H;
+  // Temporal upsampling: this frame's pixel of every 4x4 block, and the resolved full-resolution
+  // cloud layer with last frame's copy (both: (L, T) and the cloud distance).
+  t[6].name = "cloud_quarter", t[6].colors = {GL_RGBA32F, GL_R32F}, t[6].divisor = 4, t[6].round_up = true;
+  t[7].name = "cloud_layer", t[7].colors = {GL_RGBA32F, GL_R32F}, t[7].history = true;
   return t;
 }
+
+// Temporal upsampling runs for the radiance and transmittance outputs (the loop-trip output needs
+// every pixel's own march).
+bool temporal_on(const FrameSetup& f) { return f.settings.temporal && f.settings.output != OutputMode::Iterations; }
 
 std::vector<Pass> make_passes() {
   auto bloom_on = [](const FrameSetup& f) { return f.settings.bloom > 0; };
@@ -124,10 +134,28 @@ std::vector<Pass> make_passes() {
   ground.clear = {{0.f, 0.f, 0.f, 0.f}, {float(CV_NO_HIT), 0.f, 0.f, 0.f}};
   ground.enabled = [](const FrameSetup& f) { return f.params.ground_on > 0.5; };
   p.push_back(ground);
+  auto temporal = [](const FrameSetup& f) { return temporal_on(f); };
   Pass clouds;
   clouds.name = "clouds", clouds.vs = "fullscreen.vert", clouds.fs = "cloud.frag", clouds.target = "hdr";
   clouds.inputs = {{"scene", 0}, {"scene", 1}}, clouds.group = Group::Clouds;
+  clouds.enabled = [](const FrameSetup& f) { return !temporal_on(f); };
   p.push_back(clouds);
+  // render.temporal: the cloud layer at 1/16 of the pixels, resolved with the history, composited.
+  Pass sparse;
+  sparse.name = "clouds_sparse", sparse.vs = "fullscreen.vert", sparse.fs = "cloud_sparse.frag";
+  sparse.target = "cloud_quarter", sparse.inputs = {{"scene", 1}}, sparse.group = Group::Clouds;
+  sparse.enabled = temporal;
+  p.push_back(sparse);
+  Pass resolve;
+  resolve.name = "temporal_resolve", resolve.vs = "fullscreen.vert", resolve.fs = "temporal_resolve.frag";
+  resolve.target = "cloud_layer", resolve.group = Group::Clouds, resolve.enabled = temporal;
+  resolve.inputs = {{"cloud_quarter", 0}, {"cloud_quarter", 1}, {"cloud_layer@prev", 0}, {"cloud_layer@prev", 1}};
+  p.push_back(resolve);
+  Pass over;
+  over.name = "temporal_compose", over.vs = "fullscreen.vert", over.fs = "temporal_compose.frag";
+  over.target = "hdr", over.group = Group::Clouds, over.enabled = temporal;
+  over.inputs = {{"cloud_layer", 0}, {"scene", 0}, {"scene", 1}};
+  p.push_back(over);
   Pass bright;
   bright.name = "bloom_bright", bright.vs = "fullscreen.vert", bright.fs = "bloom_bright.frag";
   bright.target = "bloom_a", bright.inputs = {{"hdr", 0}}, bright.enabled = bloom_on;
@@ -171,7 +199,7 @@ struct GlRenderer::Impl {
   ShaderSource shaders;
   std::vector<Target> targets = make_targets();
   std::vector<Pass> passes = make_passes();
-  GLuint tex_volume = 0, tex_occ = 0, tex_mie = 0, tex_coverage = 0;
+  GLuint tex_volume = 0, tex_occ = 0, tex_mie = 0, tex_coverage = 0, tex_motion = 0;
   GLuint ubo_cloud = 0, ubo_frame = 0, ubo_atmo = 0;
   bool atmo_valid = false;            // the LUT targets hold `atmo_done`'s tables
   AtmosphereSettings atmo_done;
@@ -181,6 +209,12 @@ struct GlRenderer::Impl {
   int w = 0, h = 0;
   std::vector<GLuint> queries;  // one timestamp before the passes and one after each
   bool have_volume = false;
+  // Temporal upsampling: what the history in "cloud_layer@prev" was rendered with.
+  bool history_valid = false;
+  std::string history_key;       // settings, sun and size it was rendered with
+  glm::dvec3 history_eye{0.0};
+  glm::dmat4 history_view_proj{1.0};
+  double history_time = 0;
 
   Target& target(const std::string& name) {
     for (Target& t : targets)
@@ -233,8 +267,9 @@ struct GlRenderer::Impl {
     delete_targets();
     w = width, h = height;
     for (Target& t : targets) {
-      t.w = t.fixed_w > 0 ? t.fixed_w : std::max(1, w / t.divisor);
-      t.h = t.fixed_h > 0 ? t.fixed_h : std::max(1, h / t.divisor);
+      int up = t.round_up ? t.divisor - 1 : 0;
+      t.w = t.fixed_w > 0 ? t.fixed_w : std::max(1, (w + up) / t.divisor);
+      t.h = t.fixed_h > 0 ? t.fixed_h : std::max(1, (h + up) / t.divisor);
       for (int c = 0; c < (t.history ? 2 : 1); ++c) {
         glCreateFramebuffers(1, &t.fbo[c]);
         std::vector<GLenum> draw;
@@ -264,7 +299,9 @@ struct GlRenderer::Impl {
       const std::string& name = p.inputs[i].first;
       bool prev = name.size() > 5 && name.compare(name.size() - 5, 5, "@prev") == 0;
       Target& in = target(prev ? name.substr(0, name.size() - 5) : name);
-      glBindTextureUnit(GLuint(CV_UNIT_PASS_INPUT0 + i), in.tex[prev ? 1 : 0][size_t(p.inputs[i].second)]);
+      static const GLuint units[] = {CV_UNIT_PASS_INPUT0, CV_UNIT_PASS_INPUT1, CV_UNIT_PASS_INPUT2, CV_UNIT_PASS_INPUT3};
+      if (i >= sizeof(units) / sizeof(units[0])) throw GlError("render pass '" + p.name + "' reads too many inputs");
+      glBindTextureUnit(units[i], in.tex[prev ? 1 : 0][size_t(p.inputs[i].second)]);
     }
     glBindFramebuffer(GL_FRAMEBUFFER, t.fbo[0]);
     glViewport(0, 0, t.w, t.h);
@@ -343,13 +380,17 @@ GlRenderer::GlRenderer(ShaderSource shaders) : impl_(std::make_unique<Impl>()) {
   glTextureSubImage2D(m.tex_coverage, 0, 0, 0, n, n, GL_RG, GL_FLOAT, cov.data());
   glTextureParameteri(m.tex_coverage, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTextureParameteri(m.tex_coverage, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glCreateTextures(GL_TEXTURE_2D, 1, &m.tex_motion);  // medium.glsl's motion table, 2 rows
+  glTextureStorage2D(m.tex_motion, 1, GL_RGBA32F, CV_MOTION_LUT_SIZE, 2);
+  glTextureParameteri(m.tex_motion, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTextureParameteri(m.tex_motion, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
 }
 
 GlRenderer::~GlRenderer() {
   Impl& m = *impl_;
   m.delete_programs();
   m.delete_targets();
-  GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_mie, m.tex_coverage};
+  GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_mie, m.tex_coverage, m.tex_motion};
   for (GLuint t : texs)
     if (t) glDeleteTextures(1, &t);
   glDeleteBuffers(1, &m.ubo_cloud);
@@ -396,6 +437,7 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
   glTextureParameteri(m.tex_occ, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTextureParameteri(m.tex_occ, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   m.have_volume = true;
+  m.history_valid = false;
   if (glGetError() != GL_NO_ERROR) throw GlError("uploading the volume textures failed (out of GPU memory?)");
 }
 
@@ -412,6 +454,38 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   fb.viewport = glm::vec4(m.w, m.h, bloom.w, bloom.h);
   fb.post = glm::vec4(float(f.settings.exposure), float(int(f.settings.tonemap)), float(f.settings.bloom),
                       float(f.settings.bloom_threshold));
+  // Temporal: the history is usable when it was rendered with the same settings, sun and size; it
+  // maps pixel to pixel when the camera and the clouds have not moved since.
+  const bool temporal = temporal_on(f);
+  RenderSettings keyed = f.settings;
+  keyed.frame = 0;  // the frame index and the time advance every frame by design
+  keyed.time = 0;
+  std::string key = describe_settings(keyed) + "sun=" + std::to_string(f.sun.azimuth_deg) + "," +
+                    std::to_string(f.sun.elevation_deg) + " size=" + std::to_string(f.width) + "x" + std::to_string(f.height);
+  const bool valid = temporal && m.history_valid && key == m.history_key;
+  const bool clouds_still = f.params.motion_on < 0.5 ? m.history_time == f.settings.time || f.settings.time == 0
+                                                     : m.history_time == f.settings.time;
+  const bool still = valid && f.camera.eye == m.history_eye && f.view_proj == m.history_view_proj && clouds_still;
+  glm::ivec2 offset = reference_cross_matrix_offset(f.settings.frame);
+  // Last frame's clip from this frame's camera-relative position p: world = p + eye.
+  glm::dmat4 prev = m.history_view_proj * glm::translate(glm::dmat4(1.0), f.camera.eye - m.history_eye);
+  fb.prev_view_proj = glm::mat4(valid ? prev : f.view_proj);
+  fb.temporal = glm::vec4(valid ? 1.f : 0.f, still ? 1.f : 0.f, float(offset.x), float(offset.y));
+  if (f.params.motion_on > 0.5) {  // this frame's D(h), and the last frame's for the reprojection
+    std::vector<glm::dvec3> rows = f.motion_table;
+    if (valid) {
+      std::vector<glm::dvec3> prev_row = motion_table_row(f.settings, m.history_time);
+      std::copy(prev_row.begin(), prev_row.end(), rows.begin() + CV_MOTION_LUT_SIZE);
+    }
+    std::vector<glm::vec4> texels(rows.size());
+    for (size_t i = 0; i < rows.size(); ++i) texels[i] = glm::vec4(glm::vec3(rows[i]), 0.f);
+    glTextureSubImage2D(m.tex_motion, 0, 0, 0, CV_MOTION_LUT_SIZE, 2, GL_RGBA, GL_FLOAT, texels.data());
+  }
+  m.history_valid = temporal;
+  m.history_key = key;
+  m.history_eye = f.camera.eye;
+  m.history_view_proj = f.view_proj;
+  m.history_time = f.settings.time;
   glNamedBufferSubData(m.ubo_frame, 0, sizeof(fb), &fb);
   glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_CLOUD, m.ubo_cloud);
   glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_FRAME, m.ubo_frame);
@@ -420,6 +494,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glBindTextureUnit(CV_UNIT_OCCUPANCY, m.tex_occ);
   glBindTextureUnit(CV_UNIT_MIE, m.tex_mie);
   glBindTextureUnit(CV_UNIT_COVERAGE, m.tex_coverage);
+  glBindTextureUnit(CV_UNIT_MOTION, m.tex_motion);
   glDisable(GL_BLEND);
   glDisable(GL_CULL_FACE);
   glDisable(GL_FRAMEBUFFER_SRGB);

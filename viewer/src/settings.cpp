@@ -112,7 +112,8 @@ std::vector<ParamDef> build() {
   t.push_back(real("bloom", &RenderSettings::bloom, 0, 10, "bloom strength (0 = off)"));
   t.push_back(real("bloom_threshold", &RenderSettings::bloom_threshold, 0, 1e6, "bright-pass threshold (linear radiance)"));
   t.push_back(enumeration("output", &RenderSettings::output, {"radiance", "transmittance", "iterations"}, "what the cloud pass writes (debug views)"));
-  t.push_back(integer("frame", &RenderSettings::frame, 0, 1 << 30, "frame index of the jitter pattern"));
+  t.push_back(integer("frame", &RenderSettings::frame, 0, 1 << 30, "frame index of the jitter pattern (and of the temporal cross matrix)"));
+  t.push_back(boolean("temporal", &RenderSettings::temporal, "temporal upsampling (seed 003): march one pixel of every 4x4 block per frame in the cross-matrix order, rebuild the rest from the reprojected history (GL only; the CPU reference renders every pixel)"));
   return t;
 }
 
@@ -191,6 +192,7 @@ const std::vector<KeyBinding>& key_bindings() {
       {"I", 'I', "output", A::Cycle, 0},
       {"X", 'X', "exact_filter", A::Toggle, 0},
       {"N", 'N', "jitter", A::Toggle, 0},
+      {"U", 'U', "temporal", A::Toggle, 0},
       {"[", kLeftBracket, "steps", A::Scale, 0.5},
       {"]", kRightBracket, "steps", A::Scale, 2},
       {"1", '1', "exposure", A::Scale, 1 / 1.25},

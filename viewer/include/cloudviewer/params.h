@@ -33,8 +33,10 @@ struct FrameBlock {
   glm::mat4 view_proj;      ///< clip <- camera-relative world
   glm::vec4 viewport;       ///< xy: full size (px); zw: bloom size (px)
   glm::vec4 post;           ///< x: exposure; y: tone map operator (CV_TONEMAP_*); z: bloom strength; w: bloom threshold
+  glm::mat4 prev_view_proj; ///< temporal: previous frame's clip <- this frame's camera-relative world
+  glm::vec4 temporal;       ///< temporal: x history valid; y still; zw block offset
 };
-static_assert(sizeof(FrameBlock) == 160, "std140 FrameBlock size");
+static_assert(sizeof(FrameBlock) == 240, "std140 FrameBlock size");
 
 /// Converts the double parameters to the GPU block, scalar by scalar (both structs are arrays of
 /// scalars without padding, asserted above).

@@ -92,6 +92,10 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame);
 
 /// The shared header's phase function (1/sr) evaluated in double precision (for tests and docs).
 double reference_phase(PhaseMode mode, double g, double cos_theta);
+/// temporal.glsl's cross matrix M[y][x] (seed 003) and the 4x4 block position frame `frame` marches,
+/// as the renderer and the tests use them (the same text the shaders compile).
+int reference_cross_matrix(int x, int y);
+glm::ivec2 reference_cross_matrix_offset(int frame);
 /// medium.glsl's cloud_density at camera-relative p (metres) with the frame's parameters, motion
 /// included, in double precision (for tests: the moving volume against the static one).
 double reference_density(const PreparedVolume& vol, const FrameSetup& frame, const glm::dvec3& p);

@@ -121,7 +121,15 @@ struct FrameSetup {
   glm::dmat4 view_proj;      ///< camera-relative
   glm::dmat4 inv_view_proj;  ///< rounded to float, like the GPU's
   double ground_half_extent = 0;
+  /// Motion table (medium.glsl): D(h) at CV_MOTION_LUT_SIZE heights for this frame's time (row 0)
+  /// and, for temporal reprojection, the previous frame's (row 1; the GL renderer fills it in).
+  /// Empty when the clouds are still.
+  std::vector<glm::dvec3> motion_table;
 };
+
+/// motion_displacement (cloudgen/motion.glsl) at CV_MOTION_LUT_SIZE evenly spaced heights in
+/// [0, 1] at time t: one row of FrameSetup::motion_table.
+std::vector<glm::dvec3> motion_table_row(const RenderSettings& s, double t);
 
 /// Fills the parameter block from the volume, settings, camera and sun.
 FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const Camera& cam,

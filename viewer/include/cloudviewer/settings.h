@@ -72,7 +72,8 @@ struct RenderSettings {
   double bloom = 0.05;             ///< bloom strength (0 disables)
   double bloom_threshold = 1.0;
   OutputMode output = OutputMode::Radiance;
-  int frame = 0;                   ///< frame index (jitter pattern)
+  int frame = 0;                   ///< frame index (jitter pattern, temporal cross matrix)
+  bool temporal = false;           ///< temporal upsampling: 1/16 of the pixels per frame + reprojection
   double time = 0;                 ///< s: the clouds' time (`--time`; the window's clock)
   // Cloud motion (`--set motion.KEY=VALUE`; its table is cloudgen's, shared with its sequence bake).
   cloudgen::MotionParams motion;

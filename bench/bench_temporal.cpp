@@ -1,0 +1,172 @@
+// Temporal upsampling and motion (issue 11, seed 003), measured on the GL renderer:
+//  1. frame time of render.temporal=true against full-resolution rendering at 8/16/32/64 steps
+//     (GPU timer, best of --repeat, same volume, camera and run), the seed's table;
+//  2. error along a moving track (a camera pan with wind), every frame rendered both ways in
+//     sequence (so the temporal history is real): RMSE of the display image and the ghosting
+//     pixels (any channel off by more than 0.1) per frame;
+//  3. the cost of the motion (wind + flow map) at time 60 s against still clouds.
+// Usage: bench_temporal VOLUME [--size WxH] [--repeat N] [--frames N] [--csv FILE]
+// Prints Markdown tables (scripts/bench_temporal.sh puts them into docs/motion.md).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "cloudviewer/image.h"
+#include "cloudviewer/renderer.h"
+#include "cloudviewer/scene.h"
+#include "cloudviewer/settings.h"
+
+using namespace cloudviewer;
+
+namespace {
+
+Camera orbit(const PreparedVolume& vol, double yaw_deg, double aspect) {
+  Camera c = default_camera(vol, 60, aspect);
+  glm::dvec3 d = c.eye - c.target;
+  double a = glm::radians(yaw_deg);
+  c.eye = c.target + glm::dvec3(d.x * std::cos(a) - d.z * std::sin(a), d.y, d.x * std::sin(a) + d.z * std::cos(a));
+  return c;
+}
+
+int ghosts(const Image& a, const Image& b, double bound) {
+  int n = 0;
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x) {
+      double d = 0;
+      for (int c = 0; c < 3; ++c) d = std::max(d, double(std::abs(a.at(x, y)[c] - b.at(x, y)[c])));
+      n += d > bound;
+    }
+  return n;
+}
+
+// Best GPU time over `repeat` renders of a sequence of `n` frames (frame index advancing, camera
+// still), after one warm-up sequence; the temporal history is then in its steady state.
+GpuTimings best_of(GlRenderer& r, const PreparedVolume& vol, RenderSettings s, const Camera& cam, const Sun& sun,
+                   int w, int h, int repeat) {
+  GpuTimings best;
+  best.total_ms = 1e300;
+  for (int k = 0; k < repeat + 1; ++k) {
+    s.frame = k;
+    GpuTimings t;
+    r.render(make_frame(vol, s, cam, sun, w, h), &t);
+    if (k > 0 && t.total_ms < best.total_ms) best = t;
+  }
+  return best;
+}
+double best_ms(GlRenderer& r, const PreparedVolume& vol, const RenderSettings& s, const Camera& cam, const Sun& sun,
+               int w, int h, int repeat) {
+  return best_of(r, vol, s, cam, sun, w, h, repeat).total_ms;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::cerr << "usage: bench_temporal VOLUME [--size WxH] [--repeat N] [--frames N] [--csv FILE]\n";
+    return 1;
+  }
+  std::string input = argv[1], csv_path;
+  int w = 320, h = 180, repeat = 3, track_frames = 48;
+  for (int i = 2; i + 1 < argc; i += 2) {
+    std::string a = argv[i], v = argv[i + 1];
+    if (a == "--size") std::sscanf(v.c_str(), "%dx%d", &w, &h);
+    else if (a == "--repeat") repeat = std::max(1, std::atoi(v.c_str()));
+    else if (a == "--frames") track_frames = std::max(2, std::atoi(v.c_str()));
+    else if (a == "--csv") csv_path = v;
+    else {
+      std::cerr << "bench_temporal: unknown option " << a << "\n";
+      return 1;
+    }
+  }
+  try {
+    HeadlessContext ctx;
+    RenderSettings base;
+    PreparedVolume vol = open_input(input, base);
+    Camera cam = default_camera(vol, 60, double(w) / h);
+    Sun sun = default_sun(cam);
+    GlRenderer r{ShaderSource()};
+    r.set_volume(vol);
+    std::cout << "# " << ctx.description() << ", " << w << "x" << h << ", best of " << repeat << "\n\n";
+
+    std::cout << "| steps | full frame ms | temporal frame ms | frame speed-up | full clouds ms | temporal clouds ms | "
+                 "clouds speed-up |\n|---:|---:|---:|---:|---:|---:|---:|\n";
+    std::vector<GpuTimings> per_pass(2);
+    for (int steps : {8, 16, 32, 64, 128}) {
+      RenderSettings s = base;
+      s.steps = steps;
+      RenderSettings t = s;
+      t.temporal = true;
+      GpuTimings full = best_of(r, vol, s, cam, sun, w, h, repeat);
+      GpuTimings temporal = best_of(r, vol, t, cam, sun, w, h, repeat);
+      std::printf("| %d | %.1f | %.1f | %.2fx | %.1f | %.1f | %.2fx |\n", steps, full.total_ms, temporal.total_ms,
+                  full.total_ms / temporal.total_ms, full.cloud_ms, temporal.cloud_ms, full.cloud_ms / temporal.cloud_ms);
+      if (steps == 64) per_pass = {full, temporal};
+    }
+    std::cout << "\nPasses at 64 steps (ms; full | temporal):";
+    for (int k = 0; k < 2; ++k) {
+      std::cout << (k ? "\n  temporal:" : "\n  full:");
+      for (const auto& [name, ms] : per_pass[k].passes)
+        if (ms > 0.05) std::printf(" %s %.1f", name.c_str(), ms);
+    }
+    std::cout << "\n";
+
+    // Motion cost: the same frame at t = 60 s moving, and with the motion switched off.
+    {
+      RenderSettings moving = base;
+      moving.time = 60;
+      RenderSettings still = moving;
+      still.motion.wind_speed = 0;
+      still.motion.flow_speed = 0;
+      double a = best_ms(r, vol, still, cam, sun, w, h, repeat), b = best_ms(r, vol, moving, cam, sun, w, h, repeat);
+      std::printf("\n| motion | frame ms |\n|---|---:|\n| still | %.1f |\n| wind + flow map | %.1f (%+.1f%%) |\n", a, b,
+                  100.0 * (b / a - 1.0));
+    }
+
+    // The moving track: 16 still frames to converge, then a pan of 0.5 degrees per frame with the
+    // wind at 15 m/s and 1 s per frame (the clouds visibly drift).
+    GlRenderer full{ShaderSource()};
+    full.set_volume(vol);
+    std::ofstream csv;
+    if (!csv_path.empty()) {
+      csv.open(csv_path);
+      csv << "frame,rmse,ghost_pixels,full_ms,temporal_ms\n";
+    }
+    double sum_rmse = 0, max_rmse = 0;
+    int max_ghosts = 0, measured = 0;
+    long sum_ghosts = 0;
+    for (int f = 0; f < 16 + track_frames; ++f) {
+      int moving = std::max(0, f - 16);
+      RenderSettings s = base;
+      s.motion.wind_speed = 15;
+      s.frame = f;
+      s.time = moving * 1.0;
+      RenderSettings t = s;
+      t.temporal = true;
+      Camera c = orbit(vol, moving * 0.5, double(w) / h);
+      GpuTimings tt, tf;
+      r.render(make_frame(vol, t, c, sun, w, h), &tt);
+      if (f < 16) continue;
+      full.render(make_frame(vol, s, c, sun, w, h), &tf);
+      Image a = r.read_back().display, b = full.read_back().display;
+      double e = rmse(a, b);
+      int g = ghosts(a, b, 0.1);
+      sum_rmse += e, max_rmse = std::max(max_rmse, e);
+      sum_ghosts += g, max_ghosts = std::max(max_ghosts, g);
+      ++measured;
+      if (csv) csv << moving << "," << e << "," << g << "," << tf.total_ms << "," << tt.total_ms << "\n";
+    }
+    std::printf("\n| moving track (%d frames) | mean | worst |\n|---|---:|---:|\n| RMSE (display) | %.4f | %.4f |\n"
+                "| ghost pixels (> 0.1) | %.1f (%.2f%%) | %d (%.2f%%) |\n",
+                measured, sum_rmse / measured, max_rmse, double(sum_ghosts) / measured,
+                100.0 * double(sum_ghosts) / measured / (w * h), max_ghosts, 100.0 * max_ghosts / (w * h));
+  } catch (const std::exception& e) {
+    std::cerr << "bench_temporal: " << e.what() << "\n";
+    return 2;
+  }
+  return 0;
+}
