@@ -32,6 +32,8 @@ build/bin/cloudviewer --params-markdown > "$tmp"
 replace_block docs/viewer.md render-params "$tmp"
 build/bin/cloudviewer --atmosphere-markdown > "$tmp"
 replace_block docs/viewer.md atmosphere-params "$tmp"
+build/bin/cloudviewer --motion-markdown > "$tmp"
+replace_block docs/viewer.md motion-params "$tmp"
 build/bin/cloudviewer --keys-markdown > "$tmp"
 replace_block docs/viewer.md render-keys "$tmp"
 

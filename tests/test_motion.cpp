@@ -137,6 +137,14 @@ TEST(MotionFormula, ZeroStrengthMeansNoMotion) {
   EXPECT_TRUE(cloudgen::motion_moves(MotionParams{}));
 }
 
+TEST(MotionFormula, DocsTableIsCurrent) {
+  std::ifstream in(std::string(CLOUD_SOURCE_DIR) + "/docs/viewer.md");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  EXPECT_NE(ss.str().find(cloudgen::motion_markdown()), std::string::npos)
+      << "docs/viewer.md's motion table is out of date (scripts/gen_docs.sh)";
+}
+
 TEST(MotionFormula, TableRejectsBadValuesWithTheRange) {
   MotionParams m;
   cloudgen::set_motion_key(m, "wind_speed", "3.5", "--set");
