@@ -24,6 +24,20 @@ vec3 compose_over(vec4 m, vec3 rd, Number t_scene, vec3 scene_color) {
   return vec3(m) + m.w * background;
 }
 
+// The air in front of the background along rd, as temporal upsampling samples it at 1/16 of the
+// pixels (precomputed sky only): `inscattered` is the sky without the sun's disc for a ray that
+// sees no ground (t_scene >= CV_NO_HIT_TEST, `transmittance` 0), else the light the air scatters
+// over the t_scene metres to the ground and their transmittance. The background is then
+// scene_color * transmittance + inscattered (+ the sun's disc on the sky).
+void background_air(vec3 rd, Number t_scene, OUT(vec3) inscattered, OUT(vec3) transmittance) {
+  if (t_scene >= CV_NO_HIT_TEST) {
+    inscattered = precomputed_sky_air(rd);
+    transmittance = vec3(0.0);
+  } else {
+    air_segment(rd, t_scene, inscattered, transmittance);
+  }
+}
+
 // `rd`: unit camera-relative ray; `pixel`: window pixel (jitter pattern); `t_scene`: distance to the
 // ground (>= CV_NO_HIT_TEST: none); `scene_color`: ground radiance there. Returns linear HDR.
 vec3 compose_pixel(vec3 rd, ivec2 pixel, Number t_scene, vec3 scene_color) {

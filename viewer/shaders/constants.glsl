@@ -42,6 +42,7 @@
 #define CV_UNIT_PASS_INPUT2 7
 #define CV_UNIT_PASS_INPUT3 8
 #define CV_UNIT_MOTION 9
+#define CV_UNIT_PASS_INPUT4 10
 
 // Fixed sizes.
 #define CV_COVERAGE_MAP_SIZE 256   // layer-mode coverage map, texels per side

@@ -17,16 +17,22 @@ vec3 sun_color_at(vec3 p) {
 
 // Background radiance along camera ray rd: single scattering, the ground beyond the ground pass's
 // mesh (sunlit, albedo atmosphere.ground_albedo) seen through the air, and the sun's disc.
-vec3 precomputed_sky_radiance(vec3 rd) {
+// precomputed_sky_air is the smooth part (scattering and the far ground), precomputed_sun_disc the
+// sharp one: temporal upsampling evaluates the first at 1/16 of the pixels.
+vec3 precomputed_sky_air(vec3 rd) {
   vec3 solar = u_cloud.sun_color * u_cloud.sun_radiance;
   vec3 transmittance = vec3(1.0);
   vec3 ground = vec3(0.0);
   Number t_end = 0.0;
   vec3 sky = atmosphere_scattering(u_cloud.sky_altitude_m, rd, u_cloud.sun_dir, solar, CV_NO_HIT, transmittance,
                                    t_end, ground);
-  vec3 disc = atmosphere_sun_disc(u_cloud.sky_altitude_m, rd, u_cloud.sun_dir, solar * u_cloud.sun_disc_scale);
-  return sky + transmittance * ground + disc;
+  return sky + transmittance * ground;
 }
+vec3 precomputed_sun_disc(vec3 rd) {
+  vec3 solar = u_cloud.sun_color * u_cloud.sun_radiance;
+  return atmosphere_sun_disc(u_cloud.sky_altitude_m, rd, u_cloud.sun_dir, solar * u_cloud.sun_disc_scale);
+}
+vec3 precomputed_sky_radiance(vec3 rd) { return precomputed_sky_air(rd) + precomputed_sun_disc(rd); }
 
 // Aerial perspective: the light the air scatters towards the camera over the first t metres of
 // camera ray rd (`inscattered`) and the air's transmittance over them (RGB: `transmittance`).
