@@ -386,8 +386,8 @@ TEST(TemporalUpsampling, PanAndMovingCloudsLeaveNoGhosts) {
     s.motion.wind_speed = 15;
     int worst = 0;
     double worst_rmse = 0;
-    for (int f = 0; f < 40; ++f) {
-      int moving = std::max(0, f - 16);  // 16 still frames to converge, then move
+    for (int f = 0; f < 30; ++f) {
+      int moving = std::max(0, f - 16);  // 16 still frames to converge, then move for 14
       Camera cam = orbit(vol, moving * c.yaw_per_frame, double(w) / h);
       s.frame = f;
       s.time = moving * c.seconds_per_frame;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <iostream>
 #include <memory>
+#include <mutex>
 #include <sstream>
 
 #include <CLI/CLI.hpp>
@@ -111,6 +112,30 @@ std::string frame_file_name(const std::string& out, int frame) {
   return r;
 }
 
+// A progress bar on stderr for long CPU work, redrawn at most every 1% (thread-safe).
+class ProgressBar {
+ public:
+  ProgressBar(std::ostream& err, std::string what) : err_(err), what_(std::move(what)) {}
+  void update(int done, int total) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    int pct = total > 0 ? done * 100 / total : 100;
+    if (pct == last_) return;
+    last_ = pct;
+    int bar = pct * 30 / 100;
+    err_ << "\r" << what_ << " [" << std::string(size_t(bar), '#') << std::string(size_t(30 - bar), ' ') << "] "
+         << pct << "%" << std::flush;
+  }
+  void finish() {
+    if (last_ >= 0) err_ << "\n";
+  }
+
+ private:
+  std::ostream& err_;
+  std::string what_;
+  std::mutex mutex_;
+  int last_ = -1;
+};
+
 std::string params_help() {
   std::string s = "render parameters (--set render.KEY=VALUE):\n";
   RenderSettings d;
@@ -167,7 +192,11 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
                  "and the jitter pattern per frame")->check(CLI::Range(1, 1000000));
   app.add_option("--fps", o.fps, "frames per second for --frames (0 holds the time still, e.g. to converge "
                  "render.temporal; default 24)")->check(CLI::Range(0.0, 10000.0));
-  app.add_option("--backend", o.backend, "gl (OpenGL) or cpu (double-precision reference)")->check(CLI::IsMember({"gl", "cpu"}));
+  app.add_option("--backend", o.backend, "gl (OpenGL), cpu (the double-precision reference of the same shader math) or "
+                 "pathtrace (the ground truth for the lighting: every order of scattering, Monte Carlo)")
+      ->check(CLI::IsMember({"gl", "cpu", "pathtrace"}));
+  app.add_option("--spp", o.spp, "--backend pathtrace: paths per pixel (noise falls as 1/sqrt(spp); default 64)")
+      ->check(CLI::Range(1, 1 << 20));
   app.add_option("--shader-dir", o.shader_dir, "read shaders from this directory instead of the embedded copies (hot reload)");
   app.add_option("--mie-table", o.mie_table, "Mie phase table to use for render.phase=mie (text: one value per line over 0..180 degrees, or 'theta value' columns)");
   app.add_option("--bench", o.bench, "benchmark camera track (JSON, see viewer/tracks/default.json)");
@@ -244,7 +273,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   const bool pattern = o.out.find('%') != std::string::npos;
   std::unique_ptr<HeadlessContext> ctx;
   std::unique_ptr<GlRenderer> renderer;
-  if (o.backend != "cpu") {
+  if (o.backend == "gl") {
     ctx = std::make_unique<HeadlessContext>();
     renderer = std::make_unique<GlRenderer>(ShaderSource(o.shader_dir));
     renderer->set_volume(vol);
@@ -259,7 +288,19 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
     FrameImages img;
     auto r0 = std::chrono::steady_clock::now();
     std::string label = o.frames > 1 ? "frame " + std::to_string(i) + " (t = " + format_number(s.time) + " s): " : "";
-    if (!renderer) {
+    if (o.backend == "pathtrace") {
+      PathTraceOptions po;
+      po.spp = o.spp;
+      po.seed = uint32_t(s.frame + 1);
+      ProgressBar bar(err, "path tracing " + std::to_string(o.width) + "x" + std::to_string(o.height) + " at " +
+                               std::to_string(o.spp) + " spp");
+      po.progress = [&bar](int done, int rows) { bar.update(done, rows); };
+      img = render_pathtrace(vol, frame, po);
+      bar.finish();
+      auto r1 = std::chrono::steady_clock::now();
+      out << label << "path tracer: " << o.width << "x" << o.height << " at " << o.spp << " spp in "
+          << std::chrono::duration<double>(r1 - r0).count() << " s\n";
+    } else if (!renderer) {
       img = render_cpu(vol, frame);
       auto r1 = std::chrono::steady_clock::now();
       out << label << "cpu reference: " << o.width << "x" << o.height << " in "

@@ -5,6 +5,7 @@
 // hand on the GPU too) and pixels at the ground quad's far edge. Everything else is the same
 // formula: the per-pixel compose, the bloom taps, the bilinear taps and the tone map included.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 
@@ -158,49 +159,51 @@ double reference_density(const PreparedVolume& vol, const FrameSetup& frame, con
   return sh.cloud_density(p);
 }
 
-FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
-  const int w = frame.width, h = frame.height;
-  const std::vector<float>& mie = mie_phase_table();
-  const ref::CloudParams& P = frame.params;
-  std::shared_ptr<const TransmittanceLut> shared =
-      int(P.sky_mode) == CV_SKY_PRECOMPUTED ? shared_transmittance_lut(frame.settings.atmosphere) : nullptr;
-  const TransmittanceLut& lut = shared ? *shared : no_lut();
-  Buffer hdr(w, h);
-  tbb::parallel_for(0, h, [&](int y) {
-    CpuShader sh(P, vol, mie, lut, &frame.motion_table);
-    for (int x = 0; x < w; ++x) {
-      dvec3 rd = sh.pixel_ray(frame.inv_view_proj, dvec2(x + 0.5, y + 0.5), dvec2(w, h));
-      double t_scene = CV_NO_HIT;
-      dvec3 scene_color(0.0);
-      // The GPU rasterises the ground mesh (ground.vert); here the same surface is intersected. The
-      // GL ground quad is visible from both sides; so is this plane. In layer mode the ground is the
-      // parabolic Earth (altitude 0), tessellated finely on the GPU.
-      double t = -1;
-      if (P.ground_on > 0.5 && P.layer_on > 0.5) {
-        dvec2 r = sh.parabola_roots((1.0 - rd.y * rd.y) / (2.0 * P.earth_radius_m), rd.y, -P.ground_y_m);
-        if (r.x <= r.y) t = r.x > 0 ? r.x : r.y;
-      } else if (P.ground_on > 0.5 && rd.y != 0.0 && P.ground_y_m / rd.y > 0.0) {
-        t = P.ground_y_m / rd.y;
-      }
-      if (t > 0) {
-        dvec3 p = rd * t;
-        if (std::abs(p.x) <= P.ground_half_extent_m && std::abs(p.z) <= P.ground_half_extent_m) {
-          t_scene = t;
-          scene_color = sh.ground_radiance(p);
-        }
-      }
-      hdr.at(x, y) = sh.compose_pixel(rd, ivec2(x, y), t_scene, scene_color);
-    }
-  });
+namespace {
 
-  // Bloom: half-resolution bright pass, separable Gaussian, added before tone mapping
-  // (the same passes and taps as bloom_bright.frag, bloom_blur.frag, tonemap.frag).
+// What the camera ray rd hits first: the ground (its radiance, shadows included, and distance) or
+// nothing (t_scene = CV_NO_HIT). The GPU rasterises the ground mesh (ground.vert); here the same
+// surface is intersected. The GL ground quad is visible from both sides; so is this plane. In
+// layer mode the ground is the parabolic Earth (altitude 0), tessellated finely on the GPU.
+void scene_hit(CpuShader& sh, const ref::CloudParams& P, const dvec3& rd, double& t_scene, dvec3& scene_color) {
+  t_scene = CV_NO_HIT;
+  scene_color = dvec3(0.0);
+  double t = -1;
+  if (P.ground_on > 0.5 && P.layer_on > 0.5) {
+    dvec2 r = sh.parabola_roots((1.0 - rd.y * rd.y) / (2.0 * P.earth_radius_m), rd.y, -P.ground_y_m);
+    if (r.x <= r.y) t = r.x > 0 ? r.x : r.y;
+  } else if (P.ground_on > 0.5 && rd.y != 0.0 && P.ground_y_m / rd.y > 0.0) {
+    t = P.ground_y_m / rd.y;
+  }
+  if (t > 0) {
+    dvec3 p = rd * t;
+    if (std::abs(p.x) <= P.ground_half_extent_m && std::abs(p.z) <= P.ground_half_extent_m) {
+      t_scene = t;
+      scene_color = sh.ground_radiance(p);
+    }
+  }
+}
+
+struct Lookups {
+  std::shared_ptr<const TransmittanceLut> shared;
+  const TransmittanceLut& lut;
+  explicit Lookups(const FrameSetup& frame)
+      : shared(int(frame.params.sky_mode) == CV_SKY_PRECOMPUTED ? shared_transmittance_lut(frame.settings.atmosphere)
+                                                                 : nullptr),
+        lut(shared ? *shared : no_lut()) {}
+};
+
+// Bloom (half-resolution bright pass, separable Gaussian, added before tone mapping) and the tone
+// map: the same passes and taps as bloom_bright.frag, bloom_blur.frag, tonemap.frag.
+FrameImages finish(const PreparedVolume& vol, const FrameSetup& frame, const TransmittanceLut& lut, const Buffer& hdr) {
+  const int w = frame.width, h = frame.height;
+  const ref::CloudParams& P = frame.params;
   const double exposure = frame.settings.exposure, strength = frame.settings.bloom;
   const double threshold = frame.settings.bloom_threshold;
   const int op = int(frame.settings.tonemap);
   const int bw = std::max(1, w / 2), bh = std::max(1, h / 2);
   Buffer bright(bw, bh), blur_h(bw, bh), blur_v(bw, bh);
-  CpuShader sh(P, vol, mie, lut);
+  CpuShader sh(P, vol, mie_phase_table(), lut);
   if (strength > 0) {
     for (int y = 0; y < bh; ++y)
       for (int x = 0; x < bw; ++x)
@@ -223,6 +226,240 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
       pd[3] = pl[3] = 1.f;
     }
   return out;
+}
+
+}  // namespace
+
+FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
+  const int w = frame.width, h = frame.height;
+  const std::vector<float>& mie = mie_phase_table();
+  const ref::CloudParams& P = frame.params;
+  Lookups look(frame);
+  Buffer hdr(w, h);
+  tbb::parallel_for(0, h, [&](int y) {
+    CpuShader sh(P, vol, mie, look.lut, &frame.motion_table);
+    for (int x = 0; x < w; ++x) {
+      dvec3 rd = sh.pixel_ray(frame.inv_view_proj, dvec2(x + 0.5, y + 0.5), dvec2(w, h));
+      double t_scene;
+      dvec3 scene_color;
+      scene_hit(sh, P, rd, t_scene, scene_color);
+      hdr.at(x, y) = sh.compose_pixel(rd, ivec2(x, y), t_scene, scene_color);
+    }
+  });
+  return finish(vol, frame, look.lut, hdr);
+}
+
+
+// ------------------------------------------------------------------------------ path tracer
+//
+// The ground truth for the lighting (`--backend pathtrace`): unbiased Monte Carlo transport through
+// the same medium (CpuShader::cloud_density: the same texture, placement, erosion, coverage and
+// motion as both renderers), every order of scattering. Delta tracking samples the collisions
+// against a majorant (the largest base-shape value times the density and extinction scales:
+// erosion, coverage and the cloud-type gradient only lower the density), next-event estimation
+// with ratio tracking adds the sun at every collision, the phase function is sampled (HG
+// analytically, the Mie table by its tabulated CDF) and a path that leaves the medium sees the
+// marcher's isotropic ambient sky (the marcher's own assumption, so the two differ only in how
+// they transport light through the cloud). A camera ray that crosses the medium without a
+// collision sees the marcher's background (sky, ground with its cloud shadows, air), and the
+// light of a collided path is faded by the same aerial perspective at its first collision.
+// References: Woodcock et al. 1965 (delta tracking), Novak et al., "Monte Carlo Methods for Volumetric
+// Light Transport Simulation", Eurographics STAR 2018 (ratio tracking, NEE).
+namespace {
+
+struct Pcg32 {
+  uint64_t state;
+  explicit Pcg32(uint64_t seed) : state(seed * 6364136223846793005ull + 1442695040888963407ull) { next(); }
+  uint32_t next() {
+    uint64_t old = state;
+    state = old * 6364136223846793005ull + 1442695040888963407ull;
+    uint32_t xorshifted = uint32_t(((old >> 18u) ^ old) >> 27u);
+    uint32_t rot = uint32_t(old >> 59u);
+    return (xorshifted >> rot) | (xorshifted << ((32u - rot) & 31u));
+  }
+  double uniform() { return (next() >> 8) * (1.0 / 16777216.0); }  // [0, 1)
+};
+
+// Sampling the phase function: HG analytically; the Mie table by the piecewise-constant CDF of
+// p(theta) sin(theta) over its bins, weighted by phase / pdf so the estimate stays unbiased.
+struct PhaseSampler {
+  int mode = CV_PHASE_HG;
+  double g = 0;
+  std::vector<double> cdf;   // Mie: per bin, cumulative probability
+  std::vector<double> mass;  // Mie: probability of each bin
+  int bins = 0;
+  PhaseSampler(const ref::CloudParams& p, const std::vector<float>& mie) : mode(int(p.phase_mode)), g(p.hg_g) {
+    if (mode != CV_PHASE_MIE) return;
+    bins = int(mie.size()) - 1;
+    double total = 0;
+    for (int i = 0; i < bins; ++i) {
+      double a = M_PI * i / bins, b = M_PI * (i + 1) / bins;
+      double m = 0.5 * (mie[size_t(i)] + mie[size_t(i) + 1]) * (std::cos(a) - std::cos(b));
+      mass.push_back(m);
+      total += m;
+    }
+    double c = 0;
+    for (double& m : mass) {
+      m /= total;
+      c += m;
+      cdf.push_back(c);
+    }
+  }
+  // A new direction around unit d (cos of the angle to d = the scattering cosine), and the weight.
+  dvec3 sample(CpuShader& sh, const dvec3& d, Pcg32& rng, double& weight) const {
+    double u1 = rng.uniform(), u2 = rng.uniform();
+    double cos_t;
+    weight = 1.0;
+    if (mode == CV_PHASE_HG && std::abs(g) > 1e-4) {
+      double q = (1 - g * g) / (1 - g + 2 * g * u1);
+      cos_t = std::clamp((1 + g * g - q * q) / (2 * g), -1.0, 1.0);
+    } else if (mode == CV_PHASE_MIE) {
+      int i = int(std::lower_bound(cdf.begin(), cdf.end(), u1) - cdf.begin());
+      i = std::min(i, bins - 1);
+      double ca = std::cos(M_PI * i / bins), cb = std::cos(M_PI * (i + 1) / bins);
+      cos_t = cb + (ca - cb) * u2;
+      u2 = rng.uniform();
+      double pdf = mass[size_t(i)] / (2 * M_PI * (ca - cb));
+      weight = sh.phase_function(cos_t) / pdf;
+    } else {
+      cos_t = 1 - 2 * u1;
+    }
+    double sin_t = std::sqrt(std::max(0.0, 1 - cos_t * cos_t));
+    double phi = 2 * M_PI * u2;
+    dvec3 a = std::abs(d.x) < 0.9 ? dvec3(1, 0, 0) : dvec3(0, 1, 0);
+    dvec3 t = glm::normalize(glm::cross(d, a)), b = glm::cross(d, t);
+    return glm::normalize(d * cos_t + (t * std::cos(phi) + b * std::sin(phi)) * sin_t);
+  }
+};
+
+struct PathTracer {
+  CpuShader& sh;
+  const ref::CloudParams& P;
+  const PhaseSampler& phase;
+  double majorant;  // 1/m
+  int max_scatterings;
+
+  dvec2 interval(const dvec3& o, const dvec3& d) {
+    if (sh.layer_mode()) return sh.shell_interval(o, d);
+    dvec3 bmin = P.march_min_m - o;
+    return sh.ray_box(d, bmin, bmin + P.march_size_m);
+  }
+  double sigma(const dvec3& x) { return sh.cloud_density(x) * P.sigma_t_per_m; }
+  // Delta tracking in [t0, t1): the first real collision, or false.
+  bool collide(const dvec3& o, const dvec3& d, double t0, double t1, Pcg32& rng, double& t_hit) {
+    if (!(t1 > t0) || majorant <= 0) return false;
+    double t = t0;
+    for (;;) {
+      t -= std::log(1.0 - rng.uniform()) / majorant;
+      if (t >= t1) return false;
+      if (rng.uniform() * majorant < sigma(o + d * t)) {
+        t_hit = t;
+        return true;
+      }
+    }
+  }
+  // Ratio tracking toward the sun, with Russian roulette once the estimate is small.
+  double transmittance(const dvec3& x, const dvec3& d, Pcg32& rng) {
+    dvec2 tb = interval(x, d);
+    if (!(tb.y > tb.x) || majorant <= 0) return 1.0;
+    double T = 1.0, t = std::max(tb.x, 0.0);
+    for (;;) {
+      t -= std::log(1.0 - rng.uniform()) / majorant;
+      if (t >= tb.y) return T;
+      T *= std::max(0.0, 1.0 - sigma(x + d * t) / majorant);
+      if (T < 0.05) {
+        if (rng.uniform() < 0.5) return 0.0;
+        T *= 2.0;
+      }
+    }
+  }
+  dvec3 radiance(const dvec3& rd, Pcg32& rng) {
+    double t_scene;
+    dvec3 scene_color;
+    scene_hit(sh, P, rd, t_scene, scene_color);
+    dvec2 tb = interval(dvec3(0.0), rd);
+    double t1 = std::min(tb.y, std::min(t_scene, P.max_distance_m));
+    double t_first = 0;
+    if (!collide(dvec3(0.0), rd, std::max(tb.x, 0.0), t1, rng, t_first))
+      return sh.compose_over(dvec4(0.0, 0.0, 0.0, 1.0), rd, t_scene, scene_color);
+    const dvec3 sun = P.sun_dir;
+    const dvec3 ambient = P.ambient_color * P.ambient_scale;
+    dvec3 L(0.0), throughput(1.0);
+    dvec3 x = rd * t_first, d = rd;
+    for (int n = 0; n < max_scatterings; ++n) {
+      if (P.sun_radiance > 0)
+        L += throughput * P.albedo * sh.sun_color_at(x) *
+             (P.sun_radiance * sh.phase_function(glm::dot(d, sun)) * transmittance(x, sun, rng));
+      throughput *= P.albedo;
+      double m = std::max(throughput.x, std::max(throughput.y, throughput.z));
+      if (m < 0.1) {  // Russian roulette
+        if (rng.uniform() > m) break;
+        throughput /= m;
+      }
+      double w = 1;
+      dvec3 next = phase.sample(sh, d, rng, w);
+      throughput *= w;
+      dvec2 nb = interval(x, next);
+      double s = 0;
+      if (!collide(x, next, std::max(nb.x, 0.0), nb.y, rng, s)) {
+        L += throughput * ambient;
+        break;
+      }
+      x += next * s;
+      d = next;
+    }
+    if (int(P.output_mode) == CV_OUTPUT_TRANSMITTANCE) return dvec3(0.0);
+    return dvec3(sh.aerial_perspective(dvec4(L, 0.0), t_first, rd));
+  }
+};
+
+double majorant_of(const PreparedVolume& vol, const ref::CloudParams& P) {
+  double m = 0;
+  for (size_t i = 0; i < vol.rgba.size(); i += 4) m = std::max(m, double(vol.rgba[i]));
+  return m * std::max(P.density_scale, 0.0) * P.sigma_t_per_m;
+}
+
+}  // namespace
+
+glm::dvec3 pathtrace_ray(const PreparedVolume& vol, const FrameSetup& frame, const glm::dvec3& rd, int spp,
+                         uint32_t seed) {
+  Lookups look(frame);
+  CpuShader sh(frame.params, vol, mie_phase_table(), look.lut, &frame.motion_table);
+  PhaseSampler phase(frame.params, mie_phase_table());
+  PathTracer pt{sh, frame.params, phase, majorant_of(vol, frame.params), 4096};
+  dvec3 sum(0.0);
+  for (int i = 0; i < spp; ++i) {
+    Pcg32 rng((uint64_t(seed) << 32) ^ uint64_t(i) * 0x9E3779B97F4A7C15ull);
+    sum += pt.radiance(glm::normalize(rd), rng);
+  }
+  return sum / double(std::max(spp, 1));
+}
+
+FrameImages render_pathtrace(const PreparedVolume& vol, const FrameSetup& frame, const PathTraceOptions& o) {
+  const int w = frame.width, h = frame.height;
+  const ref::CloudParams& P = frame.params;
+  Lookups look(frame);
+  PhaseSampler phase(P, mie_phase_table());
+  const double majorant = majorant_of(vol, P);
+  Buffer hdr(w, h);
+  std::atomic<int> rows_done{0};
+  tbb::parallel_for(0, h, [&](int y) {
+    CpuShader sh(P, vol, mie_phase_table(), look.lut, &frame.motion_table);
+    PathTracer pt{sh, P, phase, majorant, o.max_scatterings};
+    for (int x = 0; x < w; ++x) {
+      dvec3 rd = sh.pixel_ray(frame.inv_view_proj, dvec2(x + 0.5, y + 0.5), dvec2(w, h));
+      dvec3 sum(0.0);
+      for (int i = 0; i < o.spp; ++i) {  // one stream per pixel and sample: any thread count, same image
+        uint64_t key = (uint64_t(uint32_t(y * w + x)) << 32) ^ (uint64_t(o.seed) << 20) ^ uint64_t(i);
+        Pcg32 rng(key);
+        sum += pt.radiance(rd, rng);
+      }
+      hdr.at(x, y) = sum / double(std::max(o.spp, 1));
+    }
+    int done = ++rows_done;
+    if (o.progress) o.progress(done, h);
+  });
+  return finish(vol, frame, look.lut, hdr);
 }
 
 }  // namespace cloudviewer

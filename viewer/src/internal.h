@@ -30,6 +30,7 @@ struct Options {
   int bench_reference = 0;  ///< CPU reference step count for RMSE columns (0 = none)
   int bench_repeat = 3;
   int frames = 1;           ///< headless: frames to render (--frames)
+  int spp = 64;             ///< --backend pathtrace: paths per pixel
   double fps = 24;          ///< time step 1/fps between frames (0: time stands still)
   RenderSettings settings;  ///< after --set (and --time)
   cloudgen::View view;      ///< the input's preset/metadata view (default_view.h)

@@ -1,6 +1,7 @@
 // The two renderers. Both take a FrameSetup and return the display image (tone-mapped, sRGB
 // encoded, [0,1]) and the linear HDR image (after bloom, before exposure).
 #pragma once
+#include <functional>
 #include <memory>
 #include <string>
 #include <utility>
@@ -89,6 +90,20 @@ class GlRenderer {
 
 /// Double-precision CPU reference of the same passes, evaluated with TBB over pixels.
 FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame);
+
+/// The path tracer (`--backend pathtrace`, src/cpu_renderer.cpp): the ground truth for the
+/// lighting. Same medium, sun, ambient sky and background as render_cpu; every order of scattering
+/// by delta tracking with next-event estimation of the sun. Deterministic at any thread count.
+struct PathTraceOptions {
+  int spp = 64;                 ///< paths per pixel
+  int max_scatterings = 4096;   ///< per path (albedo-1 clouds scatter hundreds of times)
+  uint32_t seed = 1;
+  std::function<void(int rows_done, int rows)> progress;  ///< called from worker threads
+};
+FrameImages render_pathtrace(const PreparedVolume& vol, const FrameSetup& frame, const PathTraceOptions& o);
+/// Mean radiance (linear HDR) of `spp` paths along one camera-relative unit ray (for tests).
+glm::dvec3 pathtrace_ray(const PreparedVolume& vol, const FrameSetup& frame, const glm::dvec3& rd, int spp,
+                         uint32_t seed = 1);
 
 /// The shared header's phase function (1/sr) evaluated in double precision (for tests and docs).
 double reference_phase(PhaseMode mode, double g, double cos_theta);
