@@ -54,7 +54,7 @@ MotionBox motion_box(const Volume& v);
 inline double height_fraction(const MotionBox& b, double y) { return (y - b.min_y()) / b.height(); }
 
 /// dD/dt (m/s, y-up world) by a central difference of motion_displacement over +-kVelocityStep s.
-inline constexpr double kVelocityStep = 1e-3;
+inline constexpr double kVelocityStep = 1e-4;
 glm::dvec3 motion_velocity(const MotionParams& m, double t, double h);
 
 /// --loop: the motion snapped so frame last + 1 equals frame first (duration = count / fps s):
