@@ -63,6 +63,6 @@ cmp_masks "$tmp/viewer_0.png" "$tmp/mask_0.png"
 if other="$(cmp_masks "$tmp/viewer_0.png" "$tmp/mask_3.png")"; then
   echo "Cycles' frame 3 matches the viewer's frame 0: the sequence did not advance ($other)"; exit 1
 fi
-echo "Cycles' frame 3 against the viewer's frame 0 (must differ): $(echo "$other" | grep -o 'IoU [0-9.]*')"
+echo "Cycles' frame 3 against the viewer's frame 0 (must differ): $(echo "$other" | grep -o 'IoU [0-9.]*' | head -1)"
 if [ -n "${CLOUD_KEEP_RENDER:-}" ]; then mkdir -p "$CLOUD_KEEP_RENDER" && cp "$tmp"/*.png "$CLOUD_KEEP_RENDER"/; fi
 echo "blender sequence OK"
