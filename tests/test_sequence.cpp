@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
@@ -276,6 +277,7 @@ TEST(Sequence, BadArgumentsExitOneWithAClearMessage) {
       {"--frames 0:3 --loop --set tiling=false --set motion.wind_shear=0" + o, "motion.wind_speed = 10"},
       {"--frames 0:3 --set motion.flow_speed=11" + o, "/motion/flow_speed: 11 is out of range"},
       {"--frames 0:3 --region 0,0,0:4,4,4" + o, "--region: not available with --frames"},
+      {"--frames 0:3 --max-memory 100K" + o, "more than --max-memory 100K"},
   };
   for (const auto& [args, want] : cases) {
     std::string out;
@@ -311,4 +313,28 @@ TEST(Sequence, CliFramesAreDeterministicAcrossThreads) {
   EXPECT_EQ(std::stod(meta("motion.flow_speed")), MotionParams{}.flow_speed);  // every digit
   EXPECT_EQ(meta("motion.wind_speed"), "10");
   EXPECT_EQ(meta("motion.box_height"), "800");
+}
+
+// All frames or none: a frame that cannot be written (its name is a link to /dev/full, which
+// fails at the commit) leaves no other frame, and a folder in the frame range is refused before
+// any work, keeping an older frame file as it was.
+TEST(Sequence, AFailedFrameLeavesNoFrame) {
+  TempDir dir;
+  namespace fs = std::filesystem;
+  fs::create_symlink("/dev/full", dir / "c_0002.vdb");
+  std::string out;
+  EXPECT_EQ(run_cli("generate tiny -q --frames 0:3 -o " + dir / "c_####.vdb", &out), 2) << out;
+  EXPECT_NE(out.find("c_0002.vdb"), std::string::npos) << out;
+  for (const char* f : {"c_0000.vdb", "c_0001.vdb", "c_0003.vdb"}) EXPECT_FALSE(fs::exists(dir / f)) << f << "\n" << out;
+  fs::remove(dir / "c_0002.vdb");
+  {
+    std::ofstream(dir / "c_0001.vdb") << "old";
+  }
+  fs::create_directory(dir / "c_0003.vdb");
+  EXPECT_EQ(run_cli("generate tiny -q --frames 0:3 -o " + dir / "c_####.vdb", &out), 1) << out;
+  EXPECT_NE(out.find("c_0003.vdb: is a folder"), std::string::npos) << out;
+  std::ifstream in(dir / "c_0001.vdb");
+  std::string old((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_EQ(old, "old");
+  EXPECT_FALSE(fs::exists(dir / "c_0000.vdb"));
 }
