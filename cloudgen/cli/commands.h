@@ -41,6 +41,8 @@ struct GenerateArgs {
 /// generate with --frames / --fps / --loop: the static volume of `p` (read from `preset_path`),
 /// baked into one VDB per frame, all staged in one OutputBatch (sequence_cmd.cpp).
 void run_generate_sequence(const Preset& p, const std::string& preset_path, const GenerateArgs& a);
+/// The CLOUDGEN_TEST_HOLD hook (main.cpp): pauses at `where` until SIGINT/SIGTERM when asked.
+void test_hold(const char* where);
 
 // Scale-out (scale_cmd.cpp): `plan`, `merge`, and generate's MPI path.
 void add_scale_commands(CLI::App& app, std::function<void()>& run);

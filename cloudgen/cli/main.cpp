@@ -71,9 +71,12 @@ std::string human(uint64_t b) {
 }
 
 
+}  // namespace
+
 /// Test hook (tests/test_cloudgen.cpp): CLOUDGEN_TEST_HOLD=generate pauses at the first progress
-/// report, =commit pauses with every output staged but none published; each prints a line and
-/// waits for SIGINT/SIGTERM, so a test can interrupt at a known point without sleeping.
+/// report, =commit pauses with every output staged but none published (=frames: a sequence with
+/// its first frame staged); each prints a line and waits for SIGINT/SIGTERM, so a test can
+/// interrupt at a known point without sleeping.
 void test_hold(const char* where) {
   const char* e = std::getenv("CLOUDGEN_TEST_HOLD");
   if (!e || std::string(e) != where) return;
@@ -81,6 +84,8 @@ void test_hold(const char* where) {
   std::fflush(stderr);
   while (!g_cancel) ::usleep(1000);
 }
+
+namespace {
 
 void run_generate(const GenerateArgs& a) {
   std::vector<std::string> sets = a.sets;

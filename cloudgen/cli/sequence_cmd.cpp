@@ -115,7 +115,9 @@ void run_generate_sequence(const Preset& p, const std::string& preset_path, cons
     bake_s += std::chrono::duration<double>(t1 - t0).count();
     write_s += std::chrono::duration<double>(t2 - t1).count();
     if (bar) bar(double(fr - r.first + 1) / double(r.count()));
+    if (fr == r.first) test_hold("frames");
   }
+  test_hold("commit");
   if (g_cancel) throw Cancelled();
   batch.commit();
   if (!a.quiet || a.stats) {
