@@ -26,22 +26,6 @@ scene.name = "cloud"
 # ---------------------------------------------------------------- volume
 vol = bpy.data.volumes.new("cloud")
 vol.filepath = S["vdb"]
-Q = S.get("sequence")
-if Q:
-    # A VDB sequence (cloud_0000.vdb ... as `cloudgen generate --frames` names it): Blender swaps the
-    # file name's frame number; scene frame F shows file (F - frame_start + 1) + frame_offset, so
-    # frame_start = A and frame_offset = A - 1 show file F at scene frame F.
-    vol.is_sequence = True
-    vol.frame_start = Q["first"]
-    vol.frame_offset = Q["first"] - 1
-    vol.frame_duration = Q["count"]
-    vol.sequence_mode = "REPEAT" if Q["loop"] else "CLIP"
-    scene.frame_start = Q["first"]
-    scene.frame_end = Q["first"] + Q["count"] - 1
-    fps = float(Q["fps"])
-    scene.render.fps = max(1, round(fps))
-    scene.render.fps_base = scene.render.fps / fps
-    scene.frame_set(Q["render_frame"])
 if not vol.grids.load():
     raise SystemExit(f"Blender could not load {S['vdb']}: {vol.grids.error_message}")
 names = [g.name for g in vol.grids]
@@ -56,6 +40,23 @@ vol.render.space = "OBJECT"
 vol.render.step_size = 0.0  # auto: one voxel, times Cycles' step rate
 obj = bpy.data.objects.new("cloud", vol)
 scene.collection.objects.link(obj)
+Q = S.get("sequence")
+if Q:
+    # A VDB sequence (cloud_0000.vdb ... as `cloudgen generate --frames` names it), set up after the
+    # first file's load above (a volume outside the scene would load frame 0). Blender swaps the
+    # file name's frame number: scene frame F shows file (F - frame_start + 1) + frame_offset, so
+    # frame_start = A and frame_offset = A - 1 show file F at scene frame F.
+    vol.is_sequence = True
+    vol.frame_start = Q["first"]
+    vol.frame_offset = Q["first"] - 1
+    vol.frame_duration = Q["count"]
+    vol.sequence_mode = "REPEAT" if Q["loop"] else "CLIP"
+    scene.frame_start = Q["first"]
+    scene.frame_end = Q["first"] + Q["count"] - 1
+    fps = float(Q["fps"])
+    scene.render.fps = max(1, round(fps))
+    scene.render.fps_base = scene.render.fps / fps
+    scene.frame_set(Q["render_frame"])
 # A y-up file stands upright by +90 degrees about x; a z-up file is upright already.
 obj.rotation_euler = (math.pi / 2, 0.0, 0.0) if S["up"] == "y" else (0.0, 0.0, 0.0)
 # OpenVDB's convention puts voxel (i,j,k)'s value at index point (i,j,k), and Blender's object

@@ -9,9 +9,10 @@ tmp="$(mktemp -d)"; trap 'rm -rf "$tmp"' EXIT
 py=/usr/bin/python3
 
 # 1. A box preset blown along +x at 100 m/s, 1 fps, no flow and no shear: 4 voxels (100 m) per
-#    frame, so frame k is frame 0 moved by exactly k * 100 m, and the velocity is (100, 0, 0).
+#    frame, so frame 5 is frame 2 moved by exactly 300 m, and the velocity is (100, 0, 0). The
+#    range starts after 0: a volume loaded before it is in the scene reads file 0, which is absent.
 "$bin/cloudgen" generate tiny -q --set tiling=false --set motion.wind_speed=100 --set motion.wind_direction=90 \
-  --set motion.wind_shear=0 --set motion.flow_speed=0 --frames 0:3 --fps 1 -o "$tmp/c_####.vdb"
+  --set motion.wind_shear=0 --set motion.flow_speed=0 --frames 2:5 --fps 1 -o "$tmp/c_####.vdb"
 $py - "$tmp" <<'PY'
 import sys, pyopenvdb as vdb
 d = sys.argv[1]
@@ -28,41 +29,41 @@ def world_values(g):
                     w = g.transform.indexToWorld((i, j, k))
                     out[tuple(round(c, 3) for c in w)] = it.value
     return out
-g0, g3 = load(0), load(3)
-assert g3["density"].metadata["frame"] == 3 and abs(g3["density"].metadata["time_seconds"] - 3.0) < 1e-12
+g0, g3 = load(2), load(5)
+assert g3["density"].metadata["frame"] == 5 and abs(g3["density"].metadata["time_seconds"] - 5.0) < 1e-12
 d0, d3 = world_values(g0["density"]), world_values(g3["density"])
 moved = {(x + 300.0, y, z): v for (x, y, z), v in d0.items()}
 moved = {tuple(round(c, 3) for c in k): v for k, v in moved.items()}
 # cos(90 deg) = 6e-17 leaves a 2e-14 m drift along z: voxels below 1e-6 may appear or vanish.
 keys = {k for k, v in moved.items() if v > 1e-6} | {k for k, v in d3.items() if v > 1e-6}
 worst = max(abs(moved.get(k, 0.0) - d3.get(k, 0.0)) for k in keys)
-assert worst < 1e-6, f"frame 3 is not frame 0 moved 300 m along +x: a voxel differs by {worst}"
+assert worst < 1e-6, f"frame 5 is not frame 2 moved 300 m along +x: a voxel differs by {worst}"
 v3 = world_values(g3["velocity"])
 assert set(v3) == set(d3), "velocity is not on the density's active voxels"
 worst_v = max(max(abs(a - b) for a, b in zip(v, (100.0, 0.0, 0.0))) for v in v3.values())
 assert worst_v < 1e-3, worst_v
-print(f"openvdb: frame 3 = frame 0 moved 300 m along +x ({len(keys)} voxels, max diff {worst:.1e}); "
+print(f"openvdb: frame 5 = frame 2 moved 300 m along +x ({len(keys)} voxels, max diff {worst:.1e}); "
       f"velocity (100, 0, 0) m/s within {worst_v:.1e} on every density voxel")
 PY
 
 # 2. Blender plays the files as a volume sequence; Cycles' last frame against the viewer's.
-"$bin/cloudgen" blender "$tmp/c_####.vdb" --frames 0:3 -q -o "$tmp/seq.blend" --size 128x72 --samples 4
+"$bin/cloudgen" blender "$tmp/c_####.vdb" --frames 2:5 -q -o "$tmp/seq.blend" --size 128x72 --samples 4
 blender -b --factory-startup --python-exit-code 1 --python "$src/tests/blender_sequence.py" -- \
-  "$tmp/seq.blend" 0 4 "$tmp" > "$tmp/blender.log" 2>&1 || { tail -20 "$tmp/blender.log"; exit 1; }
+  "$tmp/seq.blend" 2 4 "$tmp" > "$tmp/blender.log" 2>&1 || { tail -20 "$tmp/blender.log"; exit 1; }
 grep -E "^blender:" "$tmp/blender.log"
-test -s "$tmp/mask_0.png" && test -s "$tmp/mask_3.png"
+test -s "$tmp/mask_2.png" && test -s "$tmp/mask_5.png"
 vset=(--set render.output=transmittance render.tonemap=clamp render.exposure=1 render.bloom=0)
-for f in 0 3; do
+for f in 2 5; do
   "$bin/cloudviewer" "$tmp/c_000$f.vdb" --headless --size 128x72 "${vset[@]}" --out "$tmp/viewer_$f.png" >/dev/null
 done
 cmp_masks() { blender -b --factory-startup --python-exit-code 1 --python "$src/tests/blender_roundtrip.py" -- \
   compare "$@" 2>&1 | grep -E "IoU|agree|SystemExit|Error" ; return "${PIPESTATUS[0]}"; }
-cmp_masks "$tmp/viewer_3.png" "$tmp/mask_3.png"
-cmp_masks "$tmp/viewer_0.png" "$tmp/mask_0.png"
-# The played frame is the moving one: Cycles' frame 3 is not the viewer's frame 0.
-if other="$(cmp_masks "$tmp/viewer_0.png" "$tmp/mask_3.png")"; then
-  echo "Cycles' frame 3 matches the viewer's frame 0: the sequence did not advance ($other)"; exit 1
+cmp_masks "$tmp/viewer_5.png" "$tmp/mask_5.png"
+cmp_masks "$tmp/viewer_2.png" "$tmp/mask_2.png"
+# The played frame is the moving one: Cycles' frame 5 is not the viewer's frame 2.
+if other="$(cmp_masks "$tmp/viewer_2.png" "$tmp/mask_5.png")"; then
+  echo "Cycles' frame 5 matches the viewer's frame 2: the sequence did not advance ($other)"; exit 1
 fi
-echo "Cycles' frame 3 against the viewer's frame 0 (must differ): $(echo "$other" | grep -o 'IoU [0-9.]*' | head -1)"
+echo "Cycles' frame 5 against the viewer's frame 2 (must differ): $(echo "$other" | grep -o 'IoU [0-9.]*' | head -1)"
 if [ -n "${CLOUD_KEEP_RENDER:-}" ]; then mkdir -p "$CLOUD_KEEP_RENDER" && cp "$tmp"/*.png "$CLOUD_KEEP_RENDER"/; fi
 echo "blender sequence OK"
