@@ -358,3 +358,27 @@ TEST(Sequence, InterruptedSequenceLeavesNoFrame) {
     EXPECT_EQ(testutil::read_text(dir / "c_0001.vdb"), "previous contents");
   }
 }
+
+// The preset's `motion` section is read through the parameter table: defaults = MotionParams'
+// initialisers, values range-checked with the file, field, value and range, unknown keys named.
+TEST(Sequence, PresetMotionSectionGoesThroughTheTable) {
+  const Preset d = parse_preset("{}", "d.json");
+  const MotionParams want;
+  for (const MotionKey& k : motion_keys()) EXPECT_EQ(d.motion.*k.member, want.*k.member) << k.key;
+  const Preset p = parse_preset(R"({"motion": {"wind_speed": 3, "flow_up": 40}})", "m.json", {"motion.wind_shear=0"});
+  EXPECT_EQ(p.motion.wind_speed, 3);
+  EXPECT_EQ(p.motion.flow_up, 40);
+  EXPECT_EQ(p.motion.wind_shear, 0);
+  auto error = [](const std::string& json) {
+    try {
+      parse_preset(json, "bad.json");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(error(R"({"motion": {"wind_speed": 300}})").find("bad.json: /motion/wind_speed: 300 is out of range; allowed: number in [0, 200]"),
+            std::string::npos);
+  EXPECT_NE(error(R"({"motion": {"wind_sped": 3}})").find("did you mean \"wind_speed\""), std::string::npos);
+  EXPECT_NE(error(R"({"motion": {"flow_speed": "fast"}})").find("/motion/flow_speed: \"fast\" has the wrong type"), std::string::npos);
+}
