@@ -287,18 +287,23 @@ MotionFrame bake_frame(const Volume& s, const MotionParams& m, int64_t frame, do
         const Row& r = rows[j];
         const Taps& tz = r.z[k];
         if (!r.y.inside || !tz.inside) continue;
+        // The four (y, z) corners of this row and slice: their weights and where their x rows start.
+        double wyz[4];
+        size_t base[4];
+        for (int q = 0; q < 4; ++q) {
+          const int64_t y = q & 1 ? r.y.i1 : r.y.i0, z = q & 2 ? tz.i1 : tz.i0;
+          wyz[q] = (q & 1 ? r.y.w1 : r.y.w0) * (q & 2 ? tz.w1 : tz.w0);
+          base[q] = s.index(0, uint32_t(y), uint32_t(z));
+        }
         for (uint32_t i = 0; i < v.dims[0]; ++i) {
           const Taps& tx = r.x[i];
           if (!tx.inside) continue;
           const size_t out = v.index(i, j, k);
           for (size_t c = 0; c < src.size(); ++c) {
-            const std::vector<float>& ch = *src[c];
+            const float* ch = src[c]->data();
             double acc = 0;
-            for (int q = 0; q < 8; ++q) {
-              const int64_t x = q & 1 ? tx.i1 : tx.i0, y = q & 2 ? r.y.i1 : r.y.i0, z = q & 4 ? tz.i1 : tz.i0;
-              const double w = (q & 1 ? tx.w1 : tx.w0) * (q & 2 ? r.y.w1 : r.y.w0) * (q & 4 ? tz.w1 : tz.w0);
-              acc += w * double(ch[s.index(uint32_t(x), uint32_t(y), uint32_t(z))]);
-            }
+            for (int q = 0; q < 4; ++q)
+              acc += wyz[q] * (tx.w0 * double(ch[base[q] + size_t(tx.i0)]) + tx.w1 * double(ch[base[q] + size_t(tx.i1)]));
             (*dst[c])[out] = float(acc);
           }
         }
