@@ -382,3 +382,23 @@ TEST(Sequence, PresetMotionSectionGoesThroughTheTable) {
   EXPECT_NE(error(R"({"motion": {"wind_sped": 3}})").find("did you mean \"wind_speed\""), std::string::npos);
   EXPECT_NE(error(R"({"motion": {"flow_speed": "fast"}})").find("/motion/flow_speed: \"fast\" has the wrong type"), std::string::npos);
 }
+
+// `cloudgen blender` with a sequence: the pattern needs --frames, every frame must exist, and
+// --render-frame must lie in the range (exit 1 before Blender runs).
+TEST(Sequence, BlenderSequenceArgumentsAreChecked) {
+  TempDir dir;
+  ASSERT_EQ(run_cli("generate tiny -q --frames 0:1 -o " + dir / "c_####.vdb"), 0);
+  const std::string in = dir / "c_####.vdb", o = " -o " + dir / "s.blend";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {in + o, "needs --frames A:B"},
+      {in + " --frames 0:2" + o, "c_0002.vdb: no such file (frame 2 of --frames 0:2)"},
+      {in + " --frames 0:1 --render-frame 5" + o, "--render-frame 5: outside --frames 0:1"},
+      {dir / "c_0000.vdb --frames 0:1" + o, "--frames: only for a VDB sequence input"},
+  };
+  for (const auto& [args, want] : cases) {
+    std::string out;
+    EXPECT_EQ(run_cli("blender -q " + args, &out), 1) << args << "\n" << out;
+    EXPECT_NE(out.find(want), std::string::npos) << args << "\n" << out;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "s.blend"));
+}

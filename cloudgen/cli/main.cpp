@@ -70,7 +70,6 @@ std::string human(uint64_t b) {
   return o.str();
 }
 
-
 }  // namespace
 
 /// Test hook (tests/test_cloudgen.cpp): CLOUDGEN_TEST_HOLD=generate pauses at the first progress
