@@ -46,6 +46,23 @@ print(f"openvdb: frame 5 = frame 2 moved 300 m along +x ({len(keys)} voxels, max
       f"velocity (100, 0, 0) m/s within {worst_v:.1e} on every density voxel")
 PY
 
+# A wind toward -z (azimuth 0): velocity (0, 0, -100) in a y-up file, turned like the positions
+# to (0, 100, 0) in a z-up (Blender) file.
+for up in y z; do
+  "$bin/cloudgen" generate tiny -q --up $up --set motion.wind_speed=100 --set motion.wind_direction=0 \
+    --set motion.wind_shear=0 --set motion.flow_speed=0 --frames 1 -o "$tmp/north_$up.vdb"
+done
+$py - "$tmp" <<'PY'
+import sys, pyopenvdb as vdb
+d = sys.argv[1]
+for up, want in (("y", (0.0, 0.0, -100.0)), ("z", (0.0, 100.0, 0.0))):
+    g = vdb.read(f"{d}/north_{up}.vdb", "velocity")
+    assert g.activeVoxelCount() > 0
+    worst = max(max(abs(a - b) for a, b in zip(it.value, want)) for it in g.iterOnValues())
+    assert worst < 1e-3, (up, worst)
+print("openvdb: a wind toward -z is (0, 0, -100) m/s in the y-up file and (0, 100, 0) in the z-up file")
+PY
+
 # 2. Blender plays the files as a volume sequence; Cycles' last frame against the viewer's.
 "$bin/cloudgen" blender "$tmp/c_####.vdb" --frames 2:5 -q -o "$tmp/seq.blend" --size 128x72 --samples 4
 blender -b --factory-startup --python-exit-code 1 --python "$src/tests/blender_sequence.py" -- \
