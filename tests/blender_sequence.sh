@@ -63,6 +63,33 @@ for up, want in (("y", (0.0, 0.0, -100.0)), ("z", (0.0, 100.0, 0.0))):
 print("openvdb: a wind toward -z is (0, 0, -100) m/s in the y-up file and (0, 100, 0) in the z-up file")
 PY
 
+# Frame 0 of the default motion is the static export's density grid: same transform, active
+# voxels and values; the metadata differs only by the sequence's own keys.
+"$bin/cloudgen" generate tiny -q -o "$tmp/static.vdb"
+"$bin/cloudgen" generate tiny -q --frames 0:1 -o "$tmp/zero_#.vdb"
+$py - "$tmp/static.vdb" "$tmp/zero_0.vdb" <<'PY'
+import sys, pyopenvdb as vdb
+a, b = (vdb.read(p, "density") for p in sys.argv[1:3])
+def voxels(g):
+    out = {}
+    for it in g.iterOnValues():
+        lo, hi = it.min, it.max
+        for i in range(lo[0], hi[0] + 1):
+            for j in range(lo[1], hi[1] + 1):
+                for k in range(lo[2], hi[2] + 1):
+                    out[(i, j, k)] = it.value
+    return out
+assert a.transform.info() == b.transform.info(), (a.transform.info(), b.transform.info())
+va, vb = voxels(a), voxels(b)
+assert va == vb, f"{len(set(va) ^ set(vb))} voxels differ in place, or values differ"
+extra = {k for k in set(a.metadata) ^ set(b.metadata) if not k.startswith("file_")}
+seq = {"frame", "time_seconds", "fps", "frame_first", "frame_last"}
+assert all(k in seq or k.startswith("motion.") for k in extra), extra
+same = {k for k in set(a.metadata) & set(b.metadata) if not k.startswith("file_")}
+assert all(a.metadata[k] == b.metadata[k] for k in same), [k for k in same if a.metadata[k] != b.metadata[k]]
+print(f"openvdb: frame 0 holds the static density grid exactly ({len(va)} voxels), plus {len(extra)} sequence keys")
+PY
+
 # 2. Blender plays the files as a volume sequence; Cycles' last frame against the viewer's.
 "$bin/cloudgen" blender "$tmp/c_####.vdb" --frames 2:5 -q -o "$tmp/seq.blend" --size 128x72 --samples 4
 blender -b --factory-startup --python-exit-code 1 --python "$src/tests/blender_sequence.py" -- \
