@@ -402,3 +402,24 @@ TEST(Sequence, BlenderSequenceArgumentsAreChecked) {
   }
   EXPECT_FALSE(std::filesystem::exists(dir / "s.blend"));
 }
+
+// Every staged frame holds a descriptor until the commit: below the hard limit the soft one is
+// raised (100 frames under a soft limit of 64), at the hard limit the run is refused up front,
+// naming it, with nothing written.
+TEST(Sequence, DescriptorLimitIsRaisedOrNamed) {
+  TempDir dir;
+  std::string out;
+  EXPECT_EQ(testutil::run_shell("ulimit -Sn 64 && " + testutil::kCli + " generate tiny -q --frames 0:99 --fps 100 -o " +
+                                    dir / "a/c_####.vdb", &out),
+            0)
+      << out;
+  EXPECT_TRUE(std::filesystem::exists(dir / "a/c_0099.vdb"));
+  EXPECT_EQ(testutil::run_shell("ulimit -n 64 && " + testutil::kCli + " generate tiny -q --frames 0:99 --fps 100 -o " +
+                                    dir / "b/c_####.vdb", &out),
+            1)
+      << out;
+  EXPECT_NE(out.find("100 frames are staged as open files until all are complete, but this process may open only 64 files"),
+            std::string::npos)
+      << out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "b"));
+}
