@@ -32,10 +32,31 @@ names = [g.name for g in vol.grids]
 if "density" not in names:
     raise SystemExit(f"{S['vdb']}: no grid 'density' (grids: {names})")
 vol.render.precision = "FULL"  # NanoVDB half/variable precision would quantise the density
+if "velocity" in names:  # metres per second (cloudgen writes dD/dt): Cycles' motion blur reads it
+    vol.velocity_grid = "velocity"
+    vol.velocity_unit = "SECOND"
+    vol.velocity_scale = 1.0
 vol.render.space = "OBJECT"
 vol.render.step_size = 0.0  # auto: one voxel, times Cycles' step rate
 obj = bpy.data.objects.new("cloud", vol)
 scene.collection.objects.link(obj)
+Q = S.get("sequence")
+if Q:
+    # A VDB sequence (cloud_0000.vdb ... as `cloudgen generate --frames` names it), set up after the
+    # first file's load above (a volume outside the scene would load frame 0). Blender swaps the
+    # file name's frame number: scene frame F shows file (F - frame_start + 1) + frame_offset, so
+    # frame_start = A and frame_offset = A - 1 show file F at scene frame F.
+    vol.is_sequence = True
+    vol.frame_start = Q["first"]
+    vol.frame_offset = Q["first"] - 1
+    vol.frame_duration = Q["count"]
+    vol.sequence_mode = "REPEAT" if Q["loop"] else "CLIP"
+    scene.frame_start = Q["first"]
+    scene.frame_end = Q["first"] + Q["count"] - 1
+    fps = float(Q["fps"])
+    scene.render.fps = max(1, round(fps))
+    scene.render.fps_base = scene.render.fps / fps
+    scene.frame_set(Q["render_frame"])
 # A y-up file stands upright by +90 degrees about x; a z-up file is upright already.
 obj.rotation_euler = (math.pi / 2, 0.0, 0.0) if S["up"] == "y" else (0.0, 0.0, 0.0)
 # OpenVDB's convention puts voxel (i,j,k)'s value at index point (i,j,k), and Blender's object

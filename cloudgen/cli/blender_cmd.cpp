@@ -17,6 +17,7 @@
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
 #include "cloudgen/preset.h"
+#include "cloudgen/sequence.h"
 #include "cloudgen/view.h"
 #include "commands.h"
 
@@ -33,6 +34,8 @@ struct BlenderArgs {
   int samples = 64;
   int volume_bounces = 0;  ///< single scattering, like the viewer's march (docs/blender.md)
   bool quiet = false;
+  std::string frames;  ///< a VDB sequence (input with a # run): its frames A:B
+  int64_t render_frame = -1;  ///< the frame --render renders (default: the first)
 };
 
 /// The blender executable: $CLOUDGEN_BLENDER, else `blender` on PATH.
@@ -109,9 +112,25 @@ void run_blender(const BlenderArgs& a) {
   const std::string script = script_path();
   if (!fs::exists(script)) throw IoError(script + ": the Blender scene script is missing (set CLOUDGEN_SCRIPT_DIR)");
 
-  // A preset is generated first, into a VDB beside the .blend (the scene refers to it).
+  // A VDB sequence (cloud_####.vdb --frames A:B, as `generate --frames` writes it): the scene is
+  // framed on its first frame and Blender plays the files as a volume sequence.
   std::string vdb = a.input;
-  if (fs::path(a.input).extension() != ".vdb") {
+  FrameRange seq;
+  const bool sequence = has_frame_pattern(a.input);
+  if (sequence != !a.frames.empty())
+    throw InputError(sequence ? a.input + ": a VDB sequence (# in the name) needs --frames A:B, the frames to play"
+                              : "--frames: only for a VDB sequence input such as out/cloud_####.vdb");
+  if (a.render_frame >= 0 && !sequence) throw InputError("--render-frame: only for a VDB sequence input");
+  if (sequence) {
+    seq = parse_frames(a.frames);
+    if (a.render_frame >= 0 && (a.render_frame < seq.first || a.render_frame > seq.last))
+      throw InputError("--render-frame " + std::to_string(a.render_frame) + ": outside --frames " + a.frames);
+    for (int64_t f = seq.first; f <= seq.last; ++f)
+      if (!fs::exists(frame_path(a.input, f)))
+        throw InputError(frame_path(a.input, f) + ": no such file (frame " + std::to_string(f) + " of --frames " + a.frames + ")");
+    vdb = frame_path(a.input, seq.first);
+    if (!a.sets.empty()) throw InputError("--set: only a preset input takes overrides; " + a.input + " is a VDB sequence");
+  } else if (fs::path(a.input).extension() != ".vdb") {
     const std::string path = resolve_preset_path(a.input);
     Preset p = load_preset(path, a.sets);
     GenerateOptions go;
@@ -175,6 +194,20 @@ void run_blender(const BlenderArgs& a) {
                             kGroundColor[2] * look.ground_albedo / 0.18}},
                  {"half_extent", 5e4}};
   s["tonemap"] = {{"exposure", look.exposure}, {"operator", look.tonemap}};
+  if (sequence) {
+    double fps = 24;
+    bool loop = false;
+    for (auto& [k, val] : info.metadata) {
+      if (k == "fps") fps = std::strtod(val.c_str(), nullptr);
+      if (k == "motion.loop") loop = val == "true" || val == "1";
+    }
+    if (!(fps > 0)) fps = 24;
+    s["sequence"] = {{"first", seq.first},
+                     {"count", seq.count()},
+                     {"fps", fps},
+                     {"loop", loop},
+                     {"render_frame", a.render_frame >= 0 ? a.render_frame : seq.first}};
+  }
   s["render"] = {{"width", width},
                  {"height", height},
                  {"samples", a.samples},
@@ -241,9 +274,14 @@ void add_blender_command(CLI::App& app, std::function<void()>& run) {
   c->add_option("--volume-bounces", a->volume_bounces, "Cycles volume bounces (default 0: single scattering like the viewer; 4-16 for brighter, multiply scattered clouds)");
   c->add_option("--set", a->sets, "Override a preset key, as for generate (preset inputs only)");
   c->add_flag("-q,--quiet", a->quiet, "No progress or summary");
+  c->add_option("--frames", a->frames,
+                "With a VDB sequence input (out/cloud_####.vdb from `generate --frames`): the frames A:B Blender plays "
+                "as a volume sequence, with its velocity grid for motion blur (docs/motion.md)");
+  c->add_option("--render-frame", a->render_frame, "The frame of the sequence --render renders (default: the first)");
   c->footer("Runs Debian's `blender` headless (package blender; CLOUDGEN_BLENDER overrides the executable) with\n"
             "scripts/blender_scene.py. Example:\n"
-            "  cloudgen blender cumulus -o out/cumulus.blend --render out/cumulus.png --size 320x180 --samples 32");
+            "  cloudgen blender cumulus -o out/cumulus.blend --render out/cumulus.png --size 320x180 --samples 32\n"
+            "  cloudgen blender out/cloud_####.vdb --frames 0:47 -o out/cloud.blend --render out/f12.png --render-frame 12");
   c->callback([a, &run] { run = [a] { run_blender(*a); }; });
 }
 

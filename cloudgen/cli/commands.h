@@ -28,6 +28,22 @@ std::string resolve_preset_path(const std::string& p);
 /// "cumulus" -> presets/cumulus.json when no such file exists in the working folder.
 std::string resolve_preset_path(const std::string& preset);
 
+/// `cloudgen generate`'s options (main.cpp parses them).
+struct GenerateArgs {
+  std::string preset, format, region, max_memory = "16G", seed, up;
+  std::vector<std::string> outputs, sets;
+  uint32_t resolution = 0;
+  int threads = 0;
+  bool quiet = false, no_skip = false, stats = false, mpi = false;
+  std::string frames, fps;  ///< --frames A:B, --fps F (sequence_cmd.cpp)
+  bool loop = false;
+};
+/// generate with --frames / --fps / --loop: the static volume of `p` (read from `preset_path`),
+/// baked into one VDB per frame, all staged in one OutputBatch (sequence_cmd.cpp).
+void run_generate_sequence(const Preset& p, const std::string& preset_path, const GenerateArgs& a);
+/// The CLOUDGEN_TEST_HOLD hook (main.cpp): pauses at `where` until SIGINT/SIGTERM when asked.
+void test_hold(const char* where);
+
 // Scale-out (scale_cmd.cpp): `plan`, `merge`, and generate's MPI path.
 void add_scale_commands(CLI::App& app, std::function<void()>& run);
 /// True with --mpi or when an MPI launcher started this process.

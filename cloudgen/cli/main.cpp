@@ -16,6 +16,7 @@
 #include "cloudgen/exit_codes.h"
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
+#include "cloudgen/motion.h"
 #include "cloudgen/preset.h"
 #include "commands.h"
 
@@ -69,17 +70,12 @@ std::string human(uint64_t b) {
   return o.str();
 }
 
-struct GenerateArgs {
-  std::string preset, format, region, max_memory = "16G", seed, up;
-  std::vector<std::string> outputs, sets;
-  uint32_t resolution = 0;
-  int threads = 0;
-  bool quiet = false, no_skip = false, stats = false, mpi = false;
-};
+}  // namespace
 
 /// Test hook (tests/test_cloudgen.cpp): CLOUDGEN_TEST_HOLD=generate pauses at the first progress
-/// report, =commit pauses with every output staged but none published; each prints a line and
-/// waits for SIGINT/SIGTERM, so a test can interrupt at a known point without sleeping.
+/// report, =commit pauses with every output staged but none published (=frames: a sequence with
+/// its first frame staged); each prints a line and waits for SIGINT/SIGTERM, so a test can
+/// interrupt at a known point without sleeping.
 void test_hold(const char* where) {
   const char* e = std::getenv("CLOUDGEN_TEST_HOLD");
   if (!e || std::string(e) != where) return;
@@ -88,6 +84,8 @@ void test_hold(const char* where) {
   while (!g_cancel) ::usleep(1000);
 }
 
+namespace {
+
 void run_generate(const GenerateArgs& a) {
   std::vector<std::string> sets = a.sets;
   if (!a.seed.empty()) sets.push_back("seed=" + std::to_string(parse_uint(a.seed, "--seed", kMaxSeed)));
@@ -95,6 +93,7 @@ void run_generate(const GenerateArgs& a) {
   const std::string path = resolve_preset(a.preset);
   Preset p = load_preset(path, sets);
   if (a.resolution) rescale(p, a.resolution);
+  if (!a.frames.empty() || !a.fps.empty() || a.loop) return run_generate_sequence(p, path, a);
   if (a.outputs.empty()) throw InputError("-o/--output: give at least one output file (.vdb, .raw, .ktx2, .png, .exr)");
   const ExportOptions& eo = p.export_options;
   std::vector<Format> formats;
@@ -207,13 +206,20 @@ int main(int argc, char** argv) {
   gen->add_flag("--stats", ga->stats, "Print timing and memory even with --quiet");
   gen->add_flag("--mpi", ga->mpi, "Generate on the ranks of an MPI job (implied under mpirun; docs/scale-out.md)");
   gen->add_flag("-q,--quiet", ga->quiet, "No progress bar or summary");
+  gen->add_option("--frames", ga->frames,
+                  "Bake frames A:B of the preset's motion into a VDB sequence, -o out/cloud_####.vdb (#### = the frame "
+                  "number, Blender's naming); frame F is the volume displaced by the motion at F / fps s (docs/motion.md)");
+  gen->add_option("--fps", ga->fps, "Frames per second of --frames (default 24)");
+  gen->add_flag("--loop", ga->loop,
+                "Snap the motion so frame B + 1 equals frame A: whole flow cycles, and whole tiles of wind "
+                "(needs motion.wind_shear = 0; box presets need motion.wind_speed = 0)");
   std::string keys;
   for (const auto& pi : params()) {
     std::string k = pi.pointer.substr(1);
     std::replace(k.begin(), k.end(), '/', '.');
     keys += "  " + k + " (" + pi.range + ", default " + pi.default_value + ")\n";
   }
-  gen->footer("Preset keys (docs/presets.md explains each):\n" + keys);
+  gen->footer("Preset keys (docs/presets.md explains each):\n" + keys + "\n" + motion_help());
   gen->callback([ga, &run] { run = [ga] { run_generate(*ga); }; });
 
   auto vpath = std::make_shared<std::vector<std::string>>();

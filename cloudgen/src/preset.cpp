@@ -251,6 +251,14 @@ std::vector<Spec> build_table() {
         p.view.render.clear();
         for (auto& [k, val] : j.items()) p.view.render.push_back({k, val.is_string() ? val.get<std::string>() : val.dump()});
       });
+  // The `motion` section, from motion.h's one table (the viewer's --set motion.KEY reads it too).
+  const MotionParams motion_defaults;
+  for (const MotionKey& k : motion_keys()) {
+    double MotionParams::*member = k.member;
+    add("/motion/" + k.key, "number", fmt(motion_defaults.*member), k.lo, k.hi,
+        (k.unit.empty() ? "" : "(" + k.unit + ") ") + k.doc + "; used by `--frames` sequences (docs/motion.md).",
+        [member](Preset& p, const json& j, const Index&) { p.motion.*member = j.get<double>(); });
+  }
   return t;
 }
 

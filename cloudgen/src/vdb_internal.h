@@ -27,6 +27,9 @@ openvdb::FloatGrid::Ptr make_grid(const Volume& v, const std::vector<float>& dat
                                   char up = 'y');
 /// The grids write_vdb writes for v (density first, then the detail grids), as empty grids.
 openvdb::GridPtrVec make_empty_grids(const Volume& v, const ExportOptions& o);
+/// The grids write_vdb writes for v (density, baked erosion if asked, then the detail grids);
+/// `erosion_baked` receives what write_grids is to record. `path` names v in messages.
+openvdb::GridPtrVec export_grids(const Volume& v, const ExportOptions& o, const std::string& path, double* erosion_baked);
 /// Stages grids (density first; detail grids get the density's topology dilated by one voxel)
 /// with the computed metadata (extinction, voxel size, phase, up axis, tiling, units), v's
 /// metadata and the creator, in `batch`. `erosion_baked`: the erosion applied to density, or < 0

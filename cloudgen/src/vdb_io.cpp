@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <mutex>
 #include <set>
@@ -151,6 +152,17 @@ bool cubic_voxels(const openvdb::GridBase& g) {
   if (!g.transform().isLinear()) return false;
   const openvdb::Vec3d v = g.voxelSize();
   return v[0] > 0 && std::abs(v[1] - v[0]) <= 1e-9 * v[0] && std::abs(v[2] - v[0]) <= 1e-9 * v[0];
+}
+
+/// Metadata as text for Volume::metadata: doubles with every digit (OpenVDB's str() keeps 6, and a
+/// sequence frame's motion.* values must come back exactly), anything else as OpenVDB writes it.
+std::string meta_text(const openvdb::Metadata& m) {
+  if (const auto* d = dynamic_cast<const openvdb::DoubleMetadata*>(&m)) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", d->value());
+    return buf;
+  }
+  return m.str();
 }
 
 /// An exception's text cut to a length that fits a terminal line (a damaged file once put a
@@ -330,6 +342,7 @@ void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::s
     }
     tbb::parallel_for(size_t(1), grids.size(), [&](size_t i) {
       auto g = openvdb::gridPtrCast<openvdb::FloatGrid>(grids[i]);
+      if (!g) return;  // not a detail channel (a sequence frame's velocity grid keeps its own topology)
       g->tree().topologyUnion(mask->tree());
       g->tree().topologyIntersection(mask->tree());
       g->tree().voxelizeActiveTiles();
@@ -398,7 +411,8 @@ using vdb::computed_meta;
 void init_vdb() { vdb::init(); }
 }  // namespace
 
-void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o, OutputBatch& batch) {
+namespace vdb {
+openvdb::GridPtrVec export_grids(const Volume& v, const ExportOptions& o, const std::string& path, double* erosion_baked) {
   vdb::init();
   const View view = view_of_metadata(v.metadata, path);
   const Look look = look_of_view(view, path);
@@ -433,7 +447,15 @@ void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o,
   tbb::parallel_for(size_t(0), todo.size(), [&](size_t i) {
     grids[i + 1] = vdb::make_grid(v, *todo[i].first, todo[i].second, o.vdb_half, o.vdb_up);
   });
-  vdb::write_grids(v, grids, path, o, batch, all_detail ? look.erosion : 0.0);
+  if (erosion_baked) *erosion_baked = all_detail ? look.erosion : 0.0;
+  return grids;
+}
+}  // namespace vdb
+
+void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o, OutputBatch& batch) {
+  double erosion = 0;
+  const openvdb::GridPtrVec grids = vdb::export_grids(v, o, path, &erosion);
+  vdb::write_grids(v, grids, path, o, batch, erosion);
 }
 
 Volume read_vdb(const std::string& path, uint64_t max_bytes) {
@@ -497,7 +519,7 @@ Volume read_vdb(const std::string& path, uint64_t max_bytes) {
   for (auto it = grid->beginMeta(); it != grid->endMeta(); ++it)
     if (it->first.rfind("file_", 0) != 0 && it->first != "class" && it->first != "name" &&
         !computed_meta().count(it->first))
-      v.metadata.push_back({it->first, it->second->str()});
+      v.metadata.push_back({it->first, vdb::meta_text(*it->second)});
   // Every field cloudgen writes comes back: tiling, and normalised density from physical units.
   if (auto t = grid->getMetadata<openvdb::BoolMetadata>("tiles_xz")) v.tiles_xz = t->value();
   auto units = grid->getMetadata<openvdb::StringMetadata>("density_units");
@@ -600,7 +622,7 @@ SceneInfo read_vdb_scene_info(const std::string& path) {
   for (int a = 0; a < 3; ++a) s.origin[a] = w[a] - 0.5 * s.voxel_size, s.dims[a] = uint32_t(bb.dim()[a]);
   for (auto it = g->beginMeta(); it != g->endMeta(); ++it)
     if (it->first.rfind("file_", 0) != 0 && it->first != "class" && it->first != "name")
-      s.metadata.push_back({it->first, it->second->str()});
+      s.metadata.push_back({it->first, vdb::meta_text(*it->second)});
   file.close();
   return s;
 }

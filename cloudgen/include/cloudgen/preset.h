@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "cloudgen/export_options.h"
+#include "cloudgen/motion.h"
 #include "cloudgen/view.h"
 #include "cloudgen/volume.h"
 #include "noise3d/noise3d.h"
@@ -86,6 +87,8 @@ struct Preset {
   ExportOptions export_options;  ///< export.vdb.* and export.raw.* keys
 
   View view;  ///< optional camera, sun and render.* settings (viewer, `cloudgen blender`, README)
+
+  MotionParams motion;  ///< the `motion` section: wind and flow map of a baked sequence (`--frames`)
 };
 
 /// One entry of the parameter table.
