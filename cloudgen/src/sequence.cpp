@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <limits>
 #include <sstream>
@@ -22,6 +23,15 @@ std::string fmt(double v) {
   s.precision(6);
   s << v;
   return s.str();
+}
+// Shortest text that reads back as the same double (metadata other programs parse).
+std::string exact(double x) {
+  char buf[32];
+  for (int prec = 6; prec <= 17; ++prec) {
+    std::snprintf(buf, sizeof buf, "%.*g", prec, x);
+    if (std::strtod(buf, nullptr) == x) break;
+  }
+  return buf;
 }
 
 int64_t mod(int64_t a, int64_t n) { return ((a % n) + n) % n; }
@@ -117,6 +127,21 @@ MotionBox motion_box(const Volume& v) {
   b.voxel_size = v.voxel_size;
   b.origin = v.origin;
   b.tiles_xz = v.tiles_xz;
+  // A region or tile of a preset measures heights in the whole preset's box (volume_header
+  // records it), so its frames move like the one-process volume's.
+  double min_y = 0, height = 0;
+  bool have_min = false, have_height = false;
+  for (const auto& [k, val] : v.metadata) {
+    char* end = nullptr;
+    double x = std::strtod(val.c_str(), &end);
+    bool ok = !val.empty() && end == val.c_str() + val.size() && std::isfinite(x);
+    if (k == "motion.box_min_y" && ok) min_y = x, have_min = true;
+    if (k == "motion.box_height" && ok && x > 0) height = x, have_height = true;
+  }
+  if (have_min && have_height) {
+    b.origin[1] = min_y;
+    b.dims[1] = uint32_t(std::max(1.0, std::round(height / v.voxel_size)));
+  }
   return b;
 }
 
@@ -245,6 +270,12 @@ MotionFrame bake_frame(const Volume& s, const MotionParams& m, int64_t frame, do
   v.voxel_size = vs;
   v.tiles_xz = s.tiles_xz;
   v.metadata = s.metadata;
+  // The box the heights were measured in travels with the frame (its own box follows the cloud).
+  v.metadata.erase(std::remove_if(v.metadata.begin(), v.metadata.end(),
+                                  [](const auto& kv) { return kv.first == "motion.box_min_y" || kv.first == "motion.box_height"; }),
+                   v.metadata.end());
+  v.metadata.push_back({"motion.box_min_y", exact(f.box.min_y())});
+  v.metadata.push_back({"motion.box_height", exact(f.box.height())});
   v.detail_names = s.detail_names;
   v.occupancy_cell = s.occupancy_cell;
   v.occupancy_padding = s.occupancy_padding;

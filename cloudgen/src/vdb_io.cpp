@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <fstream>
 #include <mutex>
@@ -356,7 +357,8 @@ void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::s
     });
   }
   for (auto& [k, val] : v.metadata)
-    if (!computed_meta().count(k)) density->insertMeta(k, openvdb::StringMetadata(val));
+    if (!computed_meta().count(k) && k != "motion.box_min_y" && k != "motion.box_height")
+      density->insertMeta(k, openvdb::StringMetadata(val));
   // The physical scale any renderer needs to light the cloud like cloudviewer does.
   density->insertMeta("extinction_per_metre", openvdb::DoubleMetadata(extinction));
   density->insertMeta("voxel_size_metres", openvdb::DoubleMetadata(v.voxel_size));
@@ -364,6 +366,12 @@ void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::s
   density->insertMeta("albedo", openvdb::DoubleMetadata(look.albedo));
   density->insertMeta("up_axis", openvdb::StringMetadata(std::string(1, o.vdb_up)));
   density->insertMeta("tiles_xz", openvdb::BoolMetadata(v.tiles_xz));
+  for (auto& [k, val] : v.metadata) {  // the motion's height box (generate.cpp volume_header), as numbers
+    if (k != "motion.box_min_y" && k != "motion.box_height") continue;
+    char* end = nullptr;
+    double x = std::strtod(val.c_str(), &end);
+    if (!val.empty() && end == val.c_str() + val.size() && std::isfinite(x)) density->insertMeta(k, openvdb::DoubleMetadata(x));
+  }
   if (o.vdb_bake_erosion) density->insertMeta("erosion_baked", openvdb::DoubleMetadata(erosion_baked));
   density->insertMeta("density_units",
                       openvdb::StringMetadata(o.vdb_physical ? "extinction_per_metre" : "normalized"));

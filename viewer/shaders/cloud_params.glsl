@@ -82,4 +82,8 @@ struct CloudParams {
   Number flow_up_m;
   Number flow_forward_m;
   Number motion_pad;
+  Number height_min_m;      // box mode: the box heights are measured in (motion, erosion), min y
+  Number height_size_m;     //   relative to the camera, and its height
+  Number height_pad0;
+  Number height_pad1;
 };

@@ -114,13 +114,20 @@ vec3 motion_table_value(Number h, int row) {
   Number f = x - Number(i);
   return mix(motion_texel(i, row), motion_texel(i + 1, row), f);
 }
+// Height fraction of camera-relative p: in the layer, or in box mode in the box heights are
+// measured in (the whole preset's when the file records it: a cropped VDB erodes and moves like
+// the dense volume it came from).
+Number height_fraction(vec3 p) {
+  if (layer_mode()) return volume_uvw(p).y;
+  return (p.y - u_cloud.height_min_m) / u_cloud.height_size_m;
+}
 vec3 motion_at(vec3 p) {
   if (u_cloud.motion_on < 0.5) return vec3(0.0);
-  return motion_table_value(volume_uvw(p).y, 0);
+  return motion_table_value(height_fraction(p), 0);
 }
 vec3 motion_at_previous(vec3 p) {
   if (u_cloud.motion_on < 0.5) return vec3(0.0);
-  return motion_table_value(volume_uvw(p).y, 1);
+  return motion_table_value(height_fraction(p), 1);
 }
 
 // Volume coordinates of the static volume seen at p: volume_uvw(p - D). Shifted in uvw rather than
@@ -134,6 +141,7 @@ vec3 moving_uvw(vec3 p, vec3 motion) { return volume_uvw(p) - motion / volume_uv
 // stays conservative.
 Number cloud_density(vec3 p) {
   vec3 motion = motion_at(p);
+  Number seen_h = height_fraction(p);  // the height where the sample is seen (an altitude rule below)
   vec3 uvw = moving_uvw(p, motion);
   if (uvw.y < 0.0 || uvw.y > 1.0) return 0.0;
   bool tiles = u_cloud.tiles_xz > 0.5;
@@ -152,8 +160,10 @@ Number cloud_density(vec3 p) {
   Number erosion = u_cloud.erosion;
   if (u_cloud.has_detail > 0.5 && erosion > 0.0 && base > 0.0) {
     Number detail = dot(vec3(v.y, v.z, v.w), vec3(0.625, 0.25, 0.125));
-    // Wispy (inverted detail) near the cloud base, billowy higher up (Schneider 2015).
-    detail = mix(1.0 - detail, detail, clamp(uvw.y * 5.0, 0.0, 1.0));
+    // Wispy (inverted detail) near the cloud base, billowy higher up (Schneider 2015): a rule of
+    // the altitude, so taken where the sample is seen, not where the moving cloud came from (a
+    // baked motion frame, which moves the channels, then erodes exactly like the moving volume).
+    detail = mix(1.0 - detail, detail, clamp(seen_h * 5.0, 0.0, 1.0));
     Number e = erosion * detail;
     base = clamp((base - e) / max(1.0 - e, 1e-4), 0.0, 1.0);
   }

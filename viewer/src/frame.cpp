@@ -15,7 +15,7 @@ namespace {
 
 // Motion (cloudgen/motion.glsl): the parameters, the box the march must cover at this time and the
 // large step that keeps occupancy skipping exact while the clouds are displaced.
-void apply_motion(const RenderSettings& s, const glm::dvec3& extent, ref::CloudParams& p) {
+void apply_motion(const RenderSettings& s, bool baked, double height, ref::CloudParams& p) {
   p.march_min_m = p.volume_min_m;
   p.march_size_m = p.volume_size_m;
   p.time_s = s.time;
@@ -28,7 +28,7 @@ void apply_motion(const RenderSettings& s, const glm::dvec3& extent, ref::CloudP
   p.flow_speed_hz = m.flow_speed;
   p.flow_up_m = m.flow_up;
   p.flow_forward_m = m.flow_forward;
-  p.motion_on = s.time != 0 && cloudgen::motion_moves(m) ? 1 : 0;
+  p.motion_on = s.time != 0 && cloudgen::motion_moves(m) && !baked ? 1 : 0;
   if (p.motion_on < 0.5) return;
   // D over the height fraction h in [0, 1], sampled finely: its range (the box grows by it) and its
   // steepest slope G = max |dD/dh| (metres per unit h), both padded by a quarter for what falls
@@ -54,7 +54,7 @@ void apply_motion(const RenderSettings& s, const glm::dvec3& extent, ref::CloudP
   // Occupancy skipping looks cells up at the displaced position q = p - D(h(p)). Along a large step
   // of length L, h changes by at most L / H (H: the height the volume spans), so q moves at most
   // L (1 + G / H): shorten the large step by that factor and the proof in make_frame still holds.
-  double stretch = 1.0 + slope / extent.y;
+  double stretch = 1.0 + slope / height;
   p.large_step_count = std::max(1.0, std::floor(p.large_step_count / stretch));
   double diag = glm::length(p.march_size_m);
   if (p.layer_on < 0.5) p.max_iterations = std::max(p.max_iterations, 4.0 * std::ceil(diag / p.step_m) + 64.0);
@@ -176,7 +176,9 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
     p.coverage_bias = s.coverage;
     p.cloud_type = s.cloud_type;
   }
-  apply_motion(s, size, p);
+  p.height_min_m = vol.height_min - cam.eye.y;
+  p.height_size_m = vol.height_size;
+  apply_motion(s, vol.baked_motion, layer ? size.y : vol.height_size, p);
   if (p.motion_on > 0.5) {
     f.motion_table = motion_table_row(s, s.time);
     f.motion_table.insert(f.motion_table.end(), f.motion_table.begin(), f.motion_table.end());

@@ -42,6 +42,12 @@ struct PreparedVolume {
   std::array<int, 3> occ_dims{{0, 0, 0}};
   std::vector<uint8_t> occ;
   double occupied_fraction = 0;
+  /// The box the motion measures heights in (y, world metres): the whole preset's when the file
+  /// records it (cloudgen's motion.box_min_y / motion.box_height), else this volume's own.
+  double height_min = 0, height_size = 1;
+  /// A frame of a baked motion sequence (its metadata has time_seconds): already displaced, so the
+  /// viewer shows it still.
+  bool baked_motion = false;
   glm::dvec3 size() const { return glm::dvec3(dims[0], dims[1], dims[2]) * voxel_size; }
   glm::dvec3 center() const { return origin + 0.5 * size(); }
 };
