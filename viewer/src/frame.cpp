@@ -69,8 +69,23 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   p.adaptive = s.adaptive ? 1 : 0;
   p.adaptive_start_m = s.adaptive_start > 0 ? s.adaptive_start : 0.25 * max_extent;
   p.adaptive_growth_per_m = s.adaptive_growth > 0 ? s.adaptive_growth : 4.0 / max_extent;
-  p.occupancy_skip = s.occupancy ? 1 : 0;
-  p.light_mode = !s.light_march ? CV_LIGHT_OFF : (s.occupancy && s.occupancy_light ? CV_LIGHT_MARCH_SKIP_EMPTY : CV_LIGHT_MARCH);
+  const bool skipping = s.occupancy && s.skipping != Skipping::None;
+  const bool distance = skipping && s.skipping == Skipping::Distance && !vol.dist.empty();
+  p.occupancy_skip = skipping ? 1 : 0;
+  p.skip_distance = distance ? 1 : 0;
+  // The distance field's empty radius (march.glsl, empty_radius): d cells of the smallest world
+  // cell edge, less the half voxel trilinear density reaches past a non-empty cell.
+  p.df_cell_m = cell_m;
+  p.df_margin_m = 0.5 * min_voxel;
+  p.light_mode = !s.light_march ? CV_LIGHT_OFF : (skipping && s.occupancy_light ? CV_LIGHT_MARCH_SKIP_EMPTY : CV_LIGHT_MARCH);
+  p.df_light = distance && s.occupancy_light ? 1 : 0;
+  p.transmittance_cutoff = s.transmittance_cutoff;
+  p.density_step = s.density_step;
+  p.density_step_below = s.density_step_below;
+  // The light volume: box mode only (layer mode's coverage map does not repeat with the texture).
+  p.light_volume_on = s.light_volume && s.light_march && !layer ? 1 : 0;
+  for (int i = 0; i < 3; ++i)
+    p.light_volume_dims[i] = std::max(1, (vol.dims[size_t(i)] + s.light_volume_scale - 1) / s.light_volume_scale);
   p.light_samples = s.light_samples;
   p.light_step_m = s.light_step > 0 ? s.light_step : 2.5 * min_voxel;
   p.light_growth = s.light_growth;
