@@ -659,6 +659,11 @@ TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
   CV_EXPECT_OFFSET(light_mode);
   CV_EXPECT_OFFSET(powder_strength);
   CV_EXPECT_OFFSET(output_mode);
+  CV_EXPECT_OFFSET(light_volume_dims);
+  CV_EXPECT_OFFSET(light_volume_on);
+  CV_EXPECT_OFFSET(skip_distance);
+  CV_EXPECT_OFFSET(df_light);
+  CV_EXPECT_OFFSET(transmittance_cutoff);
   CV_EXPECT_OFFSET(ground_half_extent_m);
   CV_EXPECT_OFFSET(camera_world_mod_m);
   CV_EXPECT_OFFSET(shadow_samples);

@@ -127,18 +127,18 @@ std::vector<Pass> make_passes() {
   transmittance.fs = "atmosphere_transmittance.frag", transmittance.target = "transmittance";
   transmittance.group = Group::Atmosphere, transmittance.precompute = true;
   p.push_back(transmittance);
-  // The light volume (lighting.glsl), rebuilt only when the sun, the volume or a lighting key changes.
-  Pass light;
-  light.name = "light_volume", light.vs = "fullscreen.vert", light.fs = "light_volume.frag";
-  light.target = "light_volume", light.group = Group::Light, light.light_volume = true;
-  light.enabled = [](const FrameSetup& f) { return f.params.light_volume_on > 0.5; };
-  p.push_back(light);
   Pass ground;
   ground.name = "ground", ground.vs = "ground.vert", ground.fs = "ground.frag", ground.target = "scene";
   ground.group = Group::Ground, ground.mesh = true;
   ground.clear = {{0.f, 0.f, 0.f, 0.f}, {float(CV_NO_HIT), 0.f, 0.f, 0.f}};
   ground.enabled = [](const FrameSetup& f) { return f.params.ground_on > 0.5; };
   p.push_back(ground);
+  // The light volume (lighting.glsl), rebuilt only when the sun, the volume or a lighting key changes.
+  Pass light;
+  light.name = "light_volume", light.vs = "fullscreen.vert", light.fs = "light_volume.frag";
+  light.target = "light_volume", light.group = Group::Light, light.light_volume = true;
+  light.enabled = [](const FrameSetup& f) { return f.params.light_volume_on > 0.5; };
+  p.push_back(light);
   Pass clouds;
   clouds.name = "clouds", clouds.vs = "fullscreen.vert", clouds.fs = "cloud.frag", clouds.target = "hdr";
   clouds.inputs = {{"scene", 0}, {"scene", 1}}, clouds.group = Group::Clouds;
@@ -235,9 +235,10 @@ struct GlRenderer::Impl {
       for (auto& b : built)
         if (b.first == std::make_pair(p.vs, p.fs)) p.program = b.second;
   }
-  void delete_targets() {
+  // All targets, or (a viewport resize) only those the viewport sizes.
+  void delete_targets(bool viewport_only = false) {
     for (Target& t : targets)
-      for (int c = 0; c < 2; ++c) {
+      for (int c = 0; c < 2 && !(viewport_only && t.volume_size); ++c) {
         if (t.fbo[c]) glDeleteFramebuffers(1, &t.fbo[c]);
         for (GLuint x : t.tex[c]) glDeleteTextures(1, &x);
         if (t.depth_tex[c]) glDeleteTextures(1, &t.depth_tex[c]);
@@ -245,11 +246,11 @@ struct GlRenderer::Impl {
         t.tex[c].clear();
       }
     atmo_valid = false;
-    light_key.clear();
+    if (!viewport_only) light_key.clear();
   }
   void resize(int width, int height) {
     if (width == w && height == h) return;
-    delete_targets();
+    delete_targets(true);
     w = width, h = height;
     for (Target& t : targets) {
       if (t.volume_size) continue;  // ensure_volume_target
