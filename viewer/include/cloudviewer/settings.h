@@ -57,7 +57,7 @@ struct RenderSettings {
   int light_samples = 6;
   double light_step = 0;           ///< m; 0 = auto (2.5 voxels)
   double light_growth = 1.5;
-  bool light_volume = false;       ///< look the sun's optical depth up in a precomputed volume
+  bool light_volume = true;        ///< look the sun's optical depth up in a precomputed volume (docs/viewer-speed.md)
   int light_volume_scale = 2;      ///< its texels: the volume's voxels divided by this per axis
   PhaseMode phase = PhaseMode::HenyeyGreenstein;
   double g = 0.3;                  ///< HG asymmetry
