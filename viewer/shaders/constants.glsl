@@ -39,7 +39,7 @@
 #define CV_UNIT_PASS_INPUT1 4
 #define CV_UNIT_COVERAGE 5
 #define CV_UNIT_TRANSMITTANCE 6
-#define CV_UNIT_DISTANCE 7         // R8UI: the occupancy grid's distance field (cells)
+#define CV_UNIT_DISTANCE 7         // R8UI: the coarse grid's distance field (cells)
 #define CV_UNIT_LIGHT_VOLUME 8     // R32F: optical depth toward the sun (render.light_volume)
 
 // Fixed sizes.

@@ -18,7 +18,7 @@
 //   vec4   volume_texel(ivec3 texel)     texel of the RGBA volume, texel inside the grid
 //   vec4   volume_filtered(vec3 uvw)     filtered lookup (the GPU's texture unit; exact on the CPU)
 //   Number occupancy_texel(ivec3 cell)   1 where the coarse cell may hold density, else 0
-//   int    distance_texel(ivec3 cell)    L-infinity cells to the nearest occupied cell (0: occupied)
+//   int    distance_texel(ivec3 cell)    L-infinity cells to the nearest cell holding density (0: it does)
 //   Number light_volume_texel(ivec3 t)   optical depth toward the sun at a light-volume texel
 //   Number light_volume_filtered(vec3 uvw)  its filtered lookup (exact on the CPU)
 //   Number mie_table_value(int i)        i-th entry of the Mie phase table over theta in [0, pi]
@@ -42,9 +42,9 @@
 // just under one coarse cell), so the samples it keeps are the very samples of the plain march and
 // the image does not change; it only skips samples whose density is zero. Distance skipping jumps
 // farther on the same lattice (as far as the distance field proves empty) and takes small steps
-// with the thesis's re-check next to clouds. The density-aware
-// step (density_step > 1) and the early exit (transmittance_cutoff) do change the image: they trade
-// error for time (docs/viewer-speed.md).
+// with the thesis's re-check next to clouds. The density-aware step (density_step > 1) and the
+// early exit (transmittance_cutoff) do change the image: they trade error for time
+// (docs/viewer-speed.md).
 vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, OUT(Number) t_mean) {
   iterations = 0;
   t_mean = 0.0;
