@@ -245,6 +245,17 @@ TEST(ViewerSpeed, LightVolumeFollowsTheLightMarch) {
     EXPECT_LT(t99, scale == 1 ? 0.10 : 0.20) << "scale " << scale;
   }
   EXPECT_LT(worst_mean[0], worst_mean[1]) << "a finer light volume is closer to the march";
+  // A large field gets a coarser grid instead of gigabytes: 512 x 64 x 512 voxels at scale 1 would be
+  // 16.8 M texels; the scale doubles to 2 (2.1 M).
+  PreparedVolume big;
+  big.dims = {512, 64, 512};
+  big.voxel_size = 10;
+  big.occ_dims = {64, 8, 64};
+  RenderSettings s1 = with({"render.light_volume=true", "render.light_volume_scale=1"});
+  FrameSetup fb = make_frame(big, s1, cam, default_sun(cam), 16, 9);
+  EXPECT_EQ(fb.params.light_volume_dims, glm::dvec3(256, 32, 256));
+  EXPECT_LE(fb.params.light_volume_dims.x * fb.params.light_volume_dims.y * fb.params.light_volume_dims.z,
+            double(kMaxLightVolumeTexels));
 }
 
 // The light volume is rebuilt when the sun, the volume or a lighting key changes, never when only

@@ -84,8 +84,18 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   p.density_step_below = s.density_step_below;
   // The light volume: box mode only (layer mode's coverage map does not repeat with the texture).
   p.light_volume_on = s.light_volume && s.light_march && !layer ? 1 : 0;
+  // Its grid: the voxels / scale per axis, the scale doubled until at most kMaxLightVolumeTexels
+  // (16 MiB of R32F; the 128^3 thesis volume fits at scale 1), so a large field neither exhausts
+  // memory nor spends minutes rebuilding on a CPU rasteriser.
+  int lv_scale = s.light_volume_scale;
+  auto lv_texels = [&](int sc) {
+    double n = 1;
+    for (int i = 0; i < 3; ++i) n *= double(std::max(1, (vol.dims[size_t(i)] + sc - 1) / sc));
+    return n;
+  };
+  while (lv_texels(lv_scale) > double(kMaxLightVolumeTexels)) lv_scale *= 2;
   for (int i = 0; i < 3; ++i)
-    p.light_volume_dims[i] = std::max(1, (vol.dims[size_t(i)] + s.light_volume_scale - 1) / s.light_volume_scale);
+    p.light_volume_dims[i] = std::max(1, (vol.dims[size_t(i)] + lv_scale - 1) / lv_scale);
   p.light_samples = s.light_samples;
   p.light_step_m = s.light_step > 0 ? s.light_step : 2.5 * min_voxel;
   p.light_growth = s.light_growth;

@@ -91,7 +91,7 @@ std::vector<ParamDef> build() {
   t.push_back(real("light_step", &RenderSettings::light_step, 0, 1e6, "first light step, m (0 = 2.5 voxels)"));
   t.push_back(real("light_growth", &RenderSettings::light_growth, 1, 4, "each light step is this many times the previous"));
   t.push_back(boolean("light_volume", &RenderSettings::light_volume, "box mode: look the sun's optical depth up in a precomputed 3D texture (rebuilt when the sun, the volume or a lighting key changes) instead of marching toward the sun per sample"));
-  t.push_back(integer("light_volume_scale", &RenderSettings::light_volume_scale, 1, 16, "light volume texels: the volume's voxels divided by this on each axis"));
+  t.push_back(integer("light_volume_scale", &RenderSettings::light_volume_scale, 1, 16, "light volume texels: the volume's voxels divided by this on each axis (doubled until at most 4 M texels)"));
   t.push_back(enumeration("phase", &RenderSettings::phase, {"none", "hg", "mie"}, "phase function: none (isotropic), Henyey-Greenstein, Mie table"));
   t.push_back(real("g", &RenderSettings::g, -0.99, 0.99, "Henyey-Greenstein asymmetry"));
   t.push_back(real("powder", &RenderSettings::powder, 0, 1, "strength of the powder term 1 - exp(-c d)"));

@@ -125,6 +125,10 @@ Camera default_camera(const PreparedVolume& vol, const RenderSettings& s, double
 /// camera-relative view (camera at the origin).
 glm::dmat4 view_projection(const Camera& cam, int width, int height);
 
+/// The light volume (render.light_volume) never has more texels than this: make_frame doubles
+/// render.light_volume_scale until it fits.
+constexpr int kMaxLightVolumeTexels = 1 << 22;
+
 struct FrameSetup {
   int width = 0, height = 0;
   Camera camera;
