@@ -123,7 +123,9 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, O
     if (adaptive) t += step_len; else n += lattice_steps;
     if (skipping) {
       since_check += lattice_steps;
-      if (since_check >= k) {
+      // Distance skipping re-reads the field after every empty sample too (one integer fetch, cheaper
+      // than the density's filtered one), so a gap between clouds is jumped as soon as it starts.
+      if (since_check >= k || (distance && density <= 0.0)) {
         // The small steps add up to one large step: re-read the coarse grid.
         since_check = 0;
         Number t_next = adaptive ? t : t0 + Number(n) * dt;
