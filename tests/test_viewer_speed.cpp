@@ -5,11 +5,16 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <iostream>
 #include <memory>
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "cloudviewer/app.h"
 
 #include "cloudviewer/image.h"
 #include "cloudviewer/renderer.h"
@@ -300,4 +305,30 @@ TEST(ViewerSpeed, LightVolumeRebuildsOnSunChangeNotOnCameraMove) {
   off.light_volume = false;
   r.render(make_frame(vol, off, moved, later, 320, 180));
   EXPECT_EQ(r.light_volume_builds(), 4) << "off: never built";
+}
+
+// A track key may carry its own settings (the view from below marches at most 2133 m); a bad one
+// is refused before OpenGL, naming the key's JSON pointer.
+TEST(ViewerSpeed, TrackKeysCarryTheirOwnSettings) {
+  std::filesystem::path dir = std::filesystem::temp_directory_path() / "cv_speed_track";
+  std::filesystem::create_directories(dir);
+  auto track = [&](const std::string& set) {
+    std::string path = (dir / "t.json").string();
+    std::ofstream(path) << R"({"space": "volume", "keys": [{"name": "a", "eye": [0.5, 0.5, -1], "target": [0.5, 0.5, 0.5],
+                          "set": [)" << set << R"(]}], "configs": [{"name": "c", "set": []}]})";
+    return path;
+  };
+  std::ostringstream out, err;
+  int code = run_cli({"cloudviewer", "synthetic:sphere", "--headless", "--size", "16x9", "--bench",
+                      track("\"render.nope=1\"")}, out, err);
+  EXPECT_EQ(code, 1);
+  EXPECT_NE(err.str().find("/keys/0/set/0"), std::string::npos) << err.str();
+  EXPECT_NE(err.str().find("render.nope"), std::string::npos) << err.str();
+  std::ostringstream out2, err2;
+  code = run_cli({"cloudviewer", "synthetic:sphere", "--headless", "--size", "16x9", "--bench",
+                  track("\"render.max_distance=10\""), "--bench-repeat", "1"}, out2, err2);
+  EXPECT_EQ(code, 0) << err2.str();
+  // At most 10 m of march: the sphere, 300 m away, is not reached, so no loop trips at all.
+  EXPECT_NE(out2.str().find(" 0.0 "), std::string::npos) << out2.str();
+  std::filesystem::remove_all(dir);
 }

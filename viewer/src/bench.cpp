@@ -112,7 +112,11 @@ BenchPlan parse_track(const std::string& text, const std::string& where, const O
     for (size_t si = 0; si < sets.size(); ++si) {
       if (!sets[si].is_string()) throw InputError(p + "/set/" + std::to_string(si) + ": expected a string");
       RenderSettings check = o.settings;
-      apply_setting(check, sets[si].get<std::string>());  // a bad key fails here, before OpenGL
+      try {
+        apply_setting(check, sets[si].get<std::string>());  // a bad key fails here, before OpenGL
+      } catch (const InputError& e) {
+        throw InputError(p + "/set/" + std::to_string(si) + ": " + e.what());
+      }
       f.sets.push_back(sets[si].get<std::string>());
     }
     keys.push_back(f);
