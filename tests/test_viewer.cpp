@@ -295,7 +295,7 @@ TEST(ViewerRender, OccupancySkippingDoesNotChangeTheImage) {
     for (bool gl : {true, false}) {
       std::string what = std::string(gl ? "GL" : "CPU") + " cell " + std::to_string(g.cell) + " padding " +
                          std::to_string(g.padding);
-      RenderSettings on = with({"render.occupancy=true", "render.steps=128"});
+      RenderSettings on = with({"render.occupancy=true", "render.skipping=thesis", "render.steps=128"});
       on.occupancy_light = g.padding == 1;  // the light march's skipping too, on the tighter grids
       RenderSettings off = with({"render.occupancy=false", "render.steps=128"});
       FrameSetup fon = frame_for(vol, on, 160, 90), foff = frame_for(vol, off, 160, 90);
@@ -335,7 +335,8 @@ TEST(ViewerRender, OccupancyComparisonCatchesMissedIsolatedVoxels) {
   }
   for (int padding : {0, 1, 2}) {
     PreparedVolume vol = prepare_volume(v, 4, padding);
-    RenderSettings on = with({"render.sigma_t=0.5", "render.steps=256", "render.ground=false"});
+    // The thesis scheme relies on the padding (distance skipping does not: test_viewer_speed.cpp).
+    RenderSettings on = with({"render.sigma_t=0.5", "render.steps=256", "render.ground=false", "render.skipping=thesis"});
     RenderSettings off = on;
     off.occupancy = false;
     Camera cam;
@@ -659,6 +660,11 @@ TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
   CV_EXPECT_OFFSET(light_mode);
   CV_EXPECT_OFFSET(powder_strength);
   CV_EXPECT_OFFSET(output_mode);
+  CV_EXPECT_OFFSET(light_volume_dims);
+  CV_EXPECT_OFFSET(light_volume_on);
+  CV_EXPECT_OFFSET(skip_distance);
+  CV_EXPECT_OFFSET(df_light);
+  CV_EXPECT_OFFSET(transmittance_cutoff);
   CV_EXPECT_OFFSET(ground_half_extent_m);
   CV_EXPECT_OFFSET(camera_world_mod_m);
   CV_EXPECT_OFFSET(shadow_samples);

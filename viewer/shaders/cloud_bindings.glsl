@@ -14,3 +14,9 @@ vec2 coverage_texel(ivec2 texel) { return texelFetch(s_coverage, texel, 0).rg; }
 layout(binding = CV_UNIT_MOTION) uniform sampler2D s_motion;        // RGBA32F: D(h) for this and the last frame
 vec3 motion_texel(int i, int row) { return texelFetch(s_motion, ivec2(i, row), 0).xyz; }
 ivec2 coverage_size() { return textureSize(s_coverage, 0); }
+// Distance skipping and the light volume (march.glsl, lighting.glsl).
+layout(binding = CV_UNIT_DISTANCE) uniform usampler3D s_distance;    // R8UI: cells to the nearest cell holding density
+layout(binding = CV_UNIT_LIGHT_VOLUME) uniform sampler3D s_light_volume;  // R32F: optical depth toward the sun
+int distance_texel(ivec3 cell) { return int(texelFetch(s_distance, cell, 0).r); }
+Number light_volume_texel(ivec3 texel) { return texelFetch(s_light_volume, texel, 0).r; }
+Number light_volume_filtered(vec3 uvw) { return texture(s_light_volume, uvw).r; }

@@ -45,6 +45,16 @@ struct CloudParams {
   Number frame_index;       // jitter pattern
   Number exact_filter;      // 1: trilinear by hand from texelFetch
   Number output_mode;       // CV_OUTPUT_*
+  // Distance skipping, early exit, density-aware step, light volume (docs/viewer-speed.md).
+  vec3 light_volume_dims;   Number light_volume_on;  // texels of the optical-depth volume; 1: look tau up
+  Number skip_distance;     // 1: large steps as long as the distance field allows (with occupancy_skip)
+  Number df_cell_m;         // coarse cell edge in world metres (the smallest per axis)
+  Number df_margin_m;       // half a voxel: how far trilinear density reaches past a non-empty cell
+  Number df_light;          // 1: the light and shadow marches skip samples the field proves empty
+  Number transmittance_cutoff;  // stop the primary march below this transmittance
+  Number density_step;      // small steps per step after a sample below density_step_below (1: off)
+  Number density_step_below;
+  Number speed_unused;      // (keeps the 16-byte group)
   // Ground and sky.
   Number ground_y_m;        // ground height relative to the camera
   Number ground_albedo;

@@ -39,10 +39,12 @@
 #define CV_UNIT_PASS_INPUT1 4
 #define CV_UNIT_COVERAGE 5
 #define CV_UNIT_TRANSMITTANCE 6
-#define CV_UNIT_PASS_INPUT2 7
-#define CV_UNIT_PASS_INPUT3 8
-#define CV_UNIT_MOTION 9
-#define CV_UNIT_PASS_INPUT4 10
+#define CV_UNIT_DISTANCE 7         // R8UI: the coarse grid's distance field (cells)
+#define CV_UNIT_LIGHT_VOLUME 8     // R32F: optical depth toward the sun (render.light_volume)
+#define CV_UNIT_PASS_INPUT2 9
+#define CV_UNIT_PASS_INPUT3 10
+#define CV_UNIT_MOTION 11
+#define CV_UNIT_PASS_INPUT4 12
 
 // Fixed sizes.
 #define CV_COVERAGE_MAP_SIZE 256   // layer-mode coverage map, texels per side
@@ -59,7 +61,7 @@
 #define CV_SKY_SAMPLES 32           // per-pixel single-scattering samples along a view ray
 
 // Marching.
-#define CV_TRANSMITTANCE_EPSILON 1e-3  // stop marching below this transmittance
+#define CV_TRANSMITTANCE_EPSILON 1e-3  // default render.transmittance_cutoff: stop marching below this
 #define CV_NO_HIT 1e30                 // scene distance of a pixel that sees the sky
 #define CV_NO_HIT_TEST 1e29            // t >= this means "no hit" (robust to float rounding of CV_NO_HIT)
 

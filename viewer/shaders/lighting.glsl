@@ -1,7 +1,37 @@
 // Lighting of the medium and the ground: Beer-Lambert with the powder term (Hogfeldt 2016, thesis
 // 2.5), energy-conserving step integration (S. Hillaire, "Physically Based and Unified Volumetric
 // Rendering in Frostbite", SIGGRAPH 2015), the light march toward the sun, cloud shadows on the
-// ground. Needs common.glsl, phase.glsl, medium.glsl and `u_cloud`.
+// ground, and the distance field's empty radius (the primary, light and shadow marches skip by it).
+// Needs common.glsl, phase.glsl, medium.glsl and `u_cloud`.
+
+// Distance skipping (render.skipping=distance, docs/viewer-speed.md): the coarse grid's distance
+// field d (L-infinity cells to the nearest cell that holds density, before padding; exact,
+// volume_prep.cpp) at the cell holding p, found like occupied() finds its cell. A cell at distance
+// d >= 1 is separated from every cell holding density by d - 1 whole cells, and trilinear density
+// reaches half a voxel (df_margin_m) past such a cell, so no point within (d - 1) * cell - margin of
+// any point of that cell (in L-infinity, so along any straight segment) has density > 0.
+int empty_cells(vec3 p) {
+  vec3 c = moving_uvw(p, motion_at(p)) * u_cloud.volume_dims / u_cloud.occ_cell_voxels;  // as occupied()
+  ivec3 cell = ivec3(floor(c));
+  ivec3 n = ivec3(u_cloud.occ_dims);
+  bool tiles = u_cloud.tiles_xz > 0.5;
+  cell.x = tiles ? wrap_index(cell.x, n.x) : clamp_index(cell.x, n.x);
+  cell.y = clamp_index(cell.y, n.y);
+  cell.z = tiles ? wrap_index(cell.z, n.z) : clamp_index(cell.z, n.z);
+  return distance_texel(cell);
+}
+
+// The distance from p within which the density is provably 0 (metres; 0 next to density).
+// The bound holds in L-infinity, so along any straight segment. In layer mode a straight ray bends
+// away from the layer's flat texture coordinates by at most r^2 / 2R (layer_altitude): r - r^2 / 2R
+// plus that bend stays within r.
+Number empty_radius(vec3 p) {
+  int d = empty_cells(p);
+  if (d <= 1) return 0.0;
+  Number r = Number(d - 1) * u_cloud.df_cell_m - u_cloud.df_margin_m;
+  if (layer_mode()) r -= r * r / (2.0 * u_cloud.earth_radius_m);
+  return max(r, 0.0);
+}
 
 // Beer-Lambert transmittance of optical depth tau (dimensionless).
 Number beer_lambert(Number tau) { return exp(-tau); }
@@ -25,23 +55,73 @@ Number light_optical_depth(vec3 p) {
   Number step_len = u_cloud.light_step_m;
   Number growth = u_cloud.light_growth;
   bool skip_empty = int(u_cloud.light_mode) == CV_LIGHT_MARCH_SKIP_EMPTY;
+  bool by_distance = skip_empty && u_cloud.df_light > 0.5;
   Number s = 0.0;
   Number tau = 0.0;
+  Number empty_until = -1.0;  // distance field: samples before this distance along the ray are empty
   for (int i = 0; i < samples; ++i) {
-    vec3 q = p + sun * (s + 0.5 * step_len);
+    Number at = s + 0.5 * step_len;
+    vec3 q = p + sun * at;
     // The same coarse grid also spares the light march its texture reads in empty cells, where
-    // the density is exactly 0 (an addition to the thesis, `render.occupancy_light`).
-    if (!skip_empty || occupied(q)) tau += cloud_density(q) * u_cloud.sigma_t_per_m * step_len;
+    // the density is exactly 0 (an addition to the thesis, `render.occupancy_light`); the distance
+    // field spares it the reads of every sample within one empty radius of a read.
+    if (by_distance) {
+      if (at >= empty_until) {
+        Number r = empty_radius(q);
+        if (r > 0.0) empty_until = at + 0.999 * r;
+        else tau += cloud_density(q) * u_cloud.sigma_t_per_m * step_len;
+      }
+    } else if (!skip_empty || occupied(q)) {
+      tau += cloud_density(q) * u_cloud.sigma_t_per_m * step_len;
+    }
     s += step_len;
     step_len *= growth;
   }
   return tau;
 }
 
+// Light volume (render.light_volume): the optical depth of light_optical_depth at the centres of a
+// light_volume_dims grid over the box, built once per sun / volume / lighting change (the
+// light_volume pass; the CPU reference builds the same grid in double precision), then looked up
+// trilinearly instead of marching. Box mode only (layer mode's coverage map does not repeat with
+// the texture). The texel's position in camera-relative metres:
+vec3 light_volume_position(ivec3 texel) {
+  return u_cloud.volume_min_m + (vec3(texel) + 0.5) / u_cloud.light_volume_dims * u_cloud.volume_size_m;
+}
+
+// Trilinear from texel fetches, wrapped in x/z for tiling volumes, clamped otherwise (the texture
+// unit's GL_LINEAR with the light volume's wrap modes; exact_filter and the CPU reference).
+Number light_volume_trilinear(vec3 uvw) {
+  ivec3 n = ivec3(u_cloud.light_volume_dims);
+  bool tiles = u_cloud.tiles_xz > 0.5;
+  vec3 x = uvw * vec3(n) - 0.5;
+  vec3 fl = floor(x);
+  vec3 f = x - fl;
+  ivec3 i0 = ivec3(fl);
+  Number acc = 0.0;
+  for (int k = 0; k < 8; ++k) {
+    ivec3 o = ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
+    ivec3 i = i0 + o;
+    i.x = tiles ? wrap_index(i.x, n.x) : clamp_index(i.x, n.x);
+    i.y = clamp_index(i.y, n.y);
+    i.z = tiles ? wrap_index(i.z, n.z) : clamp_index(i.z, n.z);
+    vec3 w = mix(vec3(1.0) - f, f, vec3(o));
+    acc += (w.x * w.y * w.z) * light_volume_texel(i);
+  }
+  return acc;
+}
+
+Number light_volume_tau(vec3 p) {
+  vec3 uvw = volume_uvw(p);
+  return u_cloud.exact_filter > 0.5 ? light_volume_trilinear(uvw) : light_volume_filtered(uvw);
+}
+
 // Radiance scattered toward the viewer at p per unit sigma_s: sun irradiance * phase *
 // Beer(tau) * powder mix + ambient sky radiance.
 vec3 inscattered_radiance(vec3 p, Number phase) {
-  Number tau = int(u_cloud.light_mode) != CV_LIGHT_OFF ? light_optical_depth(p) : 0.0;
+  Number tau = 0.0;
+  if (int(u_cloud.light_mode) != CV_LIGHT_OFF)
+    tau = u_cloud.light_volume_on > 0.5 ? light_volume_tau(p) : light_optical_depth(p);
   Number powder = mix(1.0, powder_term(tau, u_cloud.powder_c), u_cloud.powder_strength);
   vec3 sun = sun_color_at(p) * (u_cloud.sun_radiance * phase * beer_lambert(tau) * powder);
   // Isotropic ambient radiance: the phase function integrates to 1, so it scatters as it is.
@@ -60,8 +140,20 @@ Number sun_shadow_transmittance(vec3 p) {
   int samples = int(u_cloud.shadow_samples);
   Number seg = (tb.y - tb.x) / Number(samples);
   Number tau = 0.0;
+  bool by_distance = u_cloud.df_light > 0.5;
+  Number empty_until = -1.0;  // as in light_optical_depth: samples before this are provably empty
   for (int i = 0; i < samples; ++i) {
-    tau += cloud_density(p + sun * (tb.x + (Number(i) + 0.5) * seg));
+    Number at = tb.x + (Number(i) + 0.5) * seg;
+    vec3 q = p + sun * at;
+    if (by_distance) {
+      if (at < empty_until) continue;
+      Number r = empty_radius(q);
+      if (r > 0.0) {
+        empty_until = at + 0.999 * r;
+        continue;
+      }
+    }
+    tau += cloud_density(q);
   }
   return exp(-tau * seg * u_cloud.sigma_t_per_m);
 }

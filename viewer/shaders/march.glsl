@@ -5,7 +5,8 @@
 //   phase.glsl      phase functions
 //   cloud_type.glsl cloud-type height gradients (cloudgen/include/cloudgen, shared with cloudgen)
 //   medium.glsl     density, box and layer placement, occupancy
-//   lighting.glsl   Beer-Lambert, powder, step integration, light march, ground lighting
+//   lighting.glsl   distance-field radius, Beer-Lambert, powder, step integration, light march and
+//                   light volume, ground lighting
 //   march.glsl      this file
 //   sky.glsl        background sky and aerial perspective
 //   compose.glsl    one pixel of the cloud pass: march, fade, debug outputs, background
@@ -17,6 +18,9 @@
 //   vec4   volume_texel(ivec3 texel)     texel of the RGBA volume, texel inside the grid
 //   vec4   volume_filtered(vec3 uvw)     filtered lookup (the GPU's texture unit; exact on the CPU)
 //   Number occupancy_texel(ivec3 cell)   1 where the coarse cell may hold density, else 0
+//   int    distance_texel(ivec3 cell)    L-infinity cells to the nearest cell holding density (0: it does)
+//   Number light_volume_texel(ivec3 t)   optical depth toward the sun at a light-volume texel
+//   Number light_volume_filtered(vec3 uvw)  its filtered lookup (exact on the CPU)
 //   Number mie_table_value(int i)        i-th entry of the Mie phase table over theta in [0, pi]
 //   vec2   coverage_texel(ivec2 texel)   layer coverage map: R coverage, G cloud type, in [0, 1]
 //   ivec2  coverage_size()               size of the coverage map in texels
@@ -37,7 +41,11 @@
 // covered length: a uniform slab gives exactly exp(-sigma*d) for every jitter and step.
 // Occupancy skipping moves by whole multiples of the small step (the large step is k small steps,
 // just under one coarse cell), so the samples it keeps are the very samples of the plain march and
-// the image does not change; it only skips samples whose density is zero.
+// the image does not change; it only skips samples whose density is zero. Distance skipping jumps
+// farther on the same lattice (as far as the distance field proves empty) and takes small steps
+// with the thesis's re-check next to clouds. The density-aware step (density_step > 1) and the
+// early exit (transmittance_cutoff) do change the image: they trade error for time
+// (docs/viewer-speed.md).
 vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, OUT(Number) t_mean) {
   iterations = 0;
   t_mean = 0.0;
@@ -56,6 +64,9 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, O
   Number large = Number(k) * dt;
   bool adaptive = u_cloud.adaptive > 0.5;
   bool skipping = u_cloud.occupancy_skip > 0.5;
+  bool distance = skipping && u_cloud.skip_distance > 0.5;
+  int sparse = max(int(u_cloud.density_step), 1);  // density-aware step: lattice steps per sparse step
+  bool sparse_next = false;                        // the last sample was below density_step_below
   Number sigma_scale = u_cloud.sigma_t_per_m;
   Number albedo = u_cloud.albedo;
   Number phase = phase_function(dot(rd, u_cloud.sun_dir));
@@ -67,21 +78,37 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, O
   int since_check = 0;  // small steps since the coarse grid was last read
   for (int it = 0; it < max_iterations; ++it) {
     if (!adaptive) t = t0 + Number(n) * dt;
-    if (t >= t1 || transmittance < CV_TRANSMITTANCE_EPSILON) break;
+    if (t >= t1 || transmittance < u_cloud.transmittance_cutoff) break;
     iterations += 1;
     if (large_mode) {
-      if (occupied(rd * t)) {
-        // Entered an occupied coarse cell: step back one large step, continue with small steps.
+      // Thesis: one large step (k small steps, under one cell) per empty cell. Distance: as many
+      // small steps as fit in the empty radius (k of them at d = 2), so the samples kept stay on
+      // the plain march's lattice.
+      int jump = k;
+      bool empty = true;
+      if (distance) {
+        jump = int(floor(0.999 * empty_radius(rd * t) / dt));
+        empty = jump >= 1;
+      } else {
+        empty = !occupied(rd * t);
+      }
+      if (!empty) {
+        // Next to density: small steps. The thesis steps back one large step first; a distance
+        // jump was proven empty over its whole length, so stepping back would re-read zeros.
         large_mode = false;
         since_check = 0;
-        if (adaptive) t = max(t - large, t0); else n = max(n - k, 0);
+        if (!distance) {
+          if (adaptive) t = max(t - large, t0); else n = max(n - k, 0);
+        }
       } else {
-        if (adaptive) t += large; else n += k;
+        if (adaptive) t += Number(jump) * dt; else n += jump;
       }
       continue;
     }
     Number step_len = dt;
     if (adaptive) step_len = dt * (1.0 + u_cloud.adaptive_growth_per_m * max(t - u_cloud.adaptive_start_m, 0.0));
+    int lattice_steps = sparse_next ? sparse : 1;
+    step_len *= Number(lattice_steps);
     Number seg = min(step_len, t1 - t);
     vec3 p = rd * (t + jitter * seg);
     Number density = cloud_density(p);
@@ -93,14 +120,17 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, O
       t_weighted += transmittance * (1.0 - step_transmittance) * (t + jitter * seg);
       transmittance *= step_transmittance;
     }
-    if (adaptive) t += step_len; else n += 1;
+    sparse_next = sparse > 1 && density < u_cloud.density_step_below;
+    if (adaptive) t += step_len; else n += lattice_steps;
     if (skipping) {
-      since_check += 1;
-      if (since_check >= k) {
+      since_check += lattice_steps;
+      // Distance skipping re-reads the field after every empty sample too (one integer fetch, cheaper
+      // than the density's filtered one), so a gap between clouds is jumped as soon as it starts.
+      if (since_check >= k || (distance && density <= 0.0)) {
         // The small steps add up to one large step: re-read the coarse grid.
         since_check = 0;
         Number t_next = adaptive ? t : t0 + Number(n) * dt;
-        if (!occupied(rd * t_next)) large_mode = true;
+        if (distance ? empty_radius(rd * t_next) >= dt : !occupied(rd * t_next)) large_mode = true;
       }
     }
   }

@@ -36,6 +36,7 @@ struct CpuShader {
   const TransmittanceLut& lut;
   const ref::AtmosphereParams& u_atmo;
   const std::vector<dvec3>* motion = nullptr;  // FrameSetup::motion_table (2 rows)
+  const std::vector<double>* light_volume = nullptr;  ///< light_volume_dims texels, x fastest
 
   CpuShader(const ref::CloudParams& p, const PreparedVolume& v, const std::vector<float>& m, const TransmittanceLut& t,
             const std::vector<dvec3>* motion_table = nullptr)
@@ -51,6 +52,14 @@ struct CpuShader {
   Number occupancy_texel(ivec3 c) const {
     return vol.occ[(size_t(c.z) * vol.occ_dims[1] + c.y) * vol.occ_dims[0] + c.x];
   }
+  int distance_texel(ivec3 c) const {
+    return vol.dist[(size_t(c.z) * vol.occ_dims[1] + c.y) * vol.occ_dims[0] + c.x];
+  }
+  Number light_volume_texel(ivec3 t) const {
+    const ivec3 n = ivec3(u_cloud.light_volume_dims);
+    return (*light_volume)[(size_t(t.z) * n.y + t.y) * n.x + t.x];
+  }
+  Number light_volume_filtered(vec3 uvw) { return light_volume_trilinear(uvw); }
   Number mie_table_value(int i) const { return mie[size_t(i)]; }
   vec2 coverage_texel(ivec2 t) const {
     const float* c = &coverage_map()[(size_t(t.y) * CV_COVERAGE_MAP_SIZE + size_t(t.x)) * 2];
@@ -122,6 +131,25 @@ const TransmittanceLut& no_lut() {
 }
 
 }  // namespace
+
+std::vector<double> build_light_volume_cpu(const PreparedVolume& vol, const ref::CloudParams& params) {
+  const glm::ivec3 n = glm::ivec3(params.light_volume_dims);
+  std::vector<double> tau(size_t(n.x) * n.y * n.z, 0.0);
+  tbb::parallel_for(0, n.z, [&](int z) {
+    CpuShader sh(params, vol, mie_phase_table(), no_lut());
+    for (int y = 0; y < n.y; ++y)
+      for (int x = 0; x < n.x; ++x)
+        tau[(size_t(z) * n.y + y) * n.x + x] = sh.light_optical_depth(sh.light_volume_position(ivec3(x, y, z)));
+  });
+  return tau;
+}
+
+double reference_light_optical_depth(const PreparedVolume& vol, const ref::CloudParams& params, glm::dvec3 p,
+                                     const std::vector<double>* light_volume) {
+  CpuShader sh(params, vol, mie_phase_table(), no_lut());
+  sh.light_volume = light_volume;
+  return light_volume ? sh.light_volume_tau(p) : sh.light_optical_depth(p);
+}
 
 double reference_phase(PhaseMode mode, double g, double cos_theta) {
   ref::CloudParams p{};
@@ -236,8 +264,12 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
   const ref::CloudParams& P = frame.params;
   Lookups look(frame);
   Buffer hdr(w, h);
+  // The light volume, when on: the same texels the light_volume pass computes, in double precision.
+  std::vector<double> light_volume;
+  if (P.light_volume_on > 0.5) light_volume = build_light_volume_cpu(vol, P);
   tbb::parallel_for(0, h, [&](int y) {
     CpuShader sh(P, vol, mie, look.lut, &frame.motion_table);
+    sh.light_volume = &light_volume;
     for (int x = 0; x < w; ++x) {
       dvec3 rd = sh.pixel_ray(frame.inv_view_proj, dvec2(x + 0.5, y + 0.5), dvec2(w, h));
       double t_scene;

@@ -30,6 +30,12 @@ void apply_motion(const RenderSettings& s, bool baked, double height, ref::Cloud
   p.flow_forward_m = m.flow_forward;
   p.motion_on = s.time != 0 && cloudgen::motion_moves(m) && !baked ? 1 : 0;
   if (p.motion_on < 0.5) return;
+  // Moving clouds: the distance field's jumps are proven for the still volume, and the light volume
+  // would need a rebuild every frame; both give way to the thesis scheme (made exact below) and
+  // the per-sample light march.
+  p.skip_distance = 0;
+  p.df_light = 0;
+  p.light_volume_on = 0;
   // D over the height fraction h in [0, 1], sampled finely: its range (the box grows by it) and its
   // steepest slope G = max |dD/dh| (metres per unit h), both padded by a quarter for what falls
   // between samples.
@@ -128,8 +134,33 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   p.adaptive = s.adaptive ? 1 : 0;
   p.adaptive_start_m = s.adaptive_start > 0 ? s.adaptive_start : 0.25 * max_extent;
   p.adaptive_growth_per_m = s.adaptive_growth > 0 ? s.adaptive_growth : 4.0 / max_extent;
-  p.occupancy_skip = s.occupancy ? 1 : 0;
-  p.light_mode = !s.light_march ? CV_LIGHT_OFF : (s.occupancy && s.occupancy_light ? CV_LIGHT_MARCH_SKIP_EMPTY : CV_LIGHT_MARCH);
+  const bool skipping = s.occupancy && s.skipping != Skipping::None;
+  const bool distance = skipping && s.skipping == Skipping::Distance && !vol.dist.empty();
+  p.occupancy_skip = skipping ? 1 : 0;
+  p.skip_distance = distance ? 1 : 0;
+  // The distance field's empty radius (march.glsl, empty_radius): d cells of the smallest world
+  // cell edge, less the half voxel trilinear density reaches past a non-empty cell.
+  p.df_cell_m = cell_m;
+  p.df_margin_m = 0.5 * min_voxel;
+  p.light_mode = !s.light_march ? CV_LIGHT_OFF : (skipping && s.occupancy_light ? CV_LIGHT_MARCH_SKIP_EMPTY : CV_LIGHT_MARCH);
+  p.df_light = distance && s.occupancy_light ? 1 : 0;
+  p.transmittance_cutoff = s.transmittance_cutoff;
+  p.density_step = s.density_step;
+  p.density_step_below = s.density_step_below;
+  // The light volume: box mode only (layer mode's coverage map does not repeat with the texture).
+  p.light_volume_on = s.light_volume && s.light_march && !layer ? 1 : 0;
+  // Its grid: the voxels / scale per axis, the scale doubled until at most kMaxLightVolumeTexels
+  // (16 MiB of R32F; the 128^3 thesis volume fits at scale 1), so a large field neither exhausts
+  // memory nor spends minutes rebuilding on a CPU rasteriser.
+  int lv_scale = s.light_volume_scale;
+  auto lv_texels = [&](int sc) {
+    double n = 1;
+    for (int i = 0; i < 3; ++i) n *= double(std::max(1, (vol.dims[size_t(i)] + sc - 1) / sc));
+    return n;
+  };
+  while (lv_texels(lv_scale) > double(kMaxLightVolumeTexels)) lv_scale *= 2;
+  for (int i = 0; i < 3; ++i)
+    p.light_volume_dims[i] = std::max(1, (vol.dims[size_t(i)] + lv_scale - 1) / lv_scale);
   p.light_samples = s.light_samples;
   p.light_step_m = s.light_step > 0 ? s.light_step : 2.5 * min_voxel;
   p.light_growth = s.light_growth;

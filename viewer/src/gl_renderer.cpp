@@ -76,6 +76,10 @@ struct Target {
   bool round_up = false;       // ceil(viewport / divisor): every pixel has its block (temporal)
   int fixed_w = 0, fixed_h = 0;  // > 0: a fixed size (LUTs), independent of the viewport
   bool history = false;        // keep the previous frame's copy ("NAME@prev")
+  // A 3D target sized by the frame (the light volume: f.params.light_volume_dims), one colour
+  // attachment; its passes draw once per layer. (Re)created by render() when the size changes.
+  std::function<glm::ivec3(const FrameSetup&)> volume_size;
+  int d = 0;
   // GL objects: [0] the current frame, [1] the previous one when `history`.
   int w = 0, h = 0;
   GLuint fbo[2] = {0, 0};
@@ -83,7 +87,7 @@ struct Target {
   GLuint depth_tex[2] = {0, 0};
 };
 
-enum class Group { Atmosphere, Ground, Clouds, Post };
+enum class Group { Atmosphere, Light, Ground, Clouds, Post };
 
 struct Pass {
   std::string name;
@@ -96,6 +100,7 @@ struct Pass {
   std::function<bool(const FrameSetup&)> enabled;    // null = always
   std::function<void(GLuint program)> uniforms;      // per-pass uniforms, null = none
   bool precompute = false;                           // an atmosphere LUT: runs only when atmosphere.* changed
+  bool light_volume = false;                         // runs only when the light volume's inputs changed
   GLuint program = 0;
 };
 
@@ -115,6 +120,10 @@ std::vector<Target> make_targets() {
   t[6].name = "cloud_quarter", t[6].colors = {GL_RGBA32F, GL_R32F, GL_RGBA32F, GL_RGBA32F};
   t[6].divisor = 4, t[6].round_up = true;
   t[7].name = "cloud_layer", t[7].colors = {GL_RGBA32F, GL_R32F}, t[7].history = true;
+  Target light;  // optical depth toward the sun over the box (render.light_volume)
+  light.name = "light_volume", light.colors = {GL_R32F};
+  light.volume_size = [](const FrameSetup& f) { return glm::ivec3(f.params.light_volume_dims); };
+  t.push_back(light);
   return t;
 }
 
@@ -137,6 +146,12 @@ std::vector<Pass> make_passes() {
   ground.clear = {{0.f, 0.f, 0.f, 0.f}, {float(CV_NO_HIT), 0.f, 0.f, 0.f}};
   ground.enabled = [](const FrameSetup& f) { return f.params.ground_on > 0.5; };
   p.push_back(ground);
+  // The light volume (lighting.glsl), rebuilt only when the sun, the volume or a lighting key changes.
+  Pass light;
+  light.name = "light_volume", light.vs = "fullscreen.vert", light.fs = "light_volume.frag";
+  light.target = "light_volume", light.group = Group::Light, light.light_volume = true;
+  light.enabled = [](const FrameSetup& f) { return f.params.light_volume_on > 0.5; };
+  p.push_back(light);
   auto temporal = [](const FrameSetup& f) { return temporal_on(f); };
   Pass clouds;
   clouds.name = "clouds", clouds.vs = "fullscreen.vert", clouds.fs = "cloud.frag", clouds.target = "hdr";
@@ -202,7 +217,10 @@ struct GlRenderer::Impl {
   ShaderSource shaders;
   std::vector<Target> targets = make_targets();
   std::vector<Pass> passes = make_passes();
-  GLuint tex_volume = 0, tex_occ = 0, tex_mie = 0, tex_coverage = 0, tex_motion = 0;
+  GLuint tex_volume = 0, tex_occ = 0, tex_dist = 0, tex_mie = 0, tex_coverage = 0, tex_motion = 0;
+  int volume_serial = 0;              // counts set_volume calls (part of the light volume's key)
+  std::vector<double> light_key;      // what the light volume was built from; empty = not built
+  int light_builds = 0;
   GLuint ubo_cloud = 0, ubo_frame = 0, ubo_atmo = 0;
   bool atmo_valid = false;            // the LUT targets hold `atmo_done`'s tables
   AtmosphereSettings atmo_done;
@@ -254,9 +272,10 @@ struct GlRenderer::Impl {
       for (auto& b : built)
         if (b.first == std::make_pair(p.vs, p.fs)) p.program = b.second;
   }
-  void delete_targets() {
+  // All targets, or (a viewport resize) only those the viewport sizes.
+  void delete_targets(bool viewport_only = false) {
     for (Target& t : targets)
-      for (int c = 0; c < 2; ++c) {
+      for (int c = 0; c < 2 && !(viewport_only && t.volume_size); ++c) {
         if (t.fbo[c]) glDeleteFramebuffers(1, &t.fbo[c]);
         for (GLuint x : t.tex[c]) glDeleteTextures(1, &x);
         if (t.depth_tex[c]) glDeleteTextures(1, &t.depth_tex[c]);
@@ -264,12 +283,14 @@ struct GlRenderer::Impl {
         t.tex[c].clear();
       }
     atmo_valid = false;
+    if (!viewport_only) light_key.clear();
   }
   void resize(int width, int height) {
     if (width == w && height == h) return;
-    delete_targets();
+    delete_targets(true);
     w = width, h = height;
     for (Target& t : targets) {
+      if (t.volume_size) continue;  // ensure_volume_target
       int up = t.round_up ? t.divisor - 1 : 0;
       t.w = t.fixed_w > 0 ? t.fixed_w : std::max(1, (w + up) / t.divisor);
       t.h = t.fixed_h > 0 ? t.fixed_h : std::max(1, (h + up) / t.divisor);
@@ -290,6 +311,36 @@ struct GlRenderer::Impl {
       }
     }
   }
+  // A frame-sized 3D target: recreated when the frame asks for another size.
+  void ensure_volume_target(Target& t, const FrameSetup& f) {
+    glm::ivec3 n = glm::max(t.volume_size(f), glm::ivec3(1));
+    if (t.fbo[0] && n == glm::ivec3(t.w, t.h, t.d)) return;
+    if (t.fbo[0]) glDeleteFramebuffers(1, &t.fbo[0]);
+    for (GLuint x : t.tex[0]) glDeleteTextures(1, &x);
+    t.tex[0].clear();
+    t.w = n.x, t.h = n.y, t.d = n.z;
+    GLuint tex;
+    glCreateTextures(GL_TEXTURE_3D, 1, &tex);
+    glTextureStorage3D(tex, 1, t.colors[0], n.x, n.y, n.z);
+    glTextureParameteri(tex, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTextureParameteri(tex, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    t.tex[0].push_back(tex);
+    glCreateFramebuffers(1, &t.fbo[0]);
+    glNamedFramebufferTextureLayer(t.fbo[0], GL_COLOR_ATTACHMENT0, tex, 0, 0);
+    const GLenum draw = GL_COLOR_ATTACHMENT0;
+    glNamedFramebufferDrawBuffers(t.fbo[0], 1, &draw);
+    check_fbo(t.fbo[0], t.name.c_str());
+    light_key.clear();
+  }
+  // What the light volume depends on, camera excluded (positions are camera-relative, the texels
+  // are in the box's own coordinates): the sun, the volume, the medium and the light march.
+  std::vector<double> light_volume_key(const FrameSetup& f) const {
+    const ref::CloudParams& p = f.params;
+    return {double(volume_serial), p.sun_dir.x, p.sun_dir.y, p.sun_dir.z, p.volume_size_m.x, p.volume_size_m.y,
+            p.volume_size_m.z, p.tiles_xz, p.has_detail, p.sigma_t_per_m, p.erosion, p.density_scale,
+            p.exact_filter, p.light_mode, p.light_samples, p.light_step_m, p.light_growth, p.df_light,
+            p.light_volume_dims.x, p.light_volume_dims.y, p.light_volume_dims.z};
+  }
   void run(Pass& p, const FrameSetup& f) {
     Target& t = target(p.target);
     for (size_t i = 0; i < p.clear.size(); ++i) glClearNamedFramebufferfv(t.fbo[0], GL_COLOR, GLint(i), p.clear[i].data());
@@ -298,6 +349,18 @@ struct GlRenderer::Impl {
       glClearNamedFramebufferfv(t.fbo[0], GL_DEPTH, 0, &one);
     }
     if (p.enabled && !p.enabled(f)) return;
+    if (t.volume_size) {  // one draw per layer of the 3D target (the layer in uniform location 0)
+      glUseProgram(p.program);
+      glViewport(0, 0, t.w, t.h);
+      glBindVertexArray(vao_empty);
+      for (int z = 0; z < t.d; ++z) {
+        glNamedFramebufferTextureLayer(t.fbo[0], GL_COLOR_ATTACHMENT0, t.tex[0][0], 0, z);
+        glBindFramebuffer(GL_FRAMEBUFFER, t.fbo[0]);
+        glProgramUniform1i(p.program, 0, z);
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+      }
+      return;
+    }
     for (size_t i = 0; i < p.inputs.size(); ++i) {
       const std::string& name = p.inputs[i].first;
       bool prev = name.size() > 5 && name.compare(name.size() - 5, 5, "@prev") == 0;
@@ -394,7 +457,7 @@ GlRenderer::~GlRenderer() {
   Impl& m = *impl_;
   m.delete_programs();
   m.delete_targets();
-  GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_mie, m.tex_coverage, m.tex_motion};
+  GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_dist, m.tex_mie, m.tex_coverage, m.tex_motion};
   for (GLuint t : texs)
     if (t) glDeleteTextures(1, &t);
   glDeleteBuffers(1, &m.ubo_cloud);
@@ -418,6 +481,8 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
   Impl& m = *impl_;
   if (m.tex_volume) glDeleteTextures(1, &m.tex_volume);
   if (m.tex_occ) glDeleteTextures(1, &m.tex_occ);
+  if (m.tex_dist) glDeleteTextures(1, &m.tex_dist);
+  m.tex_dist = 0;
   GLint max3d = 0;
   glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max3d);
   for (int i = 0; i < 3; ++i)
@@ -440,6 +505,17 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
   glTextureSubImage3D(m.tex_occ, 0, 0, 0, 0, vol.occ_dims[0], vol.occ_dims[1], vol.occ_dims[2], GL_RED, GL_UNSIGNED_BYTE, occ.data());
   glTextureParameteri(m.tex_occ, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTextureParameteri(m.tex_occ, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  // The distance field (integer cells, texelFetch only).
+  glCreateTextures(GL_TEXTURE_3D, 1, &m.tex_dist);
+  glTextureStorage3D(m.tex_dist, 1, GL_R8UI, vol.occ_dims[0], vol.occ_dims[1], vol.occ_dims[2]);
+  std::vector<uint8_t> dist = vol.dist;
+  dist.resize(vol.occ.size(), 1);  // a volume prepared without the field: the thesis's one cell
+  glTextureSubImage3D(m.tex_dist, 0, 0, 0, 0, vol.occ_dims[0], vol.occ_dims[1], vol.occ_dims[2], GL_RED_INTEGER,
+                      GL_UNSIGNED_BYTE, dist.data());
+  glTextureParameteri(m.tex_dist, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTextureParameteri(m.tex_dist, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  m.volume_serial += 1;
+  m.light_key.clear();
   m.have_volume = true;
   m.history_valid = false;
   if (glGetError() != GL_NO_ERROR) throw GlError("uploading the volume textures failed (out of GPU memory?)");
@@ -496,6 +572,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_ATMOSPHERE, m.ubo_atmo);
   glBindTextureUnit(CV_UNIT_VOLUME, m.tex_volume);
   glBindTextureUnit(CV_UNIT_OCCUPANCY, m.tex_occ);
+  glBindTextureUnit(CV_UNIT_DISTANCE, m.tex_dist);
   glBindTextureUnit(CV_UNIT_MIE, m.tex_mie);
   glBindTextureUnit(CV_UNIT_COVERAGE, m.tex_coverage);
   glBindTextureUnit(CV_UNIT_MOTION, m.tex_motion);
@@ -504,12 +581,34 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glDisable(GL_FRAMEBUFFER_SRGB);
   // The analytic sky reads no LUT: skip the precompute (and keep the LUTs' state for later frames).
   bool atmo_dirty = f.settings.sky == SkyMode::Precomputed && m.atmosphere_dirty(f.settings.atmosphere);
+  // The light volume: rebuilt when its key changes (not when only the camera moves).
+  Target& light = m.target("light_volume");
+  bool light_dirty = false;
+  if (f.params.light_volume_on > 0.5) {
+    m.ensure_volume_target(light, f);
+    std::vector<double> lkey = m.light_volume_key(f);
+    light_dirty = lkey != m.light_key;
+    m.light_key = lkey;
+    // Wrapped like the volume (the key holds tiles_xz).
+    GLint wrap_xz = f.params.tiles_xz > 0.5 ? GL_REPEAT : GL_CLAMP_TO_EDGE;
+    glTextureParameteri(light.tex[0][0], GL_TEXTURE_WRAP_S, wrap_xz);
+    glTextureParameteri(light.tex[0][0], GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(light.tex[0][0], GL_TEXTURE_WRAP_R, wrap_xz);
+  }
+  // Never sample the light volume while its pass writes it.
+  glBindTextureUnit(CV_UNIT_LIGHT_VOLUME, light_dirty || light.tex[0].empty() ? 0 : light.tex[0][0]);
 
   glQueryCounter(m.queries[0], GL_TIMESTAMP);
   for (size_t i = 0; i < m.passes.size(); ++i) {
     if (m.passes[i].precompute) {
       if (atmo_dirty) m.run(m.passes[i], f);
       if (i + 1 < m.passes.size() && !m.passes[i + 1].precompute) m.bind_luts();
+    } else if (m.passes[i].light_volume) {
+      if (light_dirty) {
+        m.run(m.passes[i], f);
+        m.light_builds += 1;
+        glBindTextureUnit(CV_UNIT_LIGHT_VOLUME, light.tex[0][0]);
+      }
     } else {
       m.run(m.passes[i], f);
     }
@@ -527,7 +626,8 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
       double ms = double(t[i + 1] - t[i]) * 1e-6;
       timings->passes.push_back({m.passes[i].name, ms});
       Group g = m.passes[i].group;
-      (g == Group::Atmosphere ? timings->atmosphere_ms : g == Group::Ground ? timings->ground_ms
+      (g == Group::Atmosphere ? timings->atmosphere_ms : g == Group::Light ? timings->light_volume_ms
+       : g == Group::Ground ? timings->ground_ms
        : g == Group::Clouds ? timings->cloud_ms : timings->post_ms) += ms;
     }
     timings->total_ms = double(t.back() - t.front()) * 1e-6;
@@ -608,6 +708,8 @@ std::vector<glm::vec3> GlRenderer::transmittance_dump(const AtmosphereSettings& 
   for (const glm::vec4& v : px) out.emplace_back(v);
   return out;
 }
+
+int GlRenderer::light_volume_builds() const { return impl_->light_builds; }
 
 std::vector<std::string> GlRenderer::pass_names() const {
   std::vector<std::string> names;

@@ -49,6 +49,7 @@ Sun resolve_sun(const Options& o, const Camera& cam);
 struct TrackFrame {
   std::string name, view;  ///< view class: below, inside, above (or what the track says)
   Camera camera;
+  std::vector<std::string> sets;  ///< the key's own render.KEY=VALUE, applied after the configuration's
 };
 struct Config {
   std::string name;

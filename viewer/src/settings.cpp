@@ -68,8 +68,9 @@ std::vector<ParamDef> build() {
   t.push_back(real("cloud_type", &RenderSettings::cloud_type, -1, 1, "layer mode: 0 stratus, 0.5 cumulus, 1 cumulonimbus (-1 = from the map)"));
   t.push_back(integer("coverage_tiles", &RenderSettings::coverage_tiles, 1, 1024, "layer mode: texture tiles spanned by one period of the coverage map"));
   t.push_back(integer("steps", &RenderSettings::steps, 1, 8192, "small steps across the volume's largest extent (step = extent / steps)"));
-  t.push_back(boolean("occupancy", &RenderSettings::occupancy, "occupancy skipping: large steps through empty coarse cells (thesis 2.4.2)"));
-  t.push_back(boolean("occupancy_light", &RenderSettings::occupancy_light, "with occupancy on, the light march also skips samples in empty cells (an addition to the thesis; image-neutral, no measurable gain on llvmpipe)"));
+  t.push_back(boolean("occupancy", &RenderSettings::occupancy, "empty-space skipping on (the scheme: render.skipping); false = none whatever render.skipping says (kept for older tracks)"));
+  t.push_back(enumeration("skipping", &RenderSettings::skipping, {"none", "thesis", "distance"}, "empty-space skipping when render.occupancy is on: none; thesis (one large step per empty coarse cell, step back and small steps next to clouds); distance (jumps as far as the coarse grid's distance field proves empty, small steps with the thesis's re-check next to clouds; the same image, docs/viewer-speed.md)"));
+  t.push_back(boolean("occupancy_light", &RenderSettings::occupancy_light, "with skipping on, the light march also skips samples in empty cells (an addition to the thesis); with render.skipping=distance the light and ground-shadow marches skip what the distance field proves empty. Image-neutral; no measurable gain on llvmpipe (docs/viewer-speed.md)"));
   t.push_back(integer("occupancy_cell", &RenderSettings::occupancy_cell, 2, 64, "coarse occupancy cell edge in voxels"));
   t.push_back(integer("occupancy_padding", &RenderSettings::occupancy_padding, 1, 4, "occupancy dilation in cells (thesis: 2, \"double padding\"; 1 is provably enough here)"));
   t.push_back(boolean("adaptive", &RenderSettings::adaptive, "step grows linearly with distance beyond adaptive_start"));
@@ -78,6 +79,9 @@ std::vector<ParamDef> build() {
   t.push_back(boolean("jitter", &RenderSettings::jitter, "jitter the sample inside each step per pixel and frame (else the midpoint)"));
   t.push_back(boolean("exact_filter", &RenderSettings::exact_filter, "trilinear filtering by hand from texelFetch (strict GPU-vs-CPU mode)"));
   t.push_back(real("max_distance", &RenderSettings::max_distance, 1, 1e8, "march no farther than this, m"));
+  t.push_back(real("transmittance_cutoff", &RenderSettings::transmittance_cutoff, 0, 0.5, "stop the primary march when the transmittance falls below this (early exit)"));
+  t.push_back(integer("density_step", &RenderSettings::density_step, 1, 16, "density-aware step: after a sample below density_step_below the next step is this many small steps (1 = off; changes the image)"));
+  t.push_back(real("density_step_below", &RenderSettings::density_step_below, 0, 10, "density under which the density-aware step lengthens the step"));
   t.push_back(real("sigma_t", &RenderSettings::sigma_t, 0, 1e4, "extinction per metre at density 1 (0 = 0.5 / voxel size)"));
   t.push_back(real("density", &RenderSettings::density, 0, 1e3, "density multiplier"));
   t.push_back(real("erosion", &RenderSettings::erosion, 0, 1, "strength of the G/B/A detail erosion of the R base shape"));
@@ -86,6 +90,8 @@ std::vector<ParamDef> build() {
   t.push_back(integer("light_samples", &RenderSettings::light_samples, 1, 128, "samples of the light march"));
   t.push_back(real("light_step", &RenderSettings::light_step, 0, 1e6, "first light step, m (0 = 2.5 voxels)"));
   t.push_back(real("light_growth", &RenderSettings::light_growth, 1, 4, "each light step is this many times the previous"));
+  t.push_back(boolean("light_volume", &RenderSettings::light_volume, "box mode: look the sun's optical depth up in a precomputed 3D texture (rebuilt when the sun, the volume or a lighting key changes) instead of marching toward the sun per sample"));
+  t.push_back(integer("light_volume_scale", &RenderSettings::light_volume_scale, 1, 16, "light volume texels: the volume's voxels divided by this on each axis (doubled until at most 4 M texels)"));
   t.push_back(enumeration("phase", &RenderSettings::phase, {"none", "hg", "mie"}, "phase function: none (isotropic), Henyey-Greenstein, Mie table"));
   t.push_back(real("g", &RenderSettings::g, -0.99, 0.99, "Henyey-Greenstein asymmetry"));
   t.push_back(real("powder", &RenderSettings::powder, 0, 1, "strength of the powder term 1 - exp(-c d)"));

@@ -47,9 +47,67 @@ void finish_occupancy(PreparedVolume& p) {
   size_t count = 0;
   for (uint8_t o : p.occ) count += o ? 1 : 0;
   p.occupied_fraction = p.occ.empty() ? 0 : double(count) / double(p.occ.size());
+  // The distance field counts cells to the nearest cell that holds density (the grid before its
+  // padding): the empty radius (lighting.glsl) accounts for trilinear reach itself, so the padding,
+  // which only the thesis's one-cell step needs, would shorten every jump by its width.
+  const int c = p.occ_cell;
+  std::vector<uint8_t> holds(p.occ.size(), 0);
+  for (int z = 0; z < p.dims[2]; ++z)
+    for (int y = 0; y < p.dims[1]; ++y) {
+      const float* row = &p.rgba[((size_t(z) * p.dims[1] + y) * p.dims[0]) * 4];
+      uint8_t* cells = &holds[(size_t(z / c) * p.occ_dims[1] + y / c) * p.occ_dims[0]];
+      for (int x = 0; x < p.dims[0]; ++x)
+        if (row[size_t(x) * 4] > 0) cells[x / c] = 1;
+    }
+  p.dist = occupancy_distance(holds, p.occ_dims, p.tiles, p.dims, p.occ_cell);
 }
 
 }  // namespace
+
+std::vector<uint8_t> occupancy_distance(const std::vector<uint8_t>& occ, const std::array<int, 3>& n, bool tiles,
+                                        const std::array<int, 3>& dims, int cell) {
+  const size_t count = size_t(n[0]) * n[1] * n[2];
+  std::vector<uint8_t> out(count, 0);
+  if (count == 0 || occ.size() != count) return out;
+  // Wrapping across x/z is exact in cells only when the tile is a whole number of cells (a partial
+  // last cell is narrower than one cell, and counting it as one would overstate the distance): else
+  // the wrapped axes keep the thesis's one-cell field.
+  const bool wrap = tiles && dims[0] % cell == 0 && dims[2] % cell == 0;
+  const bool clamp_one = tiles && !wrap;
+  // L-infinity distance is separable: d(c) = min over o of max_i |c_i - o_i| is computed one axis at
+  // a time, f_a(c) = min over c' on c's line of max(|c_a - c'_a|, f_{a-1}(c')), starting from 0 on
+  // occupied cells and "infinity" elsewhere. Each line is scanned outward until the radius reaches
+  // the best value found, so the cost is the cells times the distances, not the cells times a line.
+  const int inf = 1 << 20;
+  std::vector<int> f(count), g(count);
+  for (size_t i = 0; i < count; ++i) f[i] = occ[i] ? 0 : inf;
+  auto index = [&](int x, int y, int z) { return (size_t(z) * n[1] + y) * n[0] + x; };
+  for (int axis = 0; axis < 3; ++axis) {
+    const bool axis_wraps = wrap && axis != 1;
+    const int len = n[size_t(axis)];
+    for (int z = 0; z < n[2]; ++z)
+      for (int y = 0; y < n[1]; ++y)
+        for (int x = 0; x < n[0]; ++x) {
+          int c[3] = {x, y, z};
+          const int at = c[axis];
+          int best = f[index(x, y, z)];
+          for (int r = 1; r < best && r < len; ++r) {
+            for (int sgn : {-1, 1}) {
+              int q = at + sgn * r;
+              if (axis_wraps) q = ((q % len) + len) % len;
+              else if (q < 0 || q >= len) continue;
+              c[axis] = q;
+              best = std::min(best, std::max(r, f[index(c[0], c[1], c[2])]));
+            }
+            c[axis] = at;
+          }
+          g[index(x, y, z)] = best;
+        }
+    std::swap(f, g);
+  }
+  for (size_t i = 0; i < count; ++i) out[i] = uint8_t(std::min(f[i], clamp_one && f[i] > 1 ? 1 : 255));
+  return out;
+}
 
 uint64_t prepared_bytes(uint64_t voxels) { return voxels * 16 + voxels / 8; }
 

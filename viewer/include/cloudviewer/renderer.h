@@ -20,6 +20,7 @@ struct FrameImages {
 struct GpuTimings {
   double ground_ms = 0, cloud_ms = 0, post_ms = 0, total_ms = 0;
   double atmosphere_ms = 0;  ///< the atmosphere LUT passes (0 unless an atmosphere.* key changed)
+  double light_volume_ms = 0;  ///< the light volume's rebuild (0 unless the sun, volume or a lighting key changed)
   std::vector<std::pair<std::string, double>> passes;  ///< every pass in order, ms
 };
 
@@ -73,6 +74,9 @@ class GlRenderer {
   /// lookup; rays that hit the ground hold 0. `precompute_ms`: GPU time of the LUT passes (0 when
   /// nothing changed). Works before set_volume.
   std::vector<glm::vec3> transmittance_dump(const AtmosphereSettings& atmosphere, double* precompute_ms = nullptr);
+  /// How many times the light volume has been built (render.light_volume): once per change of the
+  /// sun, the volume or a lighting key, never for a camera move alone.
+  int light_volume_builds() const;
   /// The passes in execution order (their names label GpuTimings::passes).
   std::vector<std::string> pass_names() const;
   /// The driver's std140 layout of the cloud block: its size in bytes, and a member's byte offset
@@ -104,6 +108,13 @@ FrameImages render_pathtrace(const PreparedVolume& vol, const FrameSetup& frame,
 /// Mean radiance (linear HDR) of `spp` paths along one camera-relative unit ray (for tests).
 glm::dvec3 pathtrace_ray(const PreparedVolume& vol, const FrameSetup& frame, const glm::dvec3& rd, int spp,
                          uint32_t seed = 1);
+/// The light volume (render.light_volume) as the CPU reference builds it: light_optical_depth at
+/// every texel centre of a params.light_volume_dims grid over the box, double precision, x fastest.
+std::vector<double> build_light_volume_cpu(const PreparedVolume& vol, const ref::CloudParams& params);
+/// The optical depth toward the sun at camera-relative p: the per-sample light march, or with
+/// `light_volume` (from build_light_volume_cpu) its trilinear lookup. For tests and measurements.
+double reference_light_optical_depth(const PreparedVolume& vol, const ref::CloudParams& params, glm::dvec3 p,
+                                     const std::vector<double>* light_volume = nullptr);
 
 /// The shared header's phase function (1/sr) evaluated in double precision (for tests and docs).
 double reference_phase(PhaseMode mode, double g, double cos_theta);

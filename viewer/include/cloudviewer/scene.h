@@ -41,6 +41,10 @@ struct PreparedVolume {
   int occ_padding = 2;      ///< dilation in coarse cells
   std::array<int, 3> occ_dims{{0, 0, 0}};
   std::vector<uint8_t> occ;
+  /// Distance field of the coarse grid: per cell, the L-infinity distance in cells to the nearest
+  /// cell holding a voxel with density > 0 (the grid before padding; 0 there, capped at 255); see
+  /// occupancy_distance. Distance skipping proves density 0 within (d - 1) cells - half a voxel.
+  std::vector<uint8_t> dist;
   double occupied_fraction = 0;
   /// The box the motion measures heights in (y, world metres): the whole preset's when the file
   /// records it (cloudgen's motion.box_min_y / motion.box_height), else this volume's own.
@@ -61,6 +65,15 @@ struct PreparedVolume {
 PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_padding = 2);
 /// Rebuilds only the occupancy grid with another cell size / padding (cloudgen::build_occupancy).
 void build_occupancy(PreparedVolume& p, int occ_cell, int occ_padding);
+
+/// The distance field of an occupancy grid of `n` cells (x fastest): for each cell, the L-infinity
+/// (Chebyshev) distance in cells to the nearest occupied cell, exact, 0 on occupied cells, capped at
+/// 255 (also when the grid has none). Wrapped in x and z when `tiles` and the `dims` are whole
+/// multiples of `cell`; a tiling volume whose cells do not divide it gets at most 1 (what the
+/// thesis's large step already assumes). Exactness is what makes distance skipping safe: every cell
+/// within d - 1 of a cell at distance d is unoccupied (lighting.glsl's empty_radius).
+std::vector<uint8_t> occupancy_distance(const std::vector<uint8_t>& occ, const std::array<int, 3>& n, bool tiles,
+                                        const std::array<int, 3>& dims, int cell);
 
 /// Bytes prepare_volume allocates for a volume of `voxels` voxels (RGBA floats, occupancy).
 uint64_t prepared_bytes(uint64_t voxels);
@@ -117,6 +130,10 @@ Camera default_camera(const PreparedVolume& vol, const RenderSettings& s, double
 /// Projection used by both renderers (near 0.5 m, far 1e6 m, OpenGL clip conventions), and the
 /// camera-relative view (camera at the origin).
 glm::dmat4 view_projection(const Camera& cam, int width, int height);
+
+/// The light volume (render.light_volume) never has more texels than this: make_frame doubles
+/// render.light_volume_scale until it fits.
+constexpr int kMaxLightVolumeTexels = 1 << 22;
 
 struct FrameSetup {
   int width = 0, height = 0;

@@ -20,6 +20,7 @@ enum class OutputMode {
   Iterations = CV_OUTPUT_ITERATIONS
 };
 enum class PlaceMode { Box = 0, Layer = 1 };
+enum class Skipping { None = 0, Thesis = 1, Distance = 2 };
 enum class SkyMode { Analytic = CV_SKY_ANALYTIC, Precomputed = CV_SKY_PRECOMPUTED };
 
 struct RenderSettings {
@@ -33,7 +34,8 @@ struct RenderSettings {
   int coverage_tiles = 8;           ///< the coverage map spans this many texture tiles
   // marching
   int steps = 128;                 ///< small steps across the volume's largest extent
-  bool occupancy = true;           ///< occupancy skipping (thesis 2.4.2)
+  bool occupancy = true;           ///< empty-space skipping on (false: none, whatever `skipping` says)
+  Skipping skipping = Skipping::Distance;  ///< with occupancy on: thesis (one cell) or distance-field jumps
   bool occupancy_light = false;    ///< the light march also skips empty cells (no measurable gain on llvmpipe)
   int occupancy_cell = 8;          ///< coarse cell edge in voxels
   int occupancy_padding = 2;       ///< dilation in cells (thesis: 2; 1 is enough, see make_frame)
@@ -43,6 +45,9 @@ struct RenderSettings {
   bool jitter = true;              ///< jittered start against banding
   bool exact_filter = false;       ///< trilinear by hand (texelFetch) instead of the texture unit
   double max_distance = 1e7;       ///< m
+  double transmittance_cutoff = CV_TRANSMITTANCE_EPSILON;  ///< stop the primary march below this transmittance
+  int density_step = 1;            ///< after a sample below density_step_below, step this many small steps (1: off)
+  double density_step_below = 0.02;
   // medium
   double sigma_t = 0;              ///< extinction per metre at density 1; 0 = auto (0.5 / voxel size)
   double density = 1;              ///< density multiplier
@@ -53,6 +58,8 @@ struct RenderSettings {
   int light_samples = 6;
   double light_step = 0;           ///< m; 0 = auto (2.5 voxels)
   double light_growth = 1.5;
+  bool light_volume = true;        ///< look the sun's optical depth up in a precomputed volume (docs/viewer-speed.md)
+  int light_volume_scale = 2;      ///< its texels: the volume's voxels divided by this per axis
   PhaseMode phase = PhaseMode::HenyeyGreenstein;
   double g = 0.3;                  ///< HG asymmetry
   double powder = 0.3;             ///< powder term strength [0,1]

@@ -1,0 +1,334 @@
+// Tests of the viewer's speed work (issue 13): the distance field of the coarse grid is exact (so
+// conservative), distance skipping leaves the image bit for bit unchanged on GL and on the CPU
+// reference while doing less work, the light volume's optical depth follows the per-sample light
+// march within a stated bound, and it is rebuilt when the sun changes and not when the camera moves.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <iostream>
+#include <memory>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "cloudviewer/app.h"
+
+#include "cloudviewer/image.h"
+#include "cloudviewer/renderer.h"
+#include "cloudviewer/scene.h"
+#include "cloudviewer/settings.h"
+
+using namespace cloudviewer;
+
+namespace {
+
+HeadlessContext& gl() {
+  static std::unique_ptr<HeadlessContext> ctx = std::make_unique<HeadlessContext>();
+  ctx->make_current();
+  return *ctx;
+}
+
+FrameImages render_gl(const PreparedVolume& vol, const FrameSetup& f) {
+  gl();
+  GlRenderer r{ShaderSource()};
+  r.set_volume(vol);
+  r.render(f);
+  return r.read_back();
+}
+
+FrameImages render(bool on_gl, const PreparedVolume& vol, const FrameSetup& f) {
+  return on_gl ? render_gl(vol, f) : render_cpu(vol, f);
+}
+
+RenderSettings with(std::initializer_list<const char*> sets) {
+  RenderSettings s;
+  for (const char* a : sets) apply_setting(s, a);
+  return s;
+}
+
+double loop_trips(bool on_gl, const PreparedVolume& vol, RenderSettings s, const Camera& cam, int w, int h) {
+  s.output = OutputMode::Iterations;
+  FrameImages im = render(on_gl, vol, make_frame(vol, s, cam, default_sun(cam), w, h));
+  double sum = 0;
+  for (size_t i = 0; i < im.linear.rgba.size(); i += 4) sum += im.linear.rgba[i];
+  return sum;
+}
+
+uint32_t lcg(uint32_t& h) { return (h = h * 1664525u + 1013904223u) >> 8; }
+
+// Brute force: the L-infinity cell distance from every cell to the nearest set cell, wrapping x and
+// z when asked; 255 when there is none (the field's cap).
+std::vector<int> brute_distance(const std::vector<uint8_t>& occ, const std::array<int, 3>& n, bool wrap) {
+  std::vector<int> d(occ.size(), 255);
+  auto axis = [&](int a, int b, int len, bool w) {
+    int diff = std::abs(a - b);
+    return w ? std::min(diff, len - diff) : diff;
+  };
+  for (int z = 0; z < n[2]; ++z)
+    for (int y = 0; y < n[1]; ++y)
+      for (int x = 0; x < n[0]; ++x)
+        for (int oz = 0; oz < n[2]; ++oz)
+          for (int oy = 0; oy < n[1]; ++oy)
+            for (int ox = 0; ox < n[0]; ++ox) {
+              if (!occ[(size_t(oz) * n[1] + oy) * n[0] + ox]) continue;
+              int dist = std::max({axis(x, ox, n[0], wrap), axis(y, oy, n[1], false), axis(z, oz, n[2], wrap)});
+              int& cell = d[(size_t(z) * n[1] + y) * n[0] + x];
+              cell = std::min(cell, dist);
+            }
+  return d;
+}
+
+}  // namespace
+
+// The field is the exact L-infinity distance (so no cell within distance d of a set cell is ever
+// reported farther than d), on small random grids, with and without x/z wrapping; a tiling volume
+// whose cells do not divide it gets at most 1 (the thesis's one cell).
+TEST(ViewerSpeed, DistanceFieldIsExactAndConservative) {
+  uint32_t h = 2024;
+  for (int trial = 0; trial < 12; ++trial) {
+    std::array<int, 3> n{{int(3 + lcg(h) % 9), int(2 + lcg(h) % 7), int(3 + lcg(h) % 9)}};
+    const int cell = 4;
+    std::array<int, 3> dims{{n[0] * cell, n[1] * cell, n[2] * cell}};
+    std::vector<uint8_t> occ(static_cast<size_t>(n[0]) * n[1] * n[2], 0);
+    const uint32_t percent = trial == 0 ? 0 : 1 + lcg(h) % 12;  // trial 0: nothing set at all
+    for (uint8_t& o : occ) o = lcg(h) % 100 < percent ? 1 : 0;
+    for (bool tiles : {false, true}) {
+      std::vector<uint8_t> field = occupancy_distance(occ, n, tiles, dims, cell);
+      std::vector<int> truth = brute_distance(occ, n, tiles);
+      ASSERT_EQ(field.size(), truth.size());
+      int farthest = 0;
+      for (size_t i = 0; i < field.size(); ++i) {
+        ASSERT_LE(int(field[i]), truth[i]) << "never farther than the nearest set cell: trial " << trial << " cell " << i;
+        ASSERT_EQ(int(field[i]), truth[i]) << "trial " << trial << " cell " << i << " tiles " << tiles;
+        EXPECT_EQ(field[i] == 0, occ[i] != 0);
+        farthest = std::max(farthest, int(field[i]));
+      }
+      if (trial > 0) {
+        EXPECT_GE(farthest, 1);
+      }
+    }
+    // A partial last cell on a wrapping axis: wrapping is not exact in cells, so the field says 1 at most.
+    std::array<int, 3> odd{{dims[0] - 1, dims[1], dims[2]}};
+    for (uint8_t d : occupancy_distance(occ, n, true, odd, cell)) ASSERT_LE(int(d), 1);
+  }
+  // And prepare_volume fills it from the cells holding density (before padding).
+  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8, 2);
+  ASSERT_EQ(vol.dist.size(), vol.occ.size());
+  size_t far = 0;
+  for (size_t i = 0; i < vol.dist.size(); ++i) {
+    if (vol.dist[i] >= 2) ++far;
+    if (vol.dist[i] <= 2) {
+      EXPECT_EQ(vol.occ[i], 1) << "padding 2 covers every cell within 2 of density";
+    }
+  }
+  EXPECT_GT(far, 0u);
+}
+
+// Distance skipping keeps exactly the samples of the plain march: max |diff| = 0 (bit for bit), on
+// GL and on the CPU reference, with the light and shadow marches skipping by the field too, and
+// fewer loop trips. The isolated-voxel volume at grazing angles is what a radius one voxel too long
+// gets wrong: a field that claims one more cell than it proves shows up as a difference.
+TEST(ViewerSpeed, DistanceSkippingDoesNotChangeTheImage) {
+  cloudgen::Volume sparse;
+  sparse.dims = {64, 64, 64};
+  sparse.voxel_size = 10;
+  sparse.origin = {-320, 200, -320};
+  sparse.density.assign(sparse.voxel_count(), 0.f);
+  uint32_t h = 12345;
+  for (int i = 0; i < 60; ++i) {
+    uint32_t x = lcg(h) % 64, y = lcg(h) % 64, z = lcg(h) % 64;
+    sparse.density[sparse.index(x, y, z)] = 1.f;
+  }
+  struct Case {
+    const char* name;
+    PreparedVolume vol;
+    RenderSettings s;
+    Camera cam;
+  };
+  std::vector<Case> cases;
+  {
+    PreparedVolume v = prepare_volume(synthetic_volume("blob"), 8, 2);
+    Camera cam = default_camera(v, 60, 160.0 / 90);
+    cases.push_back({"blob", v, with({"render.steps=128"}), cam});
+  }
+  {
+    PreparedVolume v = prepare_volume(sparse, 4, 1);
+    Camera cam;
+    cam.eye = v.center() + glm::dvec3(250, 180, -700);
+    cam.target = v.center();
+    cases.push_back({"isolated voxels", v, with({"render.sigma_t=0.5", "render.steps=256"}), cam});
+  }
+  for (const Case& c : cases)
+    for (bool on_gl : {true, false}) {
+      std::string what = std::string(c.name) + (on_gl ? " GL" : " CPU");
+      RenderSettings none = c.s, dist = c.s, dist_light = c.s;
+      none.skipping = Skipping::None;
+      dist.skipping = Skipping::Distance;
+      dist_light.skipping = Skipping::Distance;
+      dist_light.occupancy_light = true;
+      Sun sun = default_sun(c.cam);
+      FrameImages a = render(on_gl, c.vol, make_frame(c.vol, none, c.cam, sun, 160, 90));
+      FrameImages b = render(on_gl, c.vol, make_frame(c.vol, dist, c.cam, sun, 160, 90));
+      FrameImages l = render(on_gl, c.vol, make_frame(c.vol, dist_light, c.cam, sun, 160, 90));
+      EXPECT_GT(image_stats(a.display).stddev, 0.01) << what << ": a picture to compare";
+      EXPECT_EQ(max_abs_diff(a.linear, b.linear), 0.0) << what;
+      EXPECT_EQ(max_abs_diff(a.display, b.display), 0.0) << what;
+      EXPECT_EQ(max_abs_diff(a.linear, l.linear), 0.0) << what << " (light and shadow marches by the field)";
+      double ta = loop_trips(on_gl, c.vol, none, c.cam, 160, 90), tb = loop_trips(on_gl, c.vol, dist, c.cam, 160, 90);
+      RenderSettings thesis = c.s;
+      thesis.skipping = Skipping::Thesis;
+      double tt = loop_trips(on_gl, c.vol, thesis, c.cam, 160, 90);
+      std::cout << what << ": loop trips none / thesis / distance " << ta << " / " << tt << " / " << tb << "\n";
+      EXPECT_LT(tb, 0.8 * ta) << what;
+      EXPECT_LT(tb, tt) << what << ": the field jumps farther than one cell";
+      // Sensitivity: a radius one cell longer than the field proves changes the image.
+      if (std::string(c.name) == "isolated voxels") {
+        FrameSetup bad = make_frame(c.vol, dist, c.cam, sun, 160, 90);
+        bad.params.df_margin_m -= bad.params.df_cell_m;
+        EXPECT_GT(max_abs_diff(a.linear, render(on_gl, c.vol, bad).linear), 0.01) << what << ": the check can fail";
+      }
+    }
+  // render.occupancy=false still means no skipping, whatever render.skipping says.
+  RenderSettings s = with({"render.occupancy=false", "render.skipping=distance"});
+  FrameSetup f = make_frame(cases[0].vol, s, cases[0].cam, default_sun(cases[0].cam), 16, 9);
+  EXPECT_EQ(f.params.occupancy_skip, 0.0);
+  EXPECT_EQ(f.params.skip_distance, 0.0);
+  EXPECT_EQ(RenderSettings{}.skipping, Skipping::Distance);
+}
+
+// The light volume's optical depth against the per-sample light march (CPU, double precision), at
+// points inside the cloud: at the volume's resolution (scale 1) and at half of it (scale 2), the
+// mean and the 99th-percentile |tau error| and the transmittance error exp(-tau) it makes.
+TEST(ViewerSpeed, LightVolumeFollowsTheLightMarch) {
+  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8, 2);
+  Camera cam = default_camera(vol, 60, 16.0 / 9);
+  double worst_mean[2] = {0, 0};
+  for (int scale : {1, 2}) {
+    RenderSettings s = with({"render.light_volume=true"});
+    s.light_volume_scale = scale;
+    FrameSetup f = make_frame(vol, s, cam, default_sun(cam), 16, 9);
+    ASSERT_EQ(f.params.light_volume_on, 1.0);
+    EXPECT_EQ(f.params.light_volume_dims.x, double((vol.dims[0] + scale - 1) / scale));
+    std::vector<double> lv = build_light_volume_cpu(vol, f.params);
+    // Exact at texel centres: the build is the march.
+    glm::ivec3 n = glm::ivec3(f.params.light_volume_dims);
+    glm::dvec3 centre = f.params.volume_min_m + (glm::dvec3(n / 2) + 0.5) / glm::dvec3(n) * f.params.volume_size_m;
+    EXPECT_NEAR(reference_light_optical_depth(vol, f.params, centre, &lv),
+                reference_light_optical_depth(vol, f.params, centre), 1e-9);
+    uint32_t h = 99;
+    std::vector<double> tau_err, t_err;
+    double tau_sum = 0;
+    for (int i = 0; tau_err.size() < 2000 && i < 200000; ++i) {
+      glm::dvec3 u(lcg(h) / double(1 << 24), lcg(h) / double(1 << 24), lcg(h) / double(1 << 24));
+      glm::ivec3 v = glm::min(glm::ivec3(u * glm::dvec3(vol.dims[0], vol.dims[1], vol.dims[2])),
+                              glm::ivec3(vol.dims[0] - 1, vol.dims[1] - 1, vol.dims[2] - 1));
+      if (vol.rgba[((size_t(v.z) * vol.dims[1] + v.y) * vol.dims[0] + v.x) * 4] <= 0.05f) continue;  // in the cloud
+      glm::dvec3 p = f.params.volume_min_m + u * f.params.volume_size_m;
+      double march = reference_light_optical_depth(vol, f.params, p);
+      double look = reference_light_optical_depth(vol, f.params, p, &lv);
+      tau_err.push_back(std::abs(look - march));
+      t_err.push_back(std::abs(std::exp(-look) - std::exp(-march)));
+      tau_sum += march;
+    }
+    ASSERT_GE(tau_err.size(), 1000u);
+    double mean = 0, tmean = 0;
+    for (double e : tau_err) mean += e / double(tau_err.size());
+    for (double e : t_err) tmean += e / double(t_err.size());
+    std::sort(tau_err.begin(), tau_err.end());
+    std::sort(t_err.begin(), t_err.end());
+    double p99 = tau_err[tau_err.size() * 99 / 100], t99 = t_err[t_err.size() * 99 / 100];
+    std::cout << "light volume scale " << scale << ": mean tau " << tau_sum / double(tau_err.size()) << ", |tau error| mean "
+              << mean << " p99 " << p99 << "; |T error| mean " << tmean << " p99 " << t99 << "\n";
+    worst_mean[scale - 1] = mean;
+    // Bounds (measured, then about 2x headroom; see docs/viewer-speed.md): the light march's own
+    // first step is 2.5 voxels, so interpolating between texel centres a voxel or two apart errs
+    // by a fraction of a voxel's optical depth (sigma_t * voxel = 0.5 at density 1).
+    EXPECT_LT(tmean, scale == 1 ? 0.02 : 0.04) << "scale " << scale;
+    EXPECT_LT(t99, scale == 1 ? 0.10 : 0.20) << "scale " << scale;
+  }
+  EXPECT_LT(worst_mean[0], worst_mean[1]) << "a finer light volume is closer to the march";
+  // A large field gets a coarser grid instead of gigabytes: 512 x 64 x 512 voxels at scale 1 would be
+  // 16.8 M texels; the scale doubles to 2 (2.1 M).
+  PreparedVolume big;
+  big.dims = {512, 64, 512};
+  big.voxel_size = 10;
+  big.occ_dims = {64, 8, 64};
+  RenderSettings s1 = with({"render.light_volume=true", "render.light_volume_scale=1"});
+  FrameSetup fb = make_frame(big, s1, cam, default_sun(cam), 16, 9);
+  EXPECT_EQ(fb.params.light_volume_dims, glm::dvec3(256, 32, 256));
+  EXPECT_LE(fb.params.light_volume_dims.x * fb.params.light_volume_dims.y * fb.params.light_volume_dims.z,
+            double(kMaxLightVolumeTexels));
+}
+
+// The light volume is rebuilt when the sun, the volume or a lighting key changes, never when only
+// the camera moves (a counter, not a timing); the GL image with it matches the CPU reference's.
+TEST(ViewerSpeed, LightVolumeRebuildsOnSunChangeNotOnCameraMove) {
+  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8, 2);
+  gl();
+  GlRenderer r{ShaderSource()};
+  r.set_volume(vol);
+  RenderSettings s = with({"render.light_volume=true", "render.exact_filter=true", "render.steps=96"});
+  Camera cam = default_camera(vol, 60, 160.0 / 90);
+  Sun sun = default_sun(cam);
+  EXPECT_EQ(r.light_volume_builds(), 0);
+  FrameSetup f = make_frame(vol, s, cam, sun, 160, 90);
+  r.render(f);
+  EXPECT_EQ(r.light_volume_builds(), 1);
+  FrameImages a = r.read_back();
+  FrameImages ref = render_cpu(vol, f);
+  double p = psnr(a.display, ref.display);
+  std::cout << "light volume: PSNR GL vs CPU (exact filter) " << p << " dB\n";
+  EXPECT_GT(p, 50.0);
+  Camera moved = cam;
+  for (int i = 1; i <= 3; ++i) {
+    moved.eye += glm::dvec3(37.0 * i, 11.0, -23.0);
+    r.render(make_frame(vol, s, moved, sun, 160, 90));
+  }
+  EXPECT_EQ(r.light_volume_builds(), 1) << "camera moves alone keep the light volume";
+  Sun later = sun;
+  later.elevation_deg += 5;
+  r.render(make_frame(vol, s, moved, later, 160, 90));
+  EXPECT_EQ(r.light_volume_builds(), 2) << "a new sun rebuilds it";
+  RenderSettings denser = s;
+  denser.density = 2;
+  r.render(make_frame(vol, denser, moved, later, 160, 90));
+  EXPECT_EQ(r.light_volume_builds(), 3) << "a lighting key rebuilds it";
+  r.render(make_frame(vol, denser, moved, later, 320, 180));
+  EXPECT_EQ(r.light_volume_builds(), 3) << "a new viewport size does not";
+  r.set_volume(vol);
+  r.render(make_frame(vol, denser, moved, later, 320, 180));
+  EXPECT_EQ(r.light_volume_builds(), 4) << "a new volume rebuilds it";
+  RenderSettings off = denser;
+  off.light_volume = false;
+  r.render(make_frame(vol, off, moved, later, 320, 180));
+  EXPECT_EQ(r.light_volume_builds(), 4) << "off: never built";
+}
+
+// A track key may carry its own settings (the view from below marches at most 2133 m); a bad one
+// is refused before OpenGL, naming the key's JSON pointer.
+TEST(ViewerSpeed, TrackKeysCarryTheirOwnSettings) {
+  std::filesystem::path dir = std::filesystem::temp_directory_path() / "cv_speed_track";
+  std::filesystem::create_directories(dir);
+  auto track = [&](const std::string& set) {
+    std::string path = (dir / "t.json").string();
+    std::ofstream(path) << R"({"space": "volume", "keys": [{"name": "a", "eye": [0.5, 0.5, -1], "target": [0.5, 0.5, 0.5],
+                          "set": [)" << set << R"(]}], "configs": [{"name": "c", "set": []}]})";
+    return path;
+  };
+  std::ostringstream out, err;
+  int code = run_cli({"cloudviewer", "synthetic:sphere", "--headless", "--size", "16x9", "--bench",
+                      track("\"render.nope=1\"")}, out, err);
+  EXPECT_EQ(code, 1);
+  EXPECT_NE(err.str().find("/keys/0/set/0"), std::string::npos) << err.str();
+  EXPECT_NE(err.str().find("render.nope"), std::string::npos) << err.str();
+  std::ostringstream out2, err2;
+  code = run_cli({"cloudviewer", "synthetic:sphere", "--headless", "--size", "16x9", "--bench",
+                  track("\"render.max_distance=10\""), "--bench-repeat", "1"}, out2, err2);
+  EXPECT_EQ(code, 0) << err2.str();
+  // At most 10 m of march: the sphere, 300 m away, is not reached, so no loop trips at all.
+  EXPECT_NE(out2.str().find(" 0.0 "), std::string::npos) << out2.str();
+  std::filesystem::remove_all(dir);
+}
