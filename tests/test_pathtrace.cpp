@@ -70,7 +70,7 @@ TEST(PathTrace, FurnaceUniformSlabGivesTheAmbientSkyWeightedByTheTransmittance) 
 // g = 0.5, so a flipped phase angle would be off by a factor ~9.
 TEST(PathTrace, ThinCloudMatchesTheMarchersSingleScattering) {
   PreparedVolume vol = prepare_volume(synthetic_volume("sphere"), 8);
-  RenderSettings s = with({"render.sky=analytic", "render.ambient=0", "render.powder=0", "render.g=0.5",
+  RenderSettings s = with({"render.sky=analytic", "render.ambient=0", "render.powder=0", "render.g=0.5", "render.ms_octaves=1",
                            "render.density=0.0005", "render.steps=512", "render.light_samples=24",
                            "render.light_growth=1.1", "render.bloom=0", "render.jitter=false", "render.ground=false"});
   RenderSettings empty = s;

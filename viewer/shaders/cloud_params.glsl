@@ -96,4 +96,9 @@ struct CloudParams {
   Number height_size_m;     //   relative to the camera, and its height
   Number height_pad0;
   Number height_pad1;
+  // Multiple scattering by octaves (lighting.glsl inscattered_radiance).
+  Number ms_octaves;        // 1 = single scattering only, up to 4
+  Number ms_attenuation;    // a: octave weight factor
+  Number ms_extinction;     // b: optical depth factor
+  Number ms_eccentricity;   // c: phase eccentricity factor
 };

@@ -69,7 +69,7 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, O
   bool sparse_next = false;                        // the last sample was below density_step_below
   Number sigma_scale = u_cloud.sigma_t_per_m;
   Number albedo = u_cloud.albedo;
-  Number phase = phase_function(dot(rd, u_cloud.sun_dir));
+  vec4 phases = octave_phases(dot(rd, u_cloud.sun_dir));
   int max_iterations = int(u_cloud.max_iterations);
 
   bool large_mode = skipping;
@@ -114,7 +114,7 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, O
     Number density = cloud_density(p);
     if (density > 0.0) {
       Number sigma_t = density * sigma_scale;
-      vec3 source = inscattered_radiance(p, phase);
+      vec3 source = inscattered_radiance(p, phases);
       radiance += transmittance * integrate_step(source, albedo * sigma_t, sigma_t, seg);
       Number step_transmittance = exp(-sigma_t * seg);
       t_weighted += transmittance * (1.0 - step_transmittance) * (t + jitter * seg);

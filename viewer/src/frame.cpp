@@ -168,6 +168,10 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   p.hg_g = s.g;
   p.mie_table_size = double(mie_phase_table().size());
   p.powder_strength = s.powder;
+  p.ms_octaves = s.ms_octaves;
+  p.ms_attenuation = s.ms_attenuation;
+  p.ms_extinction = s.ms_extinction;
+  p.ms_eccentricity = s.ms_eccentricity;
   p.jitter = s.jitter ? 1 : 0;
   p.frame_index = s.frame;
   p.exact_filter = s.exact_filter ? 1 : 0;

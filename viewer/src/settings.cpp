@@ -96,6 +96,10 @@ std::vector<ParamDef> build() {
   t.push_back(real("g", &RenderSettings::g, -0.99, 0.99, "Henyey-Greenstein asymmetry"));
   t.push_back(real("powder", &RenderSettings::powder, 0, 1, "strength of the powder term 1 - exp(-c d)"));
   t.push_back(real("powder_c", &RenderSettings::powder_c, 0, 100, "c of the powder term"));
+  t.push_back(integer("ms_octaves", &RenderSettings::ms_octaves, 1, 4, "multiple scattering by octaves (Wrenninge 2013, Hillaire 2016): 1 = single scattering; octave i adds weight a^i, optical depth b^i, phase eccentricity c^i (docs/accuracy.md: against the path tracer)"));
+  t.push_back(real("ms_attenuation", &RenderSettings::ms_attenuation, 0, 1, "octaves: a, the weight factor (keep a <= ms_extinction for energy conservation)"));
+  t.push_back(real("ms_extinction", &RenderSettings::ms_extinction, 0, 1, "octaves: b, the optical depth factor"));
+  t.push_back(real("ms_eccentricity", &RenderSettings::ms_eccentricity, 0, 1, "octaves: c, the phase eccentricity factor"));
   t.push_back(real("sun_intensity", &RenderSettings::sun_intensity, 0, 1e6, "sun radiance scale"));
   t.push_back(real("ambient", &RenderSettings::ambient, 0, 1e6, "ambient sky radiance scale"));
   t.push_back(enumeration("sky", &RenderSettings::sky, {"analytic", "precomputed"}, "sky and sky light: analytic gradient and constant ambient (the thesis), or Bruneton's precomputed atmosphere (atmosphere.* keys; single scattering, docs/sky.md)"));

@@ -64,6 +64,10 @@ struct RenderSettings {
   double g = 0.3;                  ///< HG asymmetry
   double powder = 0.3;             ///< powder term strength [0,1]
   double powder_c = 2;             ///< c in 1 - exp(-c d)
+  int ms_octaves = 4;              ///< multiple-scattering octaves (1 = single scattering; 4: docs/accuracy.md)
+  double ms_attenuation = 0.5;     ///< a
+  double ms_extinction = 0.5;      ///< b
+  double ms_eccentricity = 0.5;    ///< c
   double sun_intensity = 30;       ///< sun radiance scale
   double ambient = 0.8;            ///< ambient sky radiance scale
   // background
