@@ -110,3 +110,22 @@ TEST(PathTrace, SameImageAtAnyThreadCount) {
   FrameImages c = render_pathtrace(vol, f, o);
   EXPECT_GT(max_abs_diff(a.linear, c.linear), 0.0) << "the seed must change the noise";
 }
+
+TEST(PathTrace, CommandLineWritesTheImageAndChecksSpp) {
+  std::string dir = ::testing::TempDir();
+  std::string out = dir + "/pathtrace_cli.png";
+  std::ostringstream o, e;
+  int code = run_cli({"cloudviewer", "synthetic:blob", "--headless", "--size", "24x14", "--backend", "pathtrace", "--spp",
+                      "2", "--out", out},
+                     o, e);
+  EXPECT_EQ(code, 0) << e.str();
+  EXPECT_NE(o.str().find("path tracer: 24x14 at 2 spp"), std::string::npos) << o.str();
+  EXPECT_NE(e.str().find("100%"), std::string::npos) << "a progress bar on stderr: " << e.str();
+  Image img = read_png(out);
+  EXPECT_EQ(img.width, 24);
+  std::ostringstream o2, e2;
+  EXPECT_EQ(run_cli({"cloudviewer", "synthetic:blob", "--headless", "--backend", "pathtrace", "--spp", "0", "--out", out},
+                    o2, e2),
+            1);
+  EXPECT_NE(e2.str().find("--spp"), std::string::npos) << e2.str();
+}
