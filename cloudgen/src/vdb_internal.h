@@ -5,6 +5,7 @@
 
 #include <openvdb/openvdb.h>
 
+#include <set>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,19 @@ openvdb::GridPtrVec make_empty_grids(const Volume& v, const ExportOptions& o);
 /// when the grids were assembled from bricks (then bake_erosion is refused).
 void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::string& path, const ExportOptions& o,
                  OutputBatch& batch, double erosion_baked);
+/// write_grids without the file: the detail topology, physical scale and metadata on `grids`.
+void finish_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::string& path, const ExportOptions& o,
+                  double erosion_baked);
+/// The grids write_vdb writes for v, before finish_grids (density first, erosion baked if asked);
+/// `erosion_baked` receives the erosion write_grids records.
+openvdb::GridPtrVec export_grids(const Volume& v, const std::string& path, const ExportOptions& o,
+                                 double* erosion_baked);
+/// Every grid of a .vdb file through the checked reader read_vdb uses (InputError when damaged).
+openvdb::GridPtrVec read_grids(const std::string& path);
+/// Linear transform with cubic voxels.
+bool cubic_voxels(const openvdb::GridBase& g);
+/// Metadata keys write_grids computes (never copied from Volume::metadata).
+const std::set<std::string>& computed_meta();
 /// The same, written at once (all or nothing).
 void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::string& path, const ExportOptions& o);
 

@@ -136,6 +136,8 @@ openvdb::MaskGrid::Ptr detail_mask(const Volume& v, const openvdb::FloatGrid& de
   return mask;
 }
 
+}  // namespace
+
 /// Metadata that write_vdb computes (never copied from Volume::metadata, which may hold a stale
 /// string copy read from another file).
 const std::set<std::string>& computed_meta() {
@@ -152,6 +154,8 @@ bool cubic_voxels(const openvdb::GridBase& g) {
   const openvdb::Vec3d v = g.voxelSize();
   return v[0] > 0 && std::abs(v[1] - v[0]) <= 1e-9 * v[0] && std::abs(v[2] - v[0]) <= 1e-9 * v[0];
 }
+
+namespace {
 
 /// An exception's text cut to a length that fits a terminal line (a damaged file once put a
 /// 1.4 GB "grid type" into OpenVDB's message).
@@ -297,10 +301,10 @@ class CheckedVdbArchive : public openvdb::io::Archive {
 
 }  // namespace
 
-void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::string& path, const ExportOptions& o,
-                 OutputBatch& batch, double erosion_baked) {
-  // The one-process writer and the MPI / tile assembler both end here, so the grids' topology,
-  // scale, metadata and file come out the same whichever path made the voxels.
+void finish_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::string& path, const ExportOptions& o,
+                  double erosion_baked) {
+  // The one-process writer, the MPI / tile assembler and the NanoVDB writer all pass here, so the
+  // grids' topology, scale and metadata come out the same whichever path made the voxels.
   if (o.vdb_up != 'y' && o.vdb_up != 'z')
     throw InputError(std::string("export.vdb.up: \"") + o.vdb_up + "\" is not one of z, y");
   if (o.vdb_bake_erosion && erosion_baked < 0)
@@ -356,6 +360,11 @@ void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::s
                       openvdb::StringMetadata(o.vdb_physical ? "extinction_per_metre" : "normalized"));
   // Never a creator starting with "Houdini": Blender then assumes a Y-up Houdini file and rotates it.
   density->setCreator(std::string("cloudgen ") + CLOUDGEN_VERSION);
+}
+
+void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::string& path, const ExportOptions& o,
+                 OutputBatch& batch, double erosion_baked) {
+  finish_grids(v, grids, path, o, erosion_baked);
   CheckedVdbArchive archive;
   uint32_t comp = openvdb::io::COMPRESS_ACTIVE_MASK;
   switch (o.vdb_compression) {
@@ -398,8 +407,11 @@ using vdb::computed_meta;
 void init_vdb() { vdb::init(); }
 }  // namespace
 
-void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o, OutputBatch& batch) {
-  vdb::init();
+namespace vdb {
+
+openvdb::GridPtrVec export_grids(const Volume& v, const std::string& path, const ExportOptions& o,
+                                 double* erosion_baked) {
+  init();
   const View view = view_of_metadata(v.metadata, path);
   const Look look = look_of_view(view, path);
   const bool all_detail = !v.detail[0].empty() && !v.detail[1].empty() && !v.detail[2].empty();
@@ -424,16 +436,27 @@ void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o,
         }
     dens = &baked;
   }
-  openvdb::GridPtrVec grids{vdb::make_grid(v, *dens, "density", o.vdb_half, o.vdb_up)};
+  openvdb::GridPtrVec grids{make_grid(v, *dens, "density", o.vdb_half, o.vdb_up)};
   std::vector<std::pair<const std::vector<float>*, std::string>> todo;
   if (o.vdb_detail && !o.vdb_bake_erosion)
     for (int c = 0; c < 3; ++c)
       if (!v.detail[c].empty()) todo.push_back({&v.detail[c], v.detail_names[c]});
   grids.resize(todo.size() + 1);
   tbb::parallel_for(size_t(0), todo.size(), [&](size_t i) {
-    grids[i + 1] = vdb::make_grid(v, *todo[i].first, todo[i].second, o.vdb_half, o.vdb_up);
+    grids[i + 1] = make_grid(v, *todo[i].first, todo[i].second, o.vdb_half, o.vdb_up);
   });
-  vdb::write_grids(v, grids, path, o, batch, all_detail ? look.erosion : 0.0);
+  *erosion_baked = all_detail ? look.erosion : 0.0;
+  return grids;
+}
+
+openvdb::GridPtrVec read_grids(const std::string& path) { return VdbFile(path).grids(); }
+
+}  // namespace vdb
+
+void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o, OutputBatch& batch) {
+  double erosion = 0;
+  const openvdb::GridPtrVec grids = vdb::export_grids(v, path, o, &erosion);
+  vdb::write_grids(v, grids, path, o, batch, erosion);
 }
 
 Volume read_vdb(const std::string& path, uint64_t max_bytes) {
