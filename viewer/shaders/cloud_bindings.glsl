@@ -6,8 +6,42 @@ layout(binding = CV_UNIT_OCCUPANCY) uniform sampler3D s_occupancy;  // R8: 1 whe
 layout(binding = CV_UNIT_MIE) uniform sampler1D s_mie;              // R32F: Mie phase over theta in [0, pi]
 layout(binding = CV_UNIT_COVERAGE) uniform sampler2D s_coverage;    // RG32F: layer coverage (R) and cloud type (G)
 
-vec4 volume_texel(ivec3 texel) { return texelFetch(s_volume, texel, 0); }
-vec4 volume_filtered(vec3 uvw) { return texture(s_volume, uvw); }
+// render.volume=nanovdb: the NanoVDB float grids back to back in one storage buffer (byte offsets
+// in u_nvdb_grid: density, then the three detail grids), read through PNanoVDB.h's GLSL mode with
+// one read accessor per grid (volume_nanovdb.glsl filters them). Plain uniforms, not CloudParams
+// members: they describe the storage, not the look, and the CPU reference reads its own copy.
+layout(std430, binding = CV_BINDING_NANOVDB) readonly buffer NanoVdbGrids { uint pnanovdb_buf_data[]; };
+uniform int u_nvdb_on;          // 1: the lookups below read the grids, 0: the dense texture
+uniform int u_nvdb_detail;      // 1: the three detail grids exist
+uniform ivec3 u_nvdb_index_min; // grid index of the volume's voxel (0, 0, 0)
+uniform uvec4 u_nvdb_grid;      // byte offsets of the density and detail grids in the buffer
+#define PNANOVDB_GLSL
+#include "PNanoVDB.h"
+
+pnanovdb_readaccessor_t nvdb_acc[4];
+bool nvdb_ready = false;
+
+Number nanovdb_value(int grid, ivec3 ijk) {
+  pnanovdb_buf_t buf;
+  if (!nvdb_ready) {
+    for (int g = 0; g < 4; ++g) {
+      pnanovdb_grid_handle_t h;
+      h.address.byte_offset = u_nvdb_grid[g];
+      pnanovdb_root_handle_t root = pnanovdb_tree_get_root(buf, pnanovdb_grid_get_tree(buf, h));
+      pnanovdb_readaccessor_init(nvdb_acc[g], root);
+    }
+    nvdb_ready = true;
+  }
+  pnanovdb_address_t a = pnanovdb_readaccessor_get_value_address(PNANOVDB_GRID_TYPE_FLOAT, buf, nvdb_acc[grid], ijk);
+  return pnanovdb_read_float(buf, a);
+}
+ivec3 nanovdb_index_min() { return u_nvdb_index_min; }
+bool nanovdb_has_detail() { return u_nvdb_detail != 0; }
+vec4 nanovdb_texel(ivec3 texel);    // volume_nanovdb.glsl
+vec4 nanovdb_filtered(vec3 uvw);
+
+vec4 volume_texel(ivec3 texel) { return u_nvdb_on != 0 ? nanovdb_texel(texel) : texelFetch(s_volume, texel, 0); }
+vec4 volume_filtered(vec3 uvw) { return u_nvdb_on != 0 ? nanovdb_filtered(uvw) : texture(s_volume, uvw); }
 Number occupancy_texel(ivec3 cell) { return texelFetch(s_occupancy, cell, 0).r; }
 Number mie_table_value(int i) { return texelFetch(s_mie, i, 0).r; }
 vec2 coverage_texel(ivec2 texel) { return texelFetch(s_coverage, texel, 0).rg; }

@@ -31,6 +31,8 @@
 #define CV_BINDING_CLOUD 0
 #define CV_BINDING_FRAME 1
 #define CV_BINDING_ATMOSPHERE 2
+// Shader storage buffer binding (its own namespace): the NanoVDB grids (render.volume=nanovdb).
+#define CV_BINDING_NANOVDB 0
 // Texture units. The two pass inputs are reused by every full-screen pass for its own sources.
 #define CV_UNIT_VOLUME 0
 #define CV_UNIT_OCCUPANCY 1

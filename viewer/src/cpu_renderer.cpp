@@ -10,9 +10,17 @@
 
 #include <tbb/parallel_for.h>
 
+// The nanovdb path samples the grids through PNanoVDB.h's C mode, the code the GLSL mode is.
+#define PNANOVDB_C
+#include <nanovdb/PNanoVDB.h>
+
 #include "cloudviewer/atmosphere.h"
 #include "cloudviewer/constants.h"
 #include "cloudviewer/renderer.h"
+
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+#include "cloudgen/nvdb.h"
+#endif
 
 namespace cloudviewer {
 namespace {
@@ -40,11 +48,50 @@ struct CpuShader {
 
   vec3 transmittance_texel(ivec2 t) const { return lut.texels[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
 
-  vec4 volume_texel(ivec3 t) const {
+  vec4 volume_texel(ivec3 t) {
+    if (vol.nano) return nanovdb_texel(t);
     const float* v = &vol.rgba[((size_t(t.z) * vol.dims[1] + t.y) * vol.dims[0] + t.x) * 4];
     return vec4(v[0], v[1], v[2], v[3]);
   }
-  vec4 volume_filtered(vec3 uvw) { return volume_trilinear(uvw); }
+  vec4 volume_filtered(vec3 uvw) { return vol.nano ? nanovdb_filtered(uvw) : volume_trilinear(uvw); }
+
+  // The nanovdb path's lookups (shaders/volume_nanovdb.glsl): one PNanoVDB read accessor per grid,
+  // kept across calls like the GLSL globals (a CpuShader serves one thread).
+  mutable pnanovdb_readaccessor_t nvdb_acc[4];
+  mutable bool nvdb_ready = false;
+  pnanovdb_buf_t nvdb_buf() const {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+    return pnanovdb_make_buf(reinterpret_cast<uint32_t*>(const_cast<uint8_t*>(vol.nano->data())), vol.nano->bytes() / 4);
+#else
+    return pnanovdb_make_buf(nullptr, 0);
+#endif
+  }
+  Number nanovdb_value(int grid, ivec3 ijk) const {
+    pnanovdb_buf_t buf = nvdb_buf();
+    if (!nvdb_ready) {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+      for (int g = 0; g < 4; ++g) {
+        const int index = g == 0 ? 0 : vol.nano->detail[size_t(g - 1)];
+        pnanovdb_grid_handle_t h;
+        h.address.byte_offset = vol.nano->grids[size_t(std::max(index, 0))].offset;
+        pnanovdb_root_handle_t root = pnanovdb_tree_get_root(buf, pnanovdb_grid_get_tree(buf, h));
+        pnanovdb_readaccessor_init(&nvdb_acc[g], root);
+      }
+#endif
+      nvdb_ready = true;
+    }
+    pnanovdb_coord_t c{ijk.x, ijk.y, ijk.z};
+    pnanovdb_address_t a = pnanovdb_readaccessor_get_value_address(PNANOVDB_GRID_TYPE_FLOAT, buf, &nvdb_acc[grid], &c);
+    return pnanovdb_read_float(buf, a);
+  }
+  ivec3 nanovdb_index_min() const {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+    return ivec3(vol.nano->index_min[0], vol.nano->index_min[1], vol.nano->index_min[2]);
+#else
+    return ivec3(0);
+#endif
+  }
+  bool nanovdb_has_detail() const { return vol.has_detail; }
   Number occupancy_texel(ivec3 c) const {
     return vol.occ[(size_t(c.z) * vol.occ_dims[1] + c.y) * vol.occ_dims[0] + c.x];
   }
@@ -60,6 +107,7 @@ struct CpuShader {
 #define INOUT(x) x&
 // The list and order of shaders/cloud_headers.glsl (after its GLSL-only bindings), plus post.glsl.
 #include "../shaders/common.glsl"
+#include "../shaders/volume_nanovdb.glsl"
 #include "../shaders/phase.glsl"
 #include "cloudgen/cloud_type.glsl"
 #include "../shaders/medium.glsl"

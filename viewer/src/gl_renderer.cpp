@@ -14,6 +14,7 @@
 #include "cloudviewer/constants.h"
 #include "cloudviewer/errors.h"
 #include "cloudviewer/renderer.h"
+#include "cloudgen/nvdb.h"
 
 namespace cloudviewer {
 namespace {
@@ -173,6 +174,10 @@ struct GlRenderer::Impl {
   std::vector<Pass> passes = make_passes();
   GLuint tex_volume = 0, tex_occ = 0, tex_mie = 0, tex_coverage = 0;
   GLuint ubo_cloud = 0, ubo_frame = 0, ubo_atmo = 0;
+  GLuint ssbo_nano = 0;  // render.volume=nanovdb: the grids (else a 32-byte placeholder)
+  int nvdb_on = 0, nvdb_detail = 0;
+  glm::ivec3 nvdb_index_min{0};
+  glm::uvec4 nvdb_grid{0u};
   bool atmo_valid = false;            // the LUT targets hold `atmo_done`'s tables
   AtmosphereSettings atmo_done;
   GLuint vao_empty = 0, vao_ground = 0, vbo_ground = 0;
@@ -252,6 +257,15 @@ struct GlRenderer::Impl {
       }
     }
   }
+  // The nanovdb lookups' plain uniforms (cloud_bindings.glsl); passes without them skip them.
+  void set_volume_uniforms(GLuint program) const {
+    GLint l = glGetUniformLocation(program, "u_nvdb_on");
+    if (l < 0) return;
+    glUniform1i(l, nvdb_on);
+    glUniform1i(glGetUniformLocation(program, "u_nvdb_detail"), nvdb_detail);
+    glUniform3i(glGetUniformLocation(program, "u_nvdb_index_min"), nvdb_index_min.x, nvdb_index_min.y, nvdb_index_min.z);
+    glUniform4ui(glGetUniformLocation(program, "u_nvdb_grid"), nvdb_grid.x, nvdb_grid.y, nvdb_grid.z, nvdb_grid.w);
+  }
   void run(Pass& p, const FrameSetup& f) {
     Target& t = target(p.target);
     for (size_t i = 0; i < p.clear.size(); ++i) glClearNamedFramebufferfv(t.fbo[0], GL_COLOR, GLint(i), p.clear[i].data());
@@ -269,6 +283,7 @@ struct GlRenderer::Impl {
     glBindFramebuffer(GL_FRAMEBUFFER, t.fbo[0]);
     glViewport(0, 0, t.w, t.h);
     glUseProgram(p.program);
+    set_volume_uniforms(p.program);
     if (p.uniforms) p.uniforms(p.program);
     if (p.mesh) {
       bool layer = f.params.layer_on > 0.5;
@@ -352,6 +367,7 @@ GlRenderer::~GlRenderer() {
   GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_mie, m.tex_coverage};
   for (GLuint t : texs)
     if (t) glDeleteTextures(1, &t);
+  if (m.ssbo_nano) glDeleteBuffers(1, &m.ssbo_nano);
   glDeleteBuffers(1, &m.ubo_cloud);
   glDeleteBuffers(1, &m.ubo_frame);
   glDeleteBuffers(1, &m.ubo_atmo);
@@ -373,15 +389,44 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
   Impl& m = *impl_;
   if (m.tex_volume) glDeleteTextures(1, &m.tex_volume);
   if (m.tex_occ) glDeleteTextures(1, &m.tex_occ);
-  GLint max3d = 0;
-  glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max3d);
-  for (int i = 0; i < 3; ++i)
-    if (vol.dims[i] > max3d)
-      throw InputError("volume dimension " + std::to_string(vol.dims[i]) + " exceeds GL_MAX_3D_TEXTURE_SIZE " + std::to_string(max3d));
+  if (m.ssbo_nano) glDeleteBuffers(1, &m.ssbo_nano);
+  m.tex_volume = m.tex_occ = m.ssbo_nano = 0;
+  glCreateBuffers(1, &m.ssbo_nano);
   glCreateTextures(GL_TEXTURE_3D, 1, &m.tex_volume);
-  glTextureStorage3D(m.tex_volume, 1, GL_RGBA32F, vol.dims[0], vol.dims[1], vol.dims[2]);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  glTextureSubImage3D(m.tex_volume, 0, 0, 0, 0, vol.dims[0], vol.dims[1], vol.dims[2], GL_RGBA, GL_FLOAT, vol.rgba.data());
+  if (vol.nano) {
+    // The grids as they are in memory (NanoVDB is position-independent: offsets are relative);
+    // the dense texture becomes one texel the lookups never read.
+    GLint64 max_ssbo = 0;
+    glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_ssbo);
+    if (GLint64(vol.nano->bytes()) > max_ssbo)
+      throw GlError("the NanoVDB grids need a " + std::to_string(vol.nano->bytes() >> 20) +
+                    " MiB storage buffer, more than this GL's GL_MAX_SHADER_STORAGE_BLOCK_SIZE of " +
+                    std::to_string(max_ssbo >> 20) + " MiB");
+    glNamedBufferStorage(m.ssbo_nano, GLsizeiptr(vol.nano->bytes()), vol.nano->data(), 0);
+    m.nvdb_on = 1;
+    m.nvdb_detail = vol.has_detail ? 1 : 0;
+    m.nvdb_index_min = glm::ivec3(vol.nano->index_min[0], vol.nano->index_min[1], vol.nano->index_min[2]);
+    for (int g = 0; g < 4; ++g) {
+      const int index = g == 0 ? 0 : std::max(vol.nano->detail[size_t(g - 1)], 0);
+      m.nvdb_grid[g] = GLuint(vol.nano->grids[size_t(index)].offset);
+    }
+    const float zero[4] = {0, 0, 0, 0};
+    glTextureStorage3D(m.tex_volume, 1, GL_RGBA32F, 1, 1, 1);
+    glTextureSubImage3D(m.tex_volume, 0, 0, 0, 0, 1, 1, 1, GL_RGBA, GL_FLOAT, zero);
+  } else {
+    const uint32_t placeholder[8] = {};
+    glNamedBufferStorage(m.ssbo_nano, sizeof placeholder, placeholder, 0);
+    m.nvdb_on = 0;
+    GLint max3d = 0;
+    glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max3d);
+    for (int i = 0; i < 3; ++i)
+      if (vol.dims[i] > max3d)
+        throw InputError("volume dimension " + std::to_string(vol.dims[i]) + " exceeds GL_MAX_3D_TEXTURE_SIZE " +
+                         std::to_string(max3d) + " (render.volume=nanovdb has no such limit)");
+    glTextureStorage3D(m.tex_volume, 1, GL_RGBA32F, vol.dims[0], vol.dims[1], vol.dims[2]);
+    glTextureSubImage3D(m.tex_volume, 0, 0, 0, 0, vol.dims[0], vol.dims[1], vol.dims[2], GL_RGBA, GL_FLOAT, vol.rgba.data());
+  }
   glTextureParameteri(m.tex_volume, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
   glTextureParameteri(m.tex_volume, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
   GLint wrap_xz = vol.tiles ? GL_REPEAT : GL_CLAMP_TO_EDGE;
@@ -418,6 +463,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_ATMOSPHERE, m.ubo_atmo);
   glBindTextureUnit(CV_UNIT_VOLUME, m.tex_volume);
   glBindTextureUnit(CV_UNIT_OCCUPANCY, m.tex_occ);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CV_BINDING_NANOVDB, m.ssbo_nano);
   glBindTextureUnit(CV_UNIT_MIE, m.tex_mie);
   glBindTextureUnit(CV_UNIT_COVERAGE, m.tex_coverage);
   glDisable(GL_BLEND);

@@ -113,6 +113,8 @@ std::vector<ParamDef> build() {
   t.push_back(real("bloom_threshold", &RenderSettings::bloom_threshold, 0, 1e6, "bright-pass threshold (linear radiance)"));
   t.push_back(enumeration("output", &RenderSettings::output, {"radiance", "transmittance", "iterations"}, "what the cloud pass writes (debug views)"));
   t.push_back(integer("frame", &RenderSettings::frame, 0, 1 << 30, "frame index of the jitter pattern"));
+  t.push_back(enumeration("volume", &RenderSettings::volume, {"auto", "dense", "nanovdb"}, "how the volume reaches the shaders: dense (an RGBA float 3D texture, 16 bytes per voxel of the active box) or nanovdb (the sparse NanoVDB grids in a storage buffer, marched through PNanoVDB.h; .nvdb and .vdb inputs load without a dense copy); auto: nanovdb when the dense texture plus occupancy (16.125 bytes per voxel) would exceed dense_budget, dense otherwise"));
+  t.push_back(real("dense_budget", &RenderSettings::dense_budget, 0, 1e9, "memory the dense path may use, MiB (0 = the free memory); volume=dense refuses a volume beyond it, volume=auto switches to nanovdb"));
   return t;
 }
 

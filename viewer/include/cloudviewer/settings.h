@@ -20,6 +20,8 @@ enum class OutputMode {
 };
 enum class PlaceMode { Box = 0, Layer = 1 };
 enum class SkyMode { Analytic = CV_SKY_ANALYTIC, Precomputed = CV_SKY_PRECOMPUTED };
+/// How the volume reaches the shaders: a dense RGBA texture, or NanoVDB grids in a storage buffer.
+enum class VolumeStorage { Auto = 0, Dense = 1, NanoVdb = 2 };
 
 struct RenderSettings {
   // placement
@@ -72,6 +74,9 @@ struct RenderSettings {
   double bloom_threshold = 1.0;
   OutputMode output = OutputMode::Radiance;
   int frame = 0;                   ///< frame index (jitter pattern)
+  // volume storage (docs/nanovdb.md)
+  VolumeStorage volume = VolumeStorage::Auto;  ///< auto: nanovdb when the dense texture exceeds dense_budget
+  double dense_budget = 0;         ///< MiB the dense path may use (RGBA floats + occupancy); 0 = the free memory
   // The atmosphere model (`--set atmosphere.KEY=VALUE`; its own table in atmosphere.h).
   AtmosphereSettings atmosphere;
 };
