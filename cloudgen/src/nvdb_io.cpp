@@ -214,6 +214,41 @@ void apply_metadata(NanoVolume& n, const std::string& text, const std::string& n
   }
 }
 
+/// Whether grids a and b have the same node layout: the same tree counts and offsets, root
+/// table, child links and leaf origins (values may differ), so equal offsets address equal voxels.
+bool same_layout(const NanoVolume& n, size_t a, size_t b) {
+  const NanoGrid& ga = *grid_at(n, a);
+  const NanoGrid& gb = *grid_at(n, b);
+  const auto* ta = reinterpret_cast<const nanovdb::TreeData<3>*>(&ga.tree());
+  const auto* tb = reinterpret_cast<const nanovdb::TreeData<3>*>(&gb.tree());
+  for (int i = 0; i < 4; ++i)
+    if (ta->mNodeOffset[i] != tb->mNodeOffset[i]) return false;
+  for (int i = 0; i < 3; ++i)
+    if (ta->mNodeCount[i] != tb->mNodeCount[i]) return false;
+  const auto* ra = ga.tree().root().data();
+  const auto* rb = gb.tree().root().data();
+  if (ra->mTableSize != rb->mTableSize) return false;
+  for (uint32_t i = 0; i < ra->mTableSize; ++i)
+    if (!(ra->tile(i)->key == rb->tile(i)->key) || ra->tile(i)->child != rb->tile(i)->child) return false;
+  auto internal = [&](auto* na, auto* nb, uint32_t count) {
+    for (uint32_t c = 0; c < count; ++c) {
+      if (!(na[c].data()->mChildMask == nb[c].data()->mChildMask)) return false;
+      for (auto it = na[c].data()->mChildMask.beginOn(); it; ++it)
+        if (na[c].data()->mTable[*it].child != nb[c].data()->mTable[*it].child) return false;
+    }
+    return true;
+  };
+  const auto& xa = ga.tree();
+  const auto& xb = gb.tree();
+  if (xa.nodeCount(2) && !internal(xa.template getFirstNode<2>(), xb.template getFirstNode<2>(), xa.nodeCount(2))) return false;
+  if (xa.nodeCount(1) && !internal(xa.template getFirstNode<1>(), xb.template getFirstNode<1>(), xa.nodeCount(1))) return false;
+  const NanoLeaf* la = xa.nodeCount(0) ? xa.template getFirstNode<0>() : nullptr;
+  const NanoLeaf* lb = xb.nodeCount(0) ? xb.template getFirstNode<0>() : nullptr;
+  for (uint32_t c = 0; c < xa.nodeCount(0); ++c)
+    if (!(la[c].origin() == lb[c].origin())) return false;
+  return true;
+}
+
 NanoVolume assemble(std::vector<std::pair<std::string, std::vector<NanoVolume::Block>>> parts, const std::string& name) {
   NanoVolume n;
   uint64_t total = 0;
@@ -233,6 +268,8 @@ NanoVolume assemble(std::vector<std::pair<std::string, std::vector<NanoVolume::B
     for (int l = 0; l < 3; ++l) (l == 0 ? n.grids[i].leaves : l == 1 ? n.grids[i].lower : n.grids[i].upper) = g.tree().nodeCount(l);
   }
   describe(n, name);
+  n.detail_shared_layout = n.has_detail() && same_layout(n, size_t(n.detail[0]), size_t(n.detail[1])) &&
+                           same_layout(n, size_t(n.detail[0]), size_t(n.detail[2]));
   return n;
 }
 

@@ -18,13 +18,16 @@ uniform uvec4 u_nvdb_grid;      // byte offsets of the density and detail grids 
 #define PNANOVDB_GLSL
 #include "PNanoVDB.h"
 
-pnanovdb_readaccessor_t nvdb_acc[4];
+uniform int u_nvdb_shared;      // 1: the detail grids share one layout (cloudgen's: one mask), so the
+                                // address of a value in grid 1 plus the grids' offset is the value in 2, 3
+
+pnanovdb_readaccessor_t nvdb_acc[2];  // density, first detail grid
 bool nvdb_ready = false;
 
-Number nanovdb_value(int grid, ivec3 ijk) {
+pnanovdb_address_t nvdb_address(int grid, ivec3 ijk) {
   pnanovdb_buf_t buf;
   if (!nvdb_ready) {
-    for (int g = 0; g < 4; ++g) {
+    for (int g = 0; g < 2; ++g) {
       pnanovdb_grid_handle_t h;
       h.address.byte_offset = u_nvdb_grid[g];
       pnanovdb_root_handle_t root = pnanovdb_tree_get_root(buf, pnanovdb_grid_get_tree(buf, h));
@@ -32,8 +35,31 @@ Number nanovdb_value(int grid, ivec3 ijk) {
     }
     nvdb_ready = true;
   }
-  pnanovdb_address_t a = pnanovdb_readaccessor_get_value_address(PNANOVDB_GRID_TYPE_FLOAT, buf, nvdb_acc[grid], ijk);
-  return pnanovdb_read_float(buf, a);
+  return pnanovdb_readaccessor_get_value_address(PNANOVDB_GRID_TYPE_FLOAT, buf, nvdb_acc[grid], ijk);
+}
+Number nanovdb_density(ivec3 ijk) {
+  pnanovdb_buf_t buf;
+  return pnanovdb_read_float(buf, nvdb_address(0, ijk));
+}
+vec3 nanovdb_detail(ivec3 ijk) {
+  pnanovdb_buf_t buf;
+  pnanovdb_address_t a = nvdb_address(1, ijk);
+  if (u_nvdb_shared != 0) {
+    pnanovdb_address_t b = a, c = a;
+    b.byte_offset += u_nvdb_grid.z - u_nvdb_grid.y;
+    c.byte_offset += u_nvdb_grid.w - u_nvdb_grid.y;
+    return vec3(pnanovdb_read_float(buf, a), pnanovdb_read_float(buf, b), pnanovdb_read_float(buf, c));
+  }
+  // Separate layouts: a root-to-leaf walk per grid (rare: files from elsewhere).
+  vec3 r;
+  r.x = pnanovdb_read_float(buf, a);
+  for (int g = 2; g < 4; ++g) {
+    pnanovdb_grid_handle_t h;
+    h.address.byte_offset = u_nvdb_grid[g];
+    pnanovdb_root_handle_t root = pnanovdb_tree_get_root(buf, pnanovdb_grid_get_tree(buf, h));
+    r[g - 1] = pnanovdb_read_float(buf, pnanovdb_root_get_value_address(PNANOVDB_GRID_TYPE_FLOAT, buf, root, ijk));
+  }
+  return r;
 }
 ivec3 nanovdb_index_min() { return u_nvdb_index_min; }
 bool nanovdb_has_detail() { return u_nvdb_detail != 0; }

@@ -1,7 +1,8 @@
 // render.volume=nanovdb: the volume lookups over NanoVDB grids, in the GLSL subset C++ also
 // compiles (the GPU reads the grids through PNanoVDB.h's GLSL mode, the CPU reference through its
 // C mode). Needs common.glsl, `u_cloud` and, from the including side:
-//   Number nanovdb_value(int grid, ivec3 ijk)  value of grid 0 (density) or 1..3 (detail) at index ijk
+//   Number nanovdb_density(ivec3 ijk)          value of the density grid at index ijk
+//   vec3   nanovdb_detail(ivec3 ijk)           values of the three detail grids at index ijk
 //   ivec3  nanovdb_index_min()                 grid index of the volume's voxel (0, 0, 0)
 //   bool   nanovdb_has_detail()                the three detail grids exist
 // The grids hold 0 in every inactive voxel and tile (cloudgen zeroes them on load), so a lookup
@@ -10,9 +11,9 @@
 // The texel the dense RGBA texture holds at `texel` (density clamped at 0, as prepare_volume).
 vec4 nanovdb_texel(ivec3 texel) {
   ivec3 ijk = texel + nanovdb_index_min();
-  Number d = max(nanovdb_value(0, ijk), 0.0);
+  Number d = max(nanovdb_density(ijk), 0.0);
   if (!nanovdb_has_detail()) return vec4(d, 0.0, 0.0, 0.0);
-  return vec4(d, nanovdb_value(1, ijk), nanovdb_value(2, ijk), nanovdb_value(3, ijk));
+  return vec4(d, nanovdb_detail(ijk));
 }
 
 // medium.glsl's volume_trilinear (same corners, weights and order of sums, so the same bits),
@@ -35,7 +36,7 @@ vec4 nanovdb_filtered(vec3 uvw) {
     i.y = clamp_index(i.y, n.y);
     i.z = tiles ? wrap_index(i.z, n.z) : clamp_index(i.z, n.z);
     corner[k] = i;
-    dens[k] = max(nanovdb_value(0, i + nanovdb_index_min()), 0.0);
+    dens[k] = max(nanovdb_density(i + nanovdb_index_min()), 0.0);
     any = any || dens[k] > 0.0;
   }
   if (!any) return vec4(0.0);
@@ -44,9 +45,7 @@ vec4 nanovdb_filtered(vec3 uvw) {
   for (int k = 0; k < 8; ++k) {
     ivec3 o = ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
     vec3 w = mix(vec3(1.0) - f, f, vec3(o));
-    ivec3 ijk = corner[k] + nanovdb_index_min();
-    vec4 t = detail ? vec4(dens[k], nanovdb_value(1, ijk), nanovdb_value(2, ijk), nanovdb_value(3, ijk))
-                    : vec4(dens[k], 0.0, 0.0, 0.0);
+    vec4 t = detail ? vec4(dens[k], nanovdb_detail(corner[k] + nanovdb_index_min())) : vec4(dens[k], 0.0, 0.0, 0.0);
     acc += (w.x * w.y * w.z) * t;
   }
   return acc;

@@ -55,9 +55,11 @@ struct CpuShader {
   }
   vec4 volume_filtered(vec3 uvw) { return vol.nano ? nanovdb_filtered(uvw) : volume_trilinear(uvw); }
 
-  // The nanovdb path's lookups (shaders/volume_nanovdb.glsl): one PNanoVDB read accessor per grid,
-  // kept across calls like the GLSL globals (a CpuShader serves one thread).
-  mutable pnanovdb_readaccessor_t nvdb_acc[4];
+  // The nanovdb path's lookups (shaders/volume_nanovdb.glsl, cloud_bindings.glsl on the GPU): a
+  // PNanoVDB read accessor for the density and the first detail grid, kept across calls like the
+  // GLSL globals (a CpuShader serves one thread); the other detail grids at the same offsets when
+  // they share the first one's layout.
+  mutable pnanovdb_readaccessor_t nvdb_acc[2];
   mutable bool nvdb_ready = false;
   pnanovdb_buf_t nvdb_buf() const {
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
@@ -66,23 +68,45 @@ struct CpuShader {
     return pnanovdb_make_buf(nullptr, 0);
 #endif
   }
-  Number nanovdb_value(int grid, ivec3 ijk) const {
+  uint64_t nvdb_grid(int g) const {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+    const int index = g == 0 ? 0 : vol.nano->detail[size_t(g - 1)];
+    return vol.nano->grids[size_t(std::max(index, 0))].offset;
+#else
+    return 0;
+#endif
+  }
+  pnanovdb_root_handle_t nvdb_root(pnanovdb_buf_t buf, int g) const {
+    pnanovdb_grid_handle_t h;
+    h.address.byte_offset = nvdb_grid(g);
+    return pnanovdb_tree_get_root(buf, pnanovdb_grid_get_tree(buf, h));
+  }
+  pnanovdb_address_t nvdb_address(int grid, ivec3 ijk) const {
     pnanovdb_buf_t buf = nvdb_buf();
     if (!nvdb_ready) {
-#ifdef CLOUDVIEWER_HAS_CLOUDGEN
-      for (int g = 0; g < 4; ++g) {
-        const int index = g == 0 ? 0 : vol.nano->detail[size_t(g - 1)];
-        pnanovdb_grid_handle_t h;
-        h.address.byte_offset = vol.nano->grids[size_t(std::max(index, 0))].offset;
-        pnanovdb_root_handle_t root = pnanovdb_tree_get_root(buf, pnanovdb_grid_get_tree(buf, h));
-        pnanovdb_readaccessor_init(&nvdb_acc[g], root);
-      }
-#endif
+      for (int g = 0; g < 2; ++g) pnanovdb_readaccessor_init(&nvdb_acc[g], nvdb_root(buf, g));
       nvdb_ready = true;
     }
     pnanovdb_coord_t c{ijk.x, ijk.y, ijk.z};
-    pnanovdb_address_t a = pnanovdb_readaccessor_get_value_address(PNANOVDB_GRID_TYPE_FLOAT, buf, &nvdb_acc[grid], &c);
-    return pnanovdb_read_float(buf, a);
+    return pnanovdb_readaccessor_get_value_address(PNANOVDB_GRID_TYPE_FLOAT, buf, &nvdb_acc[grid], &c);
+  }
+  Number nanovdb_density(ivec3 ijk) const { return pnanovdb_read_float(nvdb_buf(), nvdb_address(0, ijk)); }
+  vec3 nanovdb_detail(ivec3 ijk) const {
+    pnanovdb_buf_t buf = nvdb_buf();
+    pnanovdb_address_t a = nvdb_address(1, ijk);
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+    if (vol.nano->detail_shared_layout) {
+      pnanovdb_address_t b = a, c = a;
+      b.byte_offset += nvdb_grid(2) - nvdb_grid(1);
+      c.byte_offset += nvdb_grid(3) - nvdb_grid(1);
+      return vec3(pnanovdb_read_float(buf, a), pnanovdb_read_float(buf, b), pnanovdb_read_float(buf, c));
+    }
+#endif
+    vec3 r(pnanovdb_read_float(buf, a), 0.0, 0.0);
+    pnanovdb_coord_t c{ijk.x, ijk.y, ijk.z};
+    for (int g = 2; g < 4; ++g)
+      r[g - 1] = pnanovdb_read_float(buf, pnanovdb_root_get_value_address(PNANOVDB_GRID_TYPE_FLOAT, buf, nvdb_root(buf, g), &c));
+    return r;
   }
   ivec3 nanovdb_index_min() const {
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN

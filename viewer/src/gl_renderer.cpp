@@ -175,7 +175,7 @@ struct GlRenderer::Impl {
   GLuint tex_volume = 0, tex_occ = 0, tex_mie = 0, tex_coverage = 0;
   GLuint ubo_cloud = 0, ubo_frame = 0, ubo_atmo = 0;
   GLuint ssbo_nano = 0;  // render.volume=nanovdb: the grids (else a 32-byte placeholder)
-  int nvdb_on = 0, nvdb_detail = 0;
+  int nvdb_on = 0, nvdb_detail = 0, nvdb_shared = 0;
   glm::ivec3 nvdb_index_min{0};
   glm::uvec4 nvdb_grid{0u};
   bool atmo_valid = false;            // the LUT targets hold `atmo_done`'s tables
@@ -263,6 +263,7 @@ struct GlRenderer::Impl {
     if (l < 0) return;
     glUniform1i(l, nvdb_on);
     glUniform1i(glGetUniformLocation(program, "u_nvdb_detail"), nvdb_detail);
+    glUniform1i(glGetUniformLocation(program, "u_nvdb_shared"), nvdb_shared);
     glUniform3i(glGetUniformLocation(program, "u_nvdb_index_min"), nvdb_index_min.x, nvdb_index_min.y, nvdb_index_min.z);
     glUniform4ui(glGetUniformLocation(program, "u_nvdb_grid"), nvdb_grid.x, nvdb_grid.y, nvdb_grid.z, nvdb_grid.w);
   }
@@ -406,6 +407,7 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
     glNamedBufferStorage(m.ssbo_nano, GLsizeiptr(vol.nano->bytes()), vol.nano->data(), 0);
     m.nvdb_on = 1;
     m.nvdb_detail = vol.has_detail ? 1 : 0;
+    m.nvdb_shared = vol.has_detail && vol.nano->detail_shared_layout ? 1 : 0;
     m.nvdb_index_min = glm::ivec3(vol.nano->index_min[0], vol.nano->index_min[1], vol.nano->index_min[2]);
     for (int g = 0; g < 4; ++g) {
       const int index = g == 0 ? 0 : std::max(vol.nano->detail[size_t(g - 1)], 0);

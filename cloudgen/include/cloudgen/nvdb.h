@@ -38,6 +38,10 @@ struct NanoVolume {
   std::array<double, 3> origin{{0, 0, 0}};  ///< min corner of voxel index_min, y-up metres
   bool tiles_xz = false;
   char up = 'y';
+  /// The three detail grids have one node layout (cloudgen writes them on one mask): a value's
+  /// byte offset in detail grid 1 plus the grids' distance is the same voxel's in grids 2 and 3,
+  /// so a renderer walks one tree for all three.
+  bool detail_shared_layout = false;
   std::vector<std::pair<std::string, std::string>> metadata;
 
   const uint8_t* data() const { return buffer.empty() ? nullptr : buffer.front().b; }
