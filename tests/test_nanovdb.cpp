@@ -124,6 +124,23 @@ TEST(NanoVdb, FileRoundTripEqualsTheVdbVoxelForVoxel) {
         ASSERT_EQ(cloudgen::nano_value(n, size_t(n.detail[1]), ijk), a.detail[1][a.index(x, y, z)]);
       }
   EXPECT_GT(checked, 500u);
+  // The GL renderer's page table leads to the same values (every voxel of the box, both grids).
+  for (size_t g : {size_t(0), size_t(n.detail[0])}) {
+    const cloudgen::NanoPages t = cloudgen::nano_pages(n, g);
+    for (uint32_t z = 0; z < n.dims[2]; ++z)
+      for (uint32_t y = 0; y < n.dims[1]; ++y)
+        for (uint32_t x = 0; x < n.dims[0]; ++x) {
+          const std::array<int32_t, 3> ijk{n.index_min[0] + int(x), n.index_min[1] + int(y), n.index_min[2] + int(z)};
+          const uint32_t e = t.entries[(size_t((ijk[2] - t.origin[2]) >> 3) * t.dims[1] + size_t((ijk[1] - t.origin[1]) >> 3)) *
+                                           t.dims[0] + size_t((ijk[0] - t.origin[0]) >> 3)];
+          const uint32_t w = (e & cloudgen::NanoPages::kNanoConstant)
+                                 ? (e & ~cloudgen::NanoPages::kNanoConstant)
+                                 : e + uint32_t(((ijk[0] & 7) << 6) | ((ijk[1] & 7) << 3) | (ijk[2] & 7));
+          float f;
+          std::memcpy(&f, n.data() + size_t(w) * 4, 4);
+          ASSERT_EQ(f, cloudgen::nano_value(n, g, ijk)) << "grid " << g << " at " << x << "," << y << "," << z;
+        }
+  }
   EXPECT_EQ(cloudgen::nano_value(n, 0, {n.index_min[0] - 40, n.index_min[1], n.index_min[2]}), 0.0f);
 }
 
@@ -196,6 +213,10 @@ TEST(NanoVdb, SameViewGivesTheSameImageAsTheDensePath) {
   // GL nanovdb against the CPU nanovdb reference, as the dense path's own test (> 50 dB).
   const FrameImages cpu_e = render_cpu(nano, fe);
   EXPECT_GT(psnr(en.display, cpu_e.display), 50.0);
+  // PNanoVDB's accessor walk on the GPU instead of the page table: the same values, the same image.
+  RenderSettings acc = ex;
+  apply_setting(acc, "render.nanovdb_lookup=accessor");
+  EXPECT_EQ(max_abs_diff(render_gl(nano, frame_for(dense, acc, 96, 54)).linear, en.linear), 0.0);
   // Detail grids of separate layouts (files from elsewhere) take one tree walk per grid: same image.
   auto copy = std::make_shared<cloudgen::NanoVolume>(*nano.nano);
   copy->detail_shared_layout = false;

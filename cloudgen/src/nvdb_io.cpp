@@ -602,6 +602,52 @@ float nano_value(const NanoVolume& n, size_t g, const std::array<int32_t, 3>& ij
   return acc.getValue(nanovdb::Coord(ijk[0], ijk[1], ijk[2]));
 }
 
+NanoPages nano_pages(const NanoVolume& n, size_t g) {
+  const NanoGrid& grid = *grid_at(n, g);
+  const auto* root = grid.tree().root().data();
+  const uint8_t* base = n.data();
+  auto word = [base](const void* p) { return uint32_t((reinterpret_cast<const uint8_t*>(p) - base) / 4); };
+  NanoPages t;
+  for (int a = 0; a < 3; ++a) {
+    const int32_t lo = n.index_min[size_t(a)] & ~7, hi = n.index_min[size_t(a)] + int32_t(n.dims[size_t(a)]) - 1;
+    t.origin[size_t(a)] = lo;
+    t.dims[size_t(a)] = uint32_t((hi - lo) / 8 + 1);
+  }
+  if (n.bytes() / 4 >= NanoPages::kNanoConstant) throw InputError("NanoVDB grids beyond 8 GiB: no page table");
+  t.entries.resize(size_t(t.dims[0]) * t.dims[1] * t.dims[2]);
+  for (uint32_t z = 0; z < t.dims[2]; ++z)
+    for (uint32_t y = 0; y < t.dims[1]; ++y)
+      for (uint32_t x = 0; x < t.dims[0]; ++x) {
+        const nanovdb::Coord c(t.origin[0] + int32_t(8 * x), t.origin[1] + int32_t(8 * y), t.origin[2] + int32_t(8 * z));
+        uint32_t e = NanoPages::kNanoConstant | word(&root->mBackground);
+        const auto key = nanovdb::RootData<NanoUpper>::CoordToKey(c);
+        for (uint32_t i = 0; i < root->mTableSize; ++i) {
+          const auto* tile = root->tile(i);
+          if (!(tile->key == key)) continue;
+          if (!tile->isChild()) {
+            e = NanoPages::kNanoConstant | word(&tile->value);
+            break;
+          }
+          const auto* up = root->getChild(tile);
+          const uint32_t nu = NanoUpper::CoordToOffset(c);
+          if (!up->data()->mChildMask.isOn(nu)) {
+            e = NanoPages::kNanoConstant | word(&up->data()->mTable[nu].value);
+            break;
+          }
+          const NanoLower* low = up->data()->getChild(nu);
+          const uint32_t nl = NanoLower::CoordToOffset(c);
+          if (!low->data()->mChildMask.isOn(nl)) {
+            e = NanoPages::kNanoConstant | word(&low->data()->mTable[nl].value);
+            break;
+          }
+          e = word(low->data()->getChild(nl)->data()->mValues);
+          break;
+        }
+        t.entries[(size_t(z) * t.dims[1] + y) * t.dims[0] + x] = e;
+      }
+  return t;
+}
+
 std::vector<uint8_t> nano_occupancy(const NanoVolume& n, uint32_t cell, uint32_t padding,
                                     std::array<uint32_t, 3>& od) {
   cell = std::max<uint32_t>(1, cell);

@@ -346,8 +346,10 @@ void finish_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::
       it.setValue(*it * k);
     });
   }
+  // Keys the grid already holds (OpenVDB's own, e.g. is_saved_as_half_float of a volume read back
+  // from a .vdb) keep their typed value: OpenVDB refuses to retype them.
   for (auto& [k, val] : v.metadata)
-    if (!computed_meta().count(k)) density->insertMeta(k, openvdb::StringMetadata(val));
+    if (!computed_meta().count(k) && !(*density)[k]) density->insertMeta(k, openvdb::StringMetadata(val));
   // The physical scale any renderer needs to light the cloud like cloudviewer does.
   density->insertMeta("extinction_per_metre", openvdb::DoubleMetadata(extinction));
   density->insertMeta("voxel_size_metres", openvdb::DoubleMetadata(v.voxel_size));

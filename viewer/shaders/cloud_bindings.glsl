@@ -6,26 +6,55 @@ layout(binding = CV_UNIT_OCCUPANCY) uniform sampler3D s_occupancy;  // R8: 1 whe
 layout(binding = CV_UNIT_MIE) uniform sampler1D s_mie;              // R32F: Mie phase over theta in [0, pi]
 layout(binding = CV_UNIT_COVERAGE) uniform sampler2D s_coverage;    // RG32F: layer coverage (R) and cloud type (G)
 
-// render.volume=nanovdb: the NanoVDB float grids back to back in one storage buffer (byte offsets
-// in u_nvdb_grid: density, then the three detail grids), read through PNanoVDB.h's GLSL mode with
-// one read accessor per grid (volume_nanovdb.glsl filters them). Plain uniforms, not CloudParams
-// members: they describe the storage, not the look, and the CPU reference reads its own copy.
-layout(std430, binding = CV_BINDING_NANOVDB) readonly buffer NanoVdbGrids { uint pnanovdb_buf_data[]; };
+// render.volume=nanovdb: the NanoVDB float grids back to back in one buffer (byte offsets in
+// u_nvdb_grid: density, then the three detail grids), read through PNanoVDB.h's GLSL mode (one
+// read accessor per tree walk; volume_nanovdb.glsl filters). The buffer is a buffer texture of
+// RGBA32UI texels, not a storage buffer: llvmpipe caps storage blocks at 128 MiB, buffer textures
+// at 2^27 texels (2 GiB), and PNANOVDB_BUF_CUSTOM lets the including side say how words are read.
+// Plain uniforms, not CloudParams members: they describe the storage, not the look, and the CPU
+// reference reads its own copy.
+layout(binding = CV_UNIT_NANOVDB_GRIDS) uniform usamplerBuffer s_nvdb_grids;
+#define PNANOVDB_GLSL
+#define PNANOVDB_BUF_CUSTOM
+struct pnanovdb_buf_t {
+  uint unused;
+};
+uint pnanovdb_buf_read_uint32(pnanovdb_buf_t buf, uint byte_offset) {
+  uint w = byte_offset >> 2u;
+  return texelFetch(s_nvdb_grids, int(w >> 2u))[w & 3u];
+}
+uvec2 pnanovdb_buf_read_uint64(pnanovdb_buf_t buf, uint byte_offset) {
+  return uvec2(pnanovdb_buf_read_uint32(buf, byte_offset), pnanovdb_buf_read_uint32(buf, byte_offset + 4u));
+}
+#define pnanovdb_grid_type_t uint
+#define PNANOVDB_GRID_TYPE_GET(grid_typeIn, nameIn) pnanovdb_grid_type_constants[grid_typeIn].nameIn
+#include "PNanoVDB.h"
 uniform int u_nvdb_on;          // 1: the lookups below read the grids, 0: the dense texture
 uniform int u_nvdb_detail;      // 1: the three detail grids exist
 uniform ivec3 u_nvdb_index_min; // grid index of the volume's voxel (0, 0, 0)
 uniform uvec4 u_nvdb_grid;      // byte offsets of the density and detail grids in the buffer
-#define PNANOVDB_GLSL
-#include "PNanoVDB.h"
 
 uniform int u_nvdb_shared;      // 1: the detail grids share one layout (cloudgen's: one mask), so the
                                 // address of a value in grid 1 plus the grids' offset is the value in 2, 3
+uniform int u_nvdb_table;       // 1: find voxels through the leaf page table, 0: PNanoVDB's accessor
+uniform ivec3 u_nvdb_page_origin; // grid index of the page table's first voxel (a multiple of 8)
+// cloudgen::NanoPages of the density (R) and first detail grid (G): per 8^3 leaf cell the word
+// index of the leaf's values, or 0x80000000 | the word index of the cell's one constant value.
+layout(binding = CV_UNIT_NANOVDB_PAGES) uniform usampler3D s_nvdb_pages;
 
 pnanovdb_readaccessor_t nvdb_acc[2];  // density, first detail grid
 bool nvdb_ready = false;
 
 pnanovdb_address_t nvdb_address(int grid, ivec3 ijk) {
   pnanovdb_buf_t buf;
+  if (u_nvdb_table != 0) {
+    uint e = texelFetch(s_nvdb_pages, (ijk - u_nvdb_page_origin) >> 3, 0)[grid];
+    uint w = (e & 0x80000000u) != 0u ? (e & 0x7fffffffu)
+                                     : e + uint(((ijk.x & 7) << 6) | ((ijk.y & 7) << 3) | (ijk.z & 7));
+    pnanovdb_address_t a;
+    a.byte_offset = w << 2u;
+    return a;
+  }
   if (!nvdb_ready) {
     for (int g = 0; g < 2; ++g) {
       pnanovdb_grid_handle_t h;
@@ -50,7 +79,8 @@ vec3 nanovdb_detail(ivec3 ijk) {
     c.byte_offset += u_nvdb_grid.w - u_nvdb_grid.y;
     return vec3(pnanovdb_read_float(buf, a), pnanovdb_read_float(buf, b), pnanovdb_read_float(buf, c));
   }
-  // Separate layouts: a root-to-leaf walk per grid (rare: files from elsewhere).
+  // Separate layouts: a root-to-leaf walk per grid (rare: files from elsewhere; the page table
+  // is then off, see GlRenderer::set_volume).
   vec3 r;
   r.x = pnanovdb_read_float(buf, a);
   for (int g = 2; g < 4; ++g) {

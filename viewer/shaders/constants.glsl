@@ -31,8 +31,6 @@
 #define CV_BINDING_CLOUD 0
 #define CV_BINDING_FRAME 1
 #define CV_BINDING_ATMOSPHERE 2
-// Shader storage buffer binding (its own namespace): the NanoVDB grids (render.volume=nanovdb).
-#define CV_BINDING_NANOVDB 0
 // Texture units. The two pass inputs are reused by every full-screen pass for its own sources.
 #define CV_UNIT_VOLUME 0
 #define CV_UNIT_OCCUPANCY 1
@@ -41,6 +39,10 @@
 #define CV_UNIT_PASS_INPUT1 4
 #define CV_UNIT_COVERAGE 5
 #define CV_UNIT_TRANSMITTANCE 6
+// render.volume=nanovdb: the grids (a RGBA32UI buffer texture) and the leaf page table (RG32UI)
+// of the density and first detail grid.
+#define CV_UNIT_NANOVDB_GRIDS 14
+#define CV_UNIT_NANOVDB_PAGES 15
 
 // Fixed sizes.
 #define CV_COVERAGE_MAP_SIZE 256   // layer-mode coverage map, texels per side

@@ -1,7 +1,6 @@
 #include "cloudviewer/app.h"
 
 #include <chrono>
-#include <iomanip>
 #include <cmath>
 #include <iostream>
 #include <sstream>
@@ -192,8 +191,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
       << vol.occ_dims[0] << "x" << vol.occ_dims[1] << "x" << vol.occ_dims[2] << " cells, "
       << std::lround(vol.occupied_fraction * 100) << "% occupied, loaded in "
       << std::chrono::duration<double>(t1 - t0).count() << " s; " << (vol.nano ? "nanovdb" : "dense") << " volume, "
-      << std::fixed << std::setprecision(1) << double(volume_gpu_bytes(vol)) / (1 << 20) << std::defaultfloat
-      << " MiB on the GPU\n";
+      << std::lround(double(volume_gpu_bytes(vol)) / (1 << 20) * 10) / 10.0 << " MiB on the GPU\n";
   if (!o.bench.empty()) return run_bench(o, vol, out, err);
 
   Camera cam = resolve_camera(o, vol, o.width, o.height);

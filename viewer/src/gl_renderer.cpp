@@ -174,8 +174,12 @@ struct GlRenderer::Impl {
   std::vector<Pass> passes = make_passes();
   GLuint tex_volume = 0, tex_occ = 0, tex_mie = 0, tex_coverage = 0;
   GLuint ubo_cloud = 0, ubo_frame = 0, ubo_atmo = 0;
-  GLuint ssbo_nano = 0;  // render.volume=nanovdb: the grids (else a 32-byte placeholder)
-  int nvdb_on = 0, nvdb_detail = 0, nvdb_shared = 0;
+  GLuint buf_nano = 0, tex_nano = 0;  // render.volume=nanovdb: the grids and their buffer texture (else 32 bytes)
+  int nvdb_on = 0, nvdb_detail = 0, nvdb_shared = 0, nvdb_table = 0;
+  GLuint tex_pages = 0;  // the leaf page table (cloudgen::NanoPages of the density and detail 1)
+  glm::ivec3 nvdb_page_origin{0};
+  bool nvdb_pages_ok = false;
+  uint64_t pages_bytes = 0;
   glm::ivec3 nvdb_index_min{0};
   glm::uvec4 nvdb_grid{0u};
   bool atmo_valid = false;            // the LUT targets hold `atmo_done`'s tables
@@ -264,6 +268,9 @@ struct GlRenderer::Impl {
     glUniform1i(l, nvdb_on);
     glUniform1i(glGetUniformLocation(program, "u_nvdb_detail"), nvdb_detail);
     glUniform1i(glGetUniformLocation(program, "u_nvdb_shared"), nvdb_shared);
+    glUniform1i(glGetUniformLocation(program, "u_nvdb_table"), nvdb_table);
+    glUniform3i(glGetUniformLocation(program, "u_nvdb_page_origin"), nvdb_page_origin.x, nvdb_page_origin.y,
+                nvdb_page_origin.z);
     glUniform3i(glGetUniformLocation(program, "u_nvdb_index_min"), nvdb_index_min.x, nvdb_index_min.y, nvdb_index_min.z);
     glUniform4ui(glGetUniformLocation(program, "u_nvdb_grid"), nvdb_grid.x, nvdb_grid.y, nvdb_grid.z, nvdb_grid.w);
   }
@@ -368,7 +375,9 @@ GlRenderer::~GlRenderer() {
   GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_mie, m.tex_coverage};
   for (GLuint t : texs)
     if (t) glDeleteTextures(1, &t);
-  if (m.ssbo_nano) glDeleteBuffers(1, &m.ssbo_nano);
+  if (m.tex_nano) glDeleteTextures(1, &m.tex_nano);
+  if (m.buf_nano) glDeleteBuffers(1, &m.buf_nano);
+  if (m.tex_pages) glDeleteTextures(1, &m.tex_pages);
   glDeleteBuffers(1, &m.ubo_cloud);
   glDeleteBuffers(1, &m.ubo_frame);
   glDeleteBuffers(1, &m.ubo_atmo);
@@ -390,21 +399,28 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
   Impl& m = *impl_;
   if (m.tex_volume) glDeleteTextures(1, &m.tex_volume);
   if (m.tex_occ) glDeleteTextures(1, &m.tex_occ);
-  if (m.ssbo_nano) glDeleteBuffers(1, &m.ssbo_nano);
-  m.tex_volume = m.tex_occ = m.ssbo_nano = 0;
-  glCreateBuffers(1, &m.ssbo_nano);
+  if (m.tex_nano) glDeleteTextures(1, &m.tex_nano);
+  if (m.buf_nano) glDeleteBuffers(1, &m.buf_nano);
+  if (m.tex_pages) glDeleteTextures(1, &m.tex_pages);
+  m.tex_volume = m.tex_occ = m.buf_nano = m.tex_nano = m.tex_pages = 0;
+  glCreateBuffers(1, &m.buf_nano);
+  glCreateTextures(GL_TEXTURE_BUFFER, 1, &m.tex_nano);
+  glCreateTextures(GL_TEXTURE_3D, 1, &m.tex_pages);
+  glTextureParameteri(m.tex_pages, GL_TEXTURE_MIN_FILTER, GL_NEAREST);  // integer: complete only unfiltered
+  glTextureParameteri(m.tex_pages, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   glCreateTextures(GL_TEXTURE_3D, 1, &m.tex_volume);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
   if (vol.nano) {
     // The grids as they are in memory (NanoVDB is position-independent: offsets are relative);
     // the dense texture becomes one texel the lookups never read.
-    GLint64 max_ssbo = 0;
-    glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_ssbo);
-    if (GLint64(vol.nano->bytes()) > max_ssbo)
-      throw GlError("the NanoVDB grids need a " + std::to_string(vol.nano->bytes() >> 20) +
-                    " MiB storage buffer, more than this GL's GL_MAX_SHADER_STORAGE_BLOCK_SIZE of " +
-                    std::to_string(max_ssbo >> 20) + " MiB");
-    glNamedBufferStorage(m.ssbo_nano, GLsizeiptr(vol.nano->bytes()), vol.nano->data(), 0);
+    GLint max_texels = 0;
+    glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
+    if (vol.nano->bytes() / 16 > uint64_t(max_texels))
+      throw GlError("the NanoVDB grids need " + std::to_string(vol.nano->bytes() >> 20) +
+                    " MiB, more than this GL's buffer textures hold (GL_MAX_TEXTURE_BUFFER_SIZE " +
+                    std::to_string(max_texels) + " RGBA32UI texels)");
+    glNamedBufferStorage(m.buf_nano, GLsizeiptr(vol.nano->bytes()), vol.nano->data(), 0);
+    glTextureBuffer(m.tex_nano, GL_RGBA32UI, m.buf_nano);
     m.nvdb_on = 1;
     m.nvdb_detail = vol.has_detail ? 1 : 0;
     m.nvdb_shared = vol.has_detail && vol.nano->detail_shared_layout ? 1 : 0;
@@ -413,13 +429,37 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
       const int index = g == 0 ? 0 : std::max(vol.nano->detail[size_t(g - 1)], 0);
       m.nvdb_grid[g] = GLuint(vol.nano->grids[size_t(index)].offset);
     }
+    // The page table when every grid the shaders read has one (the detail grids through the
+    // first one's layout); otherwise the lookups walk the tree with PNanoVDB's accessor.
+    m.nvdb_pages_ok = !vol.has_detail || m.nvdb_shared;
+    if (m.nvdb_pages_ok) {
+      const cloudgen::NanoPages d = cloudgen::nano_pages(*vol.nano, 0);
+      const cloudgen::NanoPages g = vol.has_detail ? cloudgen::nano_pages(*vol.nano, size_t(vol.nano->detail[0])) : d;
+      if (d.origin != g.origin || d.dims != g.dims) throw GlError("NanoVDB page tables of different boxes");
+      std::vector<uint32_t> rg(d.entries.size() * 2);
+      for (size_t i = 0; i < d.entries.size(); ++i) rg[2 * i] = d.entries[i], rg[2 * i + 1] = g.entries[i];
+      glTextureStorage3D(m.tex_pages, 1, GL_RG32UI, GLsizei(d.dims[0]), GLsizei(d.dims[1]), GLsizei(d.dims[2]));
+      glTextureSubImage3D(m.tex_pages, 0, 0, 0, 0, GLsizei(d.dims[0]), GLsizei(d.dims[1]), GLsizei(d.dims[2]), GL_RG_INTEGER,
+                          GL_UNSIGNED_INT, rg.data());
+      m.nvdb_page_origin = glm::ivec3(d.origin[0], d.origin[1], d.origin[2]);
+      m.pages_bytes = rg.size() * 4;
+    } else {
+      const uint32_t none[2] = {0, 0};
+      glTextureStorage3D(m.tex_pages, 1, GL_RG32UI, 1, 1, 1);
+      glTextureSubImage3D(m.tex_pages, 0, 0, 0, 0, 1, 1, 1, GL_RG_INTEGER, GL_UNSIGNED_INT, none);
+    }
     const float zero[4] = {0, 0, 0, 0};
     glTextureStorage3D(m.tex_volume, 1, GL_RGBA32F, 1, 1, 1);
     glTextureSubImage3D(m.tex_volume, 0, 0, 0, 0, 1, 1, 1, GL_RGBA, GL_FLOAT, zero);
   } else {
     const uint32_t placeholder[8] = {};
-    glNamedBufferStorage(m.ssbo_nano, sizeof placeholder, placeholder, 0);
+    glNamedBufferStorage(m.buf_nano, sizeof placeholder, placeholder, 0);
+    glTextureBuffer(m.tex_nano, GL_RGBA32UI, m.buf_nano);
     m.nvdb_on = 0;
+    m.nvdb_pages_ok = false;
+    const uint32_t none[2] = {0, 0};
+    glTextureStorage3D(m.tex_pages, 1, GL_RG32UI, 1, 1, 1);
+    glTextureSubImage3D(m.tex_pages, 0, 0, 0, 0, 1, 1, 1, GL_RG_INTEGER, GL_UNSIGNED_INT, none);
     GLint max3d = 0;
     glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max3d);
     for (int i = 0; i < 3; ++i)
@@ -465,7 +505,9 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_ATMOSPHERE, m.ubo_atmo);
   glBindTextureUnit(CV_UNIT_VOLUME, m.tex_volume);
   glBindTextureUnit(CV_UNIT_OCCUPANCY, m.tex_occ);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CV_BINDING_NANOVDB, m.ssbo_nano);
+  glBindTextureUnit(CV_UNIT_NANOVDB_GRIDS, m.tex_nano);
+  glBindTextureUnit(CV_UNIT_NANOVDB_PAGES, m.tex_pages);
+  m.nvdb_table = m.nvdb_pages_ok && f.settings.nanovdb_lookup == NanoLookup::Table ? 1 : 0;
   glBindTextureUnit(CV_UNIT_MIE, m.tex_mie);
   glBindTextureUnit(CV_UNIT_COVERAGE, m.tex_coverage);
   glDisable(GL_BLEND);

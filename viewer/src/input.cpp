@@ -100,13 +100,18 @@ PreparedVolume open_input(const std::string& input, const RenderSettings& s) {
     return prepare_dense(cloudgen::dense_from_nano(n, cloudgen::kDefaultReadBudget, input), input, s);
   }
   if (file && ext == ".vdb") {
-    // The active box from the grid's metadata first: a field beyond the budget is never densified.
+    // The active box from the grid's metadata first: a field beyond the budget is never densified,
+    // and the choice is made once (the free memory changes as the volume loads).
     const cloudgen::SceneInfo info = cloudgen::read_scene_info(input);
     if (use_nanovdb(s, uint64_t(info.dims[0]) * info.dims[1] * info.dims[2]))
       return sparse(cloudgen::nano_from_vdb(input));
+    return prepare_dense(load_volume(input), input, s);
   }
+  const uint64_t budget = dense_budget_bytes(s);  // before loading, for the same reason
   cloudgen::Volume v = load_volume(input);
-  if (use_nanovdb(s, v.voxel_count())) {
+  RenderSettings fixed = s;
+  fixed.dense_budget = double(budget) / 1048576.0;
+  if (use_nanovdb(fixed, v.voxel_count())) {
     cloudgen::ExportOptions o;  // every channel as a grid, y-up: the viewer's own copy
     o.vdb_detail = true;
     o.vdb_bake_erosion = false;

@@ -13,7 +13,9 @@
 namespace cloudviewer {
 
 uint64_t dense_budget_bytes(const RenderSettings& s) {
-  return s.dense_budget > 0 ? uint64_t(s.dense_budget * 1048576.0) : available_memory_bytes();
+  // The default: a third of the free memory. While a dense volume loads, the reader's channels,
+  // the RGBA copy and the GL texture (system memory on llvmpipe) are all held at once.
+  return s.dense_budget > 0 ? uint64_t(s.dense_budget * 1048576.0) : available_memory_bytes() / 3;
 }
 
 bool use_nanovdb(const RenderSettings& s, uint64_t voxels) {
@@ -27,7 +29,15 @@ bool use_nanovdb(const RenderSettings& s, uint64_t voxels) {
 
 uint64_t volume_gpu_bytes(const PreparedVolume& v) {
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
-  if (v.nano) return v.nano->bytes() + v.occ.size();
+  if (v.nano) {
+    // The grids, the occupancy and the GL renderer's leaf page table (8 bytes per 8^3 leaf cell).
+    uint64_t cells = 1;
+    for (int a = 0; a < 3; ++a) {
+      const int64_t lo = v.nano->index_min[size_t(a)] & ~7, hi = int64_t(v.nano->index_min[size_t(a)]) + v.dims[size_t(a)] - 1;
+      cells *= uint64_t((hi - lo) / 8 + 1);
+    }
+    return v.nano->bytes() + v.occ.size() + cells * 8;
+  }
 #endif
   return uint64_t(v.rgba.size()) * sizeof(float) + v.occ.size();
 }

@@ -49,6 +49,20 @@ struct NanoVolume {
   bool has_detail() const { return detail[0] >= 0 && detail[1] >= 0 && detail[2] >= 0; }
 };
 
+/// A renderer's shortcut past the tree walk: one entry per 8^3 leaf cell of grid g's index
+/// lattice over the volume's box (cell (0,0,0) starts at index `origin`, a multiple of 8). An entry
+/// is the 32-bit word index (byte offset / 4 in NanoVolume::buffer) of the cell's leaf's value
+/// array, to which the voxel's leaf offset ((x&7)<<6 | (y&7)<<3 | z&7) is added; or kNanoConstant
+/// | the word index of the one value the whole cell reads (a tile's, or the background). Built by
+/// walking the tree once per cell; its size is the box's voxels / 128 bytes.
+struct NanoPages {
+  static constexpr uint32_t kNanoConstant = 0x80000000u;
+  std::array<int32_t, 3> origin{{0, 0, 0}};
+  std::array<uint32_t, 3> dims{{0, 0, 0}};
+  std::vector<uint32_t> entries;  ///< x fastest
+};
+NanoPages nano_pages(const NanoVolume& n, size_t grid);
+
 /// The grids write_nvdb writes for v (the .vdb export's grids, options and metadata), in memory.
 NanoVolume nano_from_volume(const Volume& v, const ExportOptions& o = ExportOptions{});
 /// A .vdb file's density and detail grids converted to NanoVDB without a dense copy (the same

@@ -68,13 +68,13 @@ uint64_t prepared_bytes(uint64_t voxels);
 /// from the NanoVDB density grid's leaves and tiles (cloudgen::nano_occupancy: the same cells as
 /// the dense builder, no dense copy). Validates like prepare_volume. Needs cloudgen.
 PreparedVolume prepare_nano(std::shared_ptr<const cloudgen::NanoVolume> n, int occ_cell, int occ_padding = 2);
-/// Bytes the dense path's budget allows (render.dense_budget MiB, or the free memory when 0).
+/// Bytes the dense path's budget allows (render.dense_budget MiB, or a third of the free memory when 0).
 uint64_t dense_budget_bytes(const RenderSettings& s);
 /// Whether INPUT of `voxels` voxels goes through NanoVDB under s.volume (auto: the dense texture
 /// and occupancy, prepared_bytes(voxels), exceed dense_budget_bytes(s)).
 bool use_nanovdb(const RenderSettings& s, uint64_t voxels);
-/// Bytes the volume occupies on the GPU: the RGBA32F texture or the NanoVDB buffer, plus the
-/// R8 occupancy texture.
+/// Bytes the volume occupies on the GPU: the RGBA32F texture, or the NanoVDB buffer and its leaf
+/// page table (8 bytes per 8^3 cell), plus the R8 occupancy texture.
 uint64_t volume_gpu_bytes(const PreparedVolume& v);
 /// Bytes of memory this process may still allocate (MemAvailable, or physical memory).
 uint64_t available_memory_bytes();
