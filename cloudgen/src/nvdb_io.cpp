@@ -350,7 +350,10 @@ void check_grid(const uint8_t* p, uint64_t size, const std::string& where) {
   if (gd->mGridName[nanovdb::GridData::MaxNameSize - 1] != '\0') c.bad("the grid name is not terminated");
   if (gd->mGridType != nanovdb::GridType::Float)
     throw InputError(where + ": grid \"" + printable(gd->mGridName) + "\" has value type " +
-                     nanovdb::toStr(gd->mGridType) + "; cloudgen reads float grids");
+                     (uint32_t(gd->mGridType) < uint32_t(nanovdb::GridType::End)
+                          ? std::string(nanovdb::toStr(gd->mGridType))
+                          : "code " + std::to_string(uint32_t(gd->mGridType)) + " (unknown)") +
+                     "; cloudgen reads float grids");
   const uint64_t tree_at = sizeof(nanovdb::GridData);
   const auto* td = reinterpret_cast<const nanovdb::TreeData<3>*>(p + tree_at);
   const uint64_t root_at = tree_at + td->mNodeOffset[3];

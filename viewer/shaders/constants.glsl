@@ -42,6 +42,8 @@
 // render.volume=nanovdb: the grids (a RGBA32UI buffer texture) and the leaf page table (RG32UI)
 // of the density and first detail grid.
 #define CV_UNIT_NANOVDB_GRIDS 14
+// Shader storage buffer binding (its own namespace): the same grids when they fit a storage block.
+#define CV_BINDING_NANOVDB 0
 #define CV_UNIT_NANOVDB_PAGES 15
 
 // Fixed sizes.

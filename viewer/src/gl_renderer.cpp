@@ -175,7 +175,7 @@ struct GlRenderer::Impl {
   GLuint tex_volume = 0, tex_occ = 0, tex_mie = 0, tex_coverage = 0;
   GLuint ubo_cloud = 0, ubo_frame = 0, ubo_atmo = 0;
   GLuint buf_nano = 0, tex_nano = 0;  // render.volume=nanovdb: the grids and their buffer texture (else 32 bytes)
-  int nvdb_on = 0, nvdb_detail = 0, nvdb_shared = 0, nvdb_table = 0;
+  int nvdb_on = 0, nvdb_detail = 0, nvdb_shared = 0, nvdb_table = 0, nvdb_ssbo = 0;
   GLuint tex_pages = 0;  // the leaf page table (cloudgen::NanoPages of the density and detail 1)
   glm::ivec3 nvdb_page_origin{0};
   bool nvdb_pages_ok = false;
@@ -269,6 +269,7 @@ struct GlRenderer::Impl {
     glUniform1i(glGetUniformLocation(program, "u_nvdb_detail"), nvdb_detail);
     glUniform1i(glGetUniformLocation(program, "u_nvdb_shared"), nvdb_shared);
     glUniform1i(glGetUniformLocation(program, "u_nvdb_table"), nvdb_table);
+    glUniform1i(glGetUniformLocation(program, "u_nvdb_ssbo"), nvdb_ssbo);
     glUniform3i(glGetUniformLocation(program, "u_nvdb_page_origin"), nvdb_page_origin.x, nvdb_page_origin.y,
                 nvdb_page_origin.z);
     glUniform3i(glGetUniformLocation(program, "u_nvdb_index_min"), nvdb_index_min.x, nvdb_index_min.y, nvdb_index_min.z);
@@ -414,13 +415,16 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
     // The grids as they are in memory (NanoVDB is position-independent: offsets are relative);
     // the dense texture becomes one texel the lookups never read.
     GLint max_texels = 0;
+    GLint64 max_block = 0;
     glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
-    if (vol.nano->bytes() / 16 > uint64_t(max_texels))
+    glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
+    m.nvdb_ssbo = GLint64(vol.nano->bytes()) <= max_block ? 1 : 0;
+    if (!m.nvdb_ssbo && vol.nano->bytes() / 16 > uint64_t(max_texels))
       throw GlError("the NanoVDB grids need " + std::to_string(vol.nano->bytes() >> 20) +
                     " MiB, more than this GL's buffer textures hold (GL_MAX_TEXTURE_BUFFER_SIZE " +
                     std::to_string(max_texels) + " RGBA32UI texels)");
     glNamedBufferStorage(m.buf_nano, GLsizeiptr(vol.nano->bytes()), vol.nano->data(), 0);
-    glTextureBuffer(m.tex_nano, GL_RGBA32UI, m.buf_nano);
+    if (vol.nano->bytes() / 16 <= uint64_t(max_texels)) glTextureBuffer(m.tex_nano, GL_RGBA32UI, m.buf_nano);
     m.nvdb_on = 1;
     m.nvdb_detail = vol.has_detail ? 1 : 0;
     m.nvdb_shared = vol.has_detail && vol.nano->detail_shared_layout ? 1 : 0;
@@ -456,6 +460,7 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
     glNamedBufferStorage(m.buf_nano, sizeof placeholder, placeholder, 0);
     glTextureBuffer(m.tex_nano, GL_RGBA32UI, m.buf_nano);
     m.nvdb_on = 0;
+    m.nvdb_ssbo = 0;
     m.nvdb_pages_ok = false;
     const uint32_t none[2] = {0, 0};
     glTextureStorage3D(m.tex_pages, 1, GL_RG32UI, 1, 1, 1);
@@ -506,6 +511,10 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glBindTextureUnit(CV_UNIT_VOLUME, m.tex_volume);
   glBindTextureUnit(CV_UNIT_OCCUPANCY, m.tex_occ);
   glBindTextureUnit(CV_UNIT_NANOVDB_GRIDS, m.tex_nano);
+  // Beyond a storage block the shaders read the buffer texture; the storage binding then covers
+  // only the first 32 bytes (a binding larger than GL_MAX_SHADER_STORAGE_BLOCK_SIZE is an error).
+  if (m.nvdb_ssbo) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CV_BINDING_NANOVDB, m.buf_nano);
+  else glBindBufferRange(GL_SHADER_STORAGE_BUFFER, CV_BINDING_NANOVDB, m.buf_nano, 0, 32);
   glBindTextureUnit(CV_UNIT_NANOVDB_PAGES, m.tex_pages);
   m.nvdb_table = m.nvdb_pages_ok && f.settings.nanovdb_lookup == NanoLookup::Table ? 1 : 0;
   glBindTextureUnit(CV_UNIT_MIE, m.tex_mie);
