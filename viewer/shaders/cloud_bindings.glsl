@@ -8,17 +8,18 @@ layout(binding = CV_UNIT_COVERAGE) uniform sampler2D s_coverage;    // RG32F: la
 
 // render.volume=nanovdb: the NanoVDB float grids back to back in one buffer (byte offsets in
 // u_nvdb_grid: density, then the three detail grids), read through PNanoVDB.h's GLSL mode (one
-// read accessor per tree walk; volume_nanovdb.glsl filters). The buffer is a buffer texture of
-// RGBA32UI texels when they exceed a storage block (llvmpipe caps storage blocks at 128 MiB,
-// buffer textures at 2^27 texels, 2 GiB); PNANOVDB_BUF_CUSTOM lets the including side say how
-// words are read.
+// read accessor per tree walk; volume_nanovdb.glsl filters). The buffer is a storage buffer, or
+// an RGBA32UI buffer texture when the grids exceed a storage block (llvmpipe caps storage blocks
+// at 128 MiB, buffer textures at 2^27 texels, 2 GiB; nanovdb_storage.glsl switches at compile
+// time); PNANOVDB_BUF_CUSTOM lets the including side say how words are read.
 // Plain uniforms, not CloudParams members: they describe the storage, not the look, and the CPU
 // reference reads its own copy.
-// Grids that fit a storage block are read from a storage buffer instead (measured faster on
-// llvmpipe); u_nvdb_ssbo says which (a uniform branch).
+#include "nanovdb_storage.glsl"
+#if CV_NANOVDB_BUFFER_TEXTURE
 layout(binding = CV_UNIT_NANOVDB_GRIDS) uniform usamplerBuffer s_nvdb_grids;
+#else
 layout(std430, binding = CV_BINDING_NANOVDB) readonly buffer NanoVdbGrids { uint nvdb_words[]; };
-uniform int u_nvdb_ssbo;
+#endif
 #define PNANOVDB_GLSL
 #define PNANOVDB_BUF_CUSTOM
 struct pnanovdb_buf_t {
@@ -26,8 +27,11 @@ struct pnanovdb_buf_t {
 };
 uint pnanovdb_buf_read_uint32(pnanovdb_buf_t buf, uint byte_offset) {
   uint w = byte_offset >> 2u;
-  if (u_nvdb_ssbo != 0) return nvdb_words[w];
+#if CV_NANOVDB_BUFFER_TEXTURE
   return texelFetch(s_nvdb_grids, int(w >> 2u))[w & 3u];
+#else
+  return nvdb_words[w];
+#endif
 }
 uvec2 pnanovdb_buf_read_uint64(pnanovdb_buf_t buf, uint byte_offset) {
   return uvec2(pnanovdb_buf_read_uint32(buf, byte_offset), pnanovdb_buf_read_uint32(buf, byte_offset + 4u));

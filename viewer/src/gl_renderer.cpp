@@ -261,6 +261,14 @@ struct GlRenderer::Impl {
       }
     }
   }
+  // nanovdb_storage.glsl's switch: rebuilds the programs when it changes.
+  bool buffer_texture = false;
+  void use_buffer_texture(bool on) {
+    if (on == buffer_texture) return;
+    shaders.set_override("nanovdb_storage.glsl", std::string("#define CV_NANOVDB_BUFFER_TEXTURE ") + (on ? "1" : "0") + "\n");
+    buffer_texture = on;
+    build_programs();
+  }
   // The nanovdb lookups' plain uniforms (cloud_bindings.glsl); passes without them skip them.
   void set_volume_uniforms(GLuint program) const {
     GLint l = glGetUniformLocation(program, "u_nvdb_on");
@@ -269,7 +277,6 @@ struct GlRenderer::Impl {
     glUniform1i(glGetUniformLocation(program, "u_nvdb_detail"), nvdb_detail);
     glUniform1i(glGetUniformLocation(program, "u_nvdb_shared"), nvdb_shared);
     glUniform1i(glGetUniformLocation(program, "u_nvdb_table"), nvdb_table);
-    glUniform1i(glGetUniformLocation(program, "u_nvdb_ssbo"), nvdb_ssbo);
     glUniform3i(glGetUniformLocation(program, "u_nvdb_page_origin"), nvdb_page_origin.x, nvdb_page_origin.y,
                 nvdb_page_origin.z);
     glUniform3i(glGetUniformLocation(program, "u_nvdb_index_min"), nvdb_index_min.x, nvdb_index_min.y, nvdb_index_min.z);
@@ -419,6 +426,7 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
     glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
     glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
     m.nvdb_ssbo = GLint64(vol.nano->bytes()) <= max_block ? 1 : 0;
+    m.use_buffer_texture(!m.nvdb_ssbo);
     if (!m.nvdb_ssbo && vol.nano->bytes() / 16 > uint64_t(max_texels))
       throw GlError("the NanoVDB grids need " + std::to_string(vol.nano->bytes() >> 20) +
                     " MiB, more than this GL's buffer textures hold (GL_MAX_TEXTURE_BUFFER_SIZE " +

@@ -2,6 +2,7 @@
 // encoded, [0,1]) and the linear HDR image (after bloom, before exposure).
 #pragma once
 #include <memory>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -32,11 +33,15 @@ class ShaderSource {
   /// back to files. `files` receives the file name of each source-string number.
   std::string expand(const std::string& name, std::vector<std::string>& files) const;
   const std::string& dir() const { return dir_; }
+  /// Replaces one file's text (before --shader-dir and the embedded copies): the renderer's
+  /// compile-time switches (nanovdb_storage.glsl).
+  void set_override(const std::string& name, std::string text) { overrides_[name] = std::move(text); }
 
  private:
   void expand_into(const std::string& name, std::vector<std::string>& files, std::string& out,
                    std::vector<std::string>& stack) const;
   std::string dir_;
+  std::map<std::string, std::string> overrides_;
 };
 
 /// Names of the embedded shader files.
