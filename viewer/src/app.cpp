@@ -117,7 +117,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   std::string dump_lut;
   CLI::App app{"cloudviewer: real-time volumetric cloud ray marcher (OpenGL 4.5) with a CPU reference"};
   app.add_option("input", o.input,
-                 "volume to view: .vdb, .raw/.json, .ktx2 (cloudgen), a preset .json, or synthetic:sphere|slab|blob|noise");
+                 "volume to view: .vdb, .nvdb, .raw/.json, .ktx2 (cloudgen), a preset .json, or synthetic:sphere|slab|blob|noise");
   app.add_flag("--headless", o.headless, "render without a display through EGL and exit");
   app.add_option("--size", size_text, "image size WIDTHxHEIGHT (default 320x180 headless, 1280x720 window)");
   app.add_option("--camera", camera_text, "camera EX,EY,EZ:TX,TY,TZ in world metres (default: frames the volume)");
