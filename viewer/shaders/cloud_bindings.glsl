@@ -39,7 +39,6 @@ uvec2 pnanovdb_buf_read_uint64(pnanovdb_buf_t buf, uint byte_offset) {
 #define pnanovdb_grid_type_t uint
 #define PNANOVDB_GRID_TYPE_GET(grid_typeIn, nameIn) pnanovdb_grid_type_constants[grid_typeIn].nameIn
 #include "PNanoVDB.h"
-uniform int u_nvdb_on;          // 1: the lookups below read the grids, 0: the dense texture
 uniform int u_nvdb_detail;      // 1: the three detail grids exist
 uniform ivec3 u_nvdb_index_min; // grid index of the volume's voxel (0, 0, 0)
 uniform uvec4 u_nvdb_grid;      // byte offsets of the density and detail grids in the buffer
@@ -106,8 +105,15 @@ bool nanovdb_has_detail() { return u_nvdb_detail != 0; }
 vec4 nanovdb_texel(ivec3 texel);    // volume_nanovdb.glsl
 vec4 nanovdb_filtered(vec3 uvw);
 
-vec4 volume_texel(ivec3 texel) { return u_nvdb_on != 0 ? nanovdb_texel(texel) : texelFetch(s_volume, texel, 0); }
-vec4 volume_filtered(vec3 uvw) { return u_nvdb_on != 0 ? nanovdb_filtered(uvw) : texture(s_volume, uvw); }
+// The storage is chosen at compile time (nanovdb_storage.glsl): a run-time branch here made
+// llvmpipe's dense programs 4x slower and, at 512 steps with exact_filter, wrong.
+#if CV_NANOVDB
+vec4 volume_texel(ivec3 texel) { return nanovdb_texel(texel); }
+vec4 volume_filtered(vec3 uvw) { return nanovdb_filtered(uvw); }
+#else
+vec4 volume_texel(ivec3 texel) { return texelFetch(s_volume, texel, 0); }
+vec4 volume_filtered(vec3 uvw) { return texture(s_volume, uvw); }
+#endif
 Number occupancy_texel(ivec3 cell) { return texelFetch(s_occupancy, cell, 0).r; }
 Number mie_table_value(int i) { return texelFetch(s_mie, i, 0).r; }
 vec2 coverage_texel(ivec2 texel) { return texelFetch(s_coverage, texel, 0).rg; }

@@ -261,19 +261,18 @@ struct GlRenderer::Impl {
       }
     }
   }
-  // nanovdb_storage.glsl's switch: rebuilds the programs when it changes.
-  bool buffer_texture = false;
-  void use_buffer_texture(bool on) {
-    if (on == buffer_texture) return;
-    shaders.set_override("nanovdb_storage.glsl", std::string("#define CV_NANOVDB_BUFFER_TEXTURE ") + (on ? "1" : "0") + "\n");
-    buffer_texture = on;
+  // nanovdb_storage.glsl's switches: rebuilds the programs when they change.
+  int storage = 0;  // 0 dense, 1 nanovdb from a storage buffer, 2 nanovdb from a buffer texture
+  void use_storage(int st) {
+    if (st == storage) return;
+    shaders.set_override("nanovdb_storage.glsl", std::string("#define CV_NANOVDB ") + (st ? "1" : "0") +
+                                                     "\n#define CV_NANOVDB_BUFFER_TEXTURE " + (st == 2 ? "1" : "0") + "\n");
+    storage = st;
     build_programs();
   }
   // The nanovdb lookups' plain uniforms (cloud_bindings.glsl); passes without them skip them.
   void set_volume_uniforms(GLuint program) const {
-    GLint l = glGetUniformLocation(program, "u_nvdb_on");
-    if (l < 0) return;
-    glUniform1i(l, nvdb_on);
+    if (!nvdb_on || glGetUniformLocation(program, "u_nvdb_grid") < 0) return;
     glUniform1i(glGetUniformLocation(program, "u_nvdb_detail"), nvdb_detail);
     glUniform1i(glGetUniformLocation(program, "u_nvdb_shared"), nvdb_shared);
     glUniform1i(glGetUniformLocation(program, "u_nvdb_table"), nvdb_table);
@@ -426,7 +425,7 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
     glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
     glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
     m.nvdb_ssbo = GLint64(vol.nano->bytes()) <= max_block ? 1 : 0;
-    m.use_buffer_texture(!m.nvdb_ssbo);
+    m.use_storage(m.nvdb_ssbo ? 1 : 2);
     if (!m.nvdb_ssbo && vol.nano->bytes() / 16 > uint64_t(max_texels))
       throw GlError("the NanoVDB grids need " + std::to_string(vol.nano->bytes() >> 20) +
                     " MiB, more than this GL's buffer textures hold (GL_MAX_TEXTURE_BUFFER_SIZE " +
@@ -469,6 +468,7 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
     glTextureBuffer(m.tex_nano, GL_RGBA32UI, m.buf_nano);
     m.nvdb_on = 0;
     m.nvdb_ssbo = 0;
+    m.use_storage(0);
     m.nvdb_pages_ok = false;
     const uint32_t none[2] = {0, 0};
     glTextureStorage3D(m.tex_pages, 1, GL_RG32UI, 1, 1, 1);
