@@ -9,7 +9,7 @@ jobs="$(nproc)"
 log "building the libFuzzer targets (clang) into build-fuzz/"
 cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Release -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
   -DCLOUD_FUZZ=ON -DCLOUD_BUILD_CLOUDGEN=ON -DCLOUD_BUILD_VIEWER=ON -DCLOUD_BUILD_TESTS=OFF -DCLOUD_BUILD_BENCH=OFF >/dev/null
-cmake --build build-fuzz -j "$jobs" --target fuzz_preset fuzz_cli fuzz_raw fuzz_ktx2 fuzz_vdb fuzz_track fuzz_viewer_input
+cmake --build build-fuzz -j "$jobs" --target fuzz_preset fuzz_cli fuzz_raw fuzz_ktx2 fuzz_vdb fuzz_nvdb fuzz_track fuzz_viewer_input
 
 log "building the ASan+UBSan unit tests into build-asan/"
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCLOUD_SANITIZE=ON \

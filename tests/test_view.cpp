@@ -255,13 +255,14 @@ TEST(BlenderExport, BakedErosionReplacesTheDetailGrids) {
   EXPECT_LE(fs::file_size(dir / "b.vdb"), fs::file_size(dir / "d.vdb") * 11 / 10) << "about the density grid alone";
   const Volume r = read_vdb(dir / "b.vdb");
   EXPECT_TRUE(r.detail[0].empty());
-  // Values: the viewer's erosion at each voxel, the height fraction over the non-zero box.
-  uint32_t ylo = v.dims[1], yhi = 0;
-  for (uint32_t i = 0; i < v.voxel_count(); ++i)
-    if (v.density[i] > 0) {
-      const uint32_t y = uint32_t((i / v.dims[0]) % v.dims[1]);
-      ylo = std::min(ylo, y), yhi = std::max(yhi, y);
-    }
+  // Values: the viewer's erosion at each voxel, the height fraction over the preset's box (the
+  // box the viewer measures heights in: the header's motion.box_min_y / motion.box_height).
+  double box_min = 0, box_height = 0;
+  for (const auto& [k, val] : v.metadata) {
+    if (k == "motion.box_min_y") box_min = std::stod(val);
+    if (k == "motion.box_height") box_height = std::stod(val);
+  }
+  ASSERT_GT(box_height, 0) << "the volume header records the preset's box";
   size_t lowered = 0, checked = 0;
   for (uint32_t z = 0; z < r.dims[2]; ++z)
     for (uint32_t y = 0; y < r.dims[1]; ++y)
@@ -271,7 +272,7 @@ TEST(BlenderExport, BakedErosionReplacesTheDetailGrids) {
         const uint32_t oz = uint32_t(std::lround((r.origin[2] - v.origin[2]) / v.voxel_size)) + z;
         const size_t i = v.index(ox, oy, oz);
         const double want = eroded_density(v.density[i], v.detail[0][i], v.detail[1][i], v.detail[2][i],
-                                           (double(oy) - ylo + 0.5) / double(yhi - ylo + 1), 0.35);
+                                           (v.origin[1] + (oy + 0.5) * v.voxel_size - box_min) / box_height, 0.35);
         ASSERT_NEAR(r.density[r.index(x, y, z)], want, 1e-6);
         lowered += want < v.density[i];
         ++checked;

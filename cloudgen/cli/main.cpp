@@ -94,7 +94,7 @@ void run_generate(const GenerateArgs& a) {
   Preset p = load_preset(path, sets);
   if (a.resolution) rescale(p, a.resolution);
   if (!a.frames.empty() || !a.fps.empty() || a.loop) return run_generate_sequence(p, path, a);
-  if (a.outputs.empty()) throw InputError("-o/--output: give at least one output file (.vdb, .raw, .ktx2, .png, .exr)");
+  if (a.outputs.empty()) throw InputError("-o/--output: give at least one output file (.vdb, .nvdb, .raw, .ktx2, .png, .exr)");
   const ExportOptions& eo = p.export_options;
   std::vector<Format> formats;
   bool detail = false;
@@ -191,7 +191,7 @@ int main(int argc, char** argv) {
   CLI::App* gen = app.add_subcommand("generate", "Generate a cloud volume from a preset and export it.");
   gen->add_option("preset", ga->preset, "Preset file, or the name of a shipped preset (see `cloudgen presets`)")->required();
   gen->add_option("-o,--output", ga->outputs, "Output file; repeat for several formats from one generation")->required();
-  gen->add_option("--format", ga->format, "vdb | raw | ktx2 | atlas-png | atlas-exr (default: from each extension)");
+  gen->add_option("--format", ga->format, "vdb | nvdb | raw | ktx2 | atlas-png | atlas-exr (default: from each extension)");
   gen->add_option("--seed", ga->seed, "Override the preset's seed: an integer in [0, 2^53]");
   gen->add_option("--up", ga->up, "VDB up axis: z (Blender, default) or y (Houdini, Maya); = --set export.vdb.up=...");
   gen->add_option("--resolution", ga->resolution, "Rescale so the longest axis has N voxels (world size kept)");
@@ -241,7 +241,7 @@ int main(int argc, char** argv) {
   });
 
   auto ipath = std::make_shared<std::vector<std::string>>();
-  CLI::App* info = app.add_subcommand("info", "Describe a .vdb, .raw (+ .json) or .ktx2 file: grids, sizes, ranges.");
+  CLI::App* info = app.add_subcommand("info", "Describe a .vdb, .nvdb, .raw (+ .json) or .ktx2 file: grids, sizes, ranges.");
   info->add_option("file", *ipath, "File(s) written by cloudgen")->required();
   info->callback([ipath, &run] {
     run = [ipath] {

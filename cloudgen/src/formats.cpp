@@ -43,7 +43,8 @@ constexpr FormatName kFormats[] = {{Format::Vdb, "vdb", ".vdb"},
                                    {Format::Raw, "raw", ".raw"},
                                    {Format::Ktx2, "ktx2", ".ktx2"},
                                    {Format::AtlasPng, "atlas-png", ".png"},
-                                   {Format::AtlasExr, "atlas-exr", ".exr"}};
+                                   {Format::AtlasExr, "atlas-exr", ".exr"},
+                                   {Format::Nvdb, "nvdb", ".nvdb"}};
 
 template <class Table, class Get>
 std::string choices(const Table& t, Get get) {
@@ -98,7 +99,7 @@ Format format_from_path(const std::string& path) {
   for (const auto& e : kFormats)
     if (ext == e.ext) return e.f;
   throw InputError(printable(path) + ": cannot tell the format from the extension \"" + printable(ext) +
-                   "\"; use .vdb, .raw, .ktx2, .png or .exr, or pass --format");
+                   "\"; use .vdb, .nvdb, .raw, .ktx2, .png or .exr, or pass --format");
 }
 
 const char* format_name(Format f) {
@@ -107,7 +108,7 @@ const char* format_name(Format f) {
   return "?";
 }
 
-bool needs_detail(Format f, const ExportOptions& o) { return f != Format::Vdb || o.vdb_detail; }
+bool needs_detail(Format f, const ExportOptions& o) { return (f != Format::Vdb && f != Format::Nvdb) || o.vdb_detail; }
 
 std::string printable(const std::string& s, bool keep_newlines) {
   std::string out;
@@ -142,6 +143,7 @@ std::vector<OutputFile> output_files(const std::string& path, Format f, bool wit
 void write_volume(const Volume& v, const std::string& path, Format f, const ExportOptions& o, OutputBatch& batch) {
   switch (f) {
     case Format::Vdb: return write_vdb(v, path, o, batch);
+    case Format::Nvdb: return write_nvdb(v, path, o, batch);
     case Format::Raw: return write_raw(v, path, o, batch);
     case Format::Ktx2: return write_ktx2(v, path, o, batch);
     case Format::AtlasPng:
@@ -191,10 +193,11 @@ Volume read_volume(const std::string& path, uint64_t max_bytes) {
   std::string ext = fs::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
   if (ext == ".vdb") return read_vdb(path, max_bytes);
+  if (ext == ".nvdb") return read_nvdb_volume(path, max_bytes);
   if (ext == ".ktx2") return read_ktx2(path, max_bytes);
   if (ext == ".raw" || ext == ".json") return read_raw(path, max_bytes);
   throw InputError(printable(path) + ": unknown volume type \"" + printable(ext) +
-                   "\"; expected .vdb, .raw (+ .json sidecar) or .ktx2");
+                   "\"; expected .vdb, .nvdb, .raw (+ .json sidecar) or .ktx2");
 }
 
 namespace {

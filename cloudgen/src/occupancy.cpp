@@ -7,25 +7,13 @@
 
 namespace cloudgen {
 
-void build_occupancy(Volume& v) {
-  const uint32_t c = std::max<uint32_t>(1, v.occupancy_cell);
-  std::array<uint32_t, 3> od{};
-  for (int a = 0; a < 3; ++a) od[a] = (v.dims[a] + c - 1) / c;
-  const size_t ncells = size_t{od[0]} * od[1] * od[2];
-  std::vector<uint8_t> raw(ncells, 0);
-  for (uint32_t z = 0; z < v.dims[2]; ++z)
-    for (uint32_t y = 0; y < v.dims[1]; ++y) {
-      const float* row = &v.density[v.index(0, y, z)];
-      uint8_t* orow = &raw[(size_t(z / c) * od[1] + y / c) * od[0]];
-      for (uint32_t x = 0; x < v.dims[0]; ++x)
-        if (row[x] > 0) orow[x / c] = 1;
-    }
+void dilate_occupancy(std::vector<uint8_t>& raw, const std::array<uint32_t, 3>& od, uint32_t padding, bool tiles_xz) {
   // Separable dilation by `padding` cells per axis (a box dilation: the union over the
   // (2p+1)^3 neighbourhood), wrapping in x and z for tiling volumes.
-  const int pad = int(v.occupancy_padding);
+  const int pad = int(padding);
   std::vector<uint8_t> tmp(raw.size());
   for (int a = 0; a < 3; ++a) {
-    const bool wrap = v.tiles_xz && a != 1;
+    const bool wrap = tiles_xz && a != 1;
     const int n = int(od[a]);
     const size_t stride = a == 0 ? 1 : a == 1 ? od[0] : size_t(od[0]) * od[1];
     for (size_t i = 0; i < raw.size(); ++i) {
@@ -41,6 +29,22 @@ void build_occupancy(Volume& v) {
     }
     raw.swap(tmp);
   }
+}
+
+void build_occupancy(Volume& v) {
+  const uint32_t c = std::max<uint32_t>(1, v.occupancy_cell);
+  std::array<uint32_t, 3> od{};
+  for (int a = 0; a < 3; ++a) od[a] = (v.dims[a] + c - 1) / c;
+  const size_t ncells = size_t{od[0]} * od[1] * od[2];
+  std::vector<uint8_t> raw(ncells, 0);
+  for (uint32_t z = 0; z < v.dims[2]; ++z)
+    for (uint32_t y = 0; y < v.dims[1]; ++y) {
+      const float* row = &v.density[v.index(0, y, z)];
+      uint8_t* orow = &raw[(size_t(z / c) * od[1] + y / c) * od[0]];
+      for (uint32_t x = 0; x < v.dims[0]; ++x)
+        if (row[x] > 0) orow[x / c] = 1;
+    }
+  dilate_occupancy(raw, od, v.occupancy_padding, v.tiles_xz);
   v.occupancy_dims = od;
   v.occupancy = std::move(raw);
 }

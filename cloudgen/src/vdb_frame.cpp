@@ -11,7 +11,7 @@ namespace cloudgen {
 
 void write_vdb_frame(const MotionFrame& f, const std::string& path, const ExportOptions& o, OutputBatch& batch) {
   double erosion = 0;
-  openvdb::GridPtrVec grids = vdb::export_grids(f.volume, o, path, &erosion);
+  openvdb::GridPtrVec grids = vdb::export_grids(f.volume, path, o, &erosion);
   auto density = openvdb::gridPtrCast<openvdb::FloatGrid>(grids[0]);
 
   // Velocity dD/dt on the density's active voxels. D depends on the row only, so each voxel takes

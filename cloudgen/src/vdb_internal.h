@@ -5,6 +5,7 @@
 
 #include <openvdb/openvdb.h>
 
+#include <set>
 #include <string>
 #include <vector>
 
@@ -27,15 +28,26 @@ openvdb::FloatGrid::Ptr make_grid(const Volume& v, const std::vector<float>& dat
                                   char up = 'y');
 /// The grids write_vdb writes for v (density first, then the detail grids), as empty grids.
 openvdb::GridPtrVec make_empty_grids(const Volume& v, const ExportOptions& o);
-/// The grids write_vdb writes for v (density, baked erosion if asked, then the detail grids);
-/// `erosion_baked` receives what write_grids is to record. `path` names v in messages.
-openvdb::GridPtrVec export_grids(const Volume& v, const ExportOptions& o, const std::string& path, double* erosion_baked);
 /// Stages grids (density first; detail grids get the density's topology dilated by one voxel)
 /// with the computed metadata (extinction, voxel size, phase, up axis, tiling, units), v's
 /// metadata and the creator, in `batch`. `erosion_baked`: the erosion applied to density, or < 0
 /// when the grids were assembled from bricks (then bake_erosion is refused).
 void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::string& path, const ExportOptions& o,
                  OutputBatch& batch, double erosion_baked);
+/// write_grids without the file: the detail topology, physical scale and metadata on `grids`.
+void finish_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::string& path, const ExportOptions& o,
+                  double erosion_baked);
+/// The grids write_vdb writes for v, before finish_grids (density first, erosion baked if asked,
+/// then the detail grids); `erosion_baked` (may be null) receives the erosion write_grids records.
+/// `path` names v in messages.
+openvdb::GridPtrVec export_grids(const Volume& v, const std::string& path, const ExportOptions& o,
+                                 double* erosion_baked);
+/// Every grid of a .vdb file through the checked reader read_vdb uses (InputError when damaged).
+openvdb::GridPtrVec read_grids(const std::string& path);
+/// Linear transform with cubic voxels.
+bool cubic_voxels(const openvdb::GridBase& g);
+/// Metadata keys write_grids computes (never copied from Volume::metadata).
+const std::set<std::string>& computed_meta();
 /// The same, written at once (all or nothing).
 void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::string& path, const ExportOptions& o);
 

@@ -138,6 +138,8 @@ openvdb::MaskGrid::Ptr detail_mask(const Volume& v, const openvdb::FloatGrid& de
   return mask;
 }
 
+}  // namespace
+
 /// Metadata that write_vdb computes (never copied from Volume::metadata, which may hold a stale
 /// string copy read from another file).
 const std::set<std::string>& computed_meta() {
@@ -165,6 +167,8 @@ std::string meta_text(const openvdb::Metadata& m) {
   }
   return m.str();
 }
+
+namespace {
 
 /// An exception's text cut to a length that fits a terminal line (a damaged file once put a
 /// 1.4 GB "grid type" into OpenVDB's message).
@@ -310,10 +314,10 @@ class CheckedVdbArchive : public openvdb::io::Archive {
 
 }  // namespace
 
-void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::string& path, const ExportOptions& o,
-                 OutputBatch& batch, double erosion_baked) {
-  // The one-process writer and the MPI / tile assembler both end here, so the grids' topology,
-  // scale, metadata and file come out the same whichever path made the voxels.
+void finish_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::string& path, const ExportOptions& o,
+                  double erosion_baked) {
+  // The one-process writer, the MPI / tile assembler and the NanoVDB writer all pass here, so the
+  // grids' topology, scale and metadata come out the same whichever path made the voxels.
   if (o.vdb_up != 'y' && o.vdb_up != 'z')
     throw InputError(std::string("export.vdb.up: \"") + o.vdb_up + "\" is not one of z, y");
   if (o.vdb_bake_erosion && erosion_baked < 0)
@@ -356,8 +360,10 @@ void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::s
       it.setValue(*it * k);
     });
   }
+  // Keys the grid already holds (OpenVDB's own, e.g. is_saved_as_half_float of a volume read back
+  // from a .vdb) keep their typed value: OpenVDB refuses to retype them.
   for (auto& [k, val] : v.metadata)
-    if (!computed_meta().count(k) && k != "motion.box_min_y" && k != "motion.box_height")
+    if (!computed_meta().count(k) && k != "motion.box_min_y" && k != "motion.box_height" && !(*density)[k])
       density->insertMeta(k, openvdb::StringMetadata(val));
   // The physical scale any renderer needs to light the cloud like cloudviewer does.
   density->insertMeta("extinction_per_metre", openvdb::DoubleMetadata(extinction));
@@ -377,6 +383,11 @@ void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::s
                       openvdb::StringMetadata(o.vdb_physical ? "extinction_per_metre" : "normalized"));
   // Never a creator starting with "Houdini": Blender then assumes a Y-up Houdini file and rotates it.
   density->setCreator(std::string("cloudgen ") + CLOUDGEN_VERSION);
+}
+
+void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::string& path, const ExportOptions& o,
+                 OutputBatch& batch, double erosion_baked) {
+  finish_grids(v, grids, path, o, erosion_baked);
   CheckedVdbArchive archive;
   uint32_t comp = openvdb::io::COMPRESS_ACTIVE_MASK;
   switch (o.vdb_compression) {
@@ -420,49 +431,71 @@ void init_vdb() { vdb::init(); }
 }  // namespace
 
 namespace vdb {
-openvdb::GridPtrVec export_grids(const Volume& v, const ExportOptions& o, const std::string& path, double* erosion_baked) {
-  vdb::init();
+
+openvdb::GridPtrVec export_grids(const Volume& v, const std::string& path, const ExportOptions& o,
+                                 double* erosion_baked) {
+  init();
   const View view = view_of_metadata(v.metadata, path);
   const Look look = look_of_view(view, path);
   const bool all_detail = !v.detail[0].empty() && !v.detail[1].empty() && !v.detail[2].empty();
   const std::vector<float>* dens = &v.density;
   std::vector<float> baked;
   if (o.vdb_bake_erosion && all_detail && look.erosion > 0) {
-    // The height fraction runs over the box of the non-zero voxels, as in the viewer reading
-    // this file's unbaked twin (it crops to the active box).
+    // The height fraction runs over the box the viewer measures heights in for this file's
+    // unbaked twin: the preset's box (motion.box_min_y / motion.box_height, which the volume
+    // header records), else the box of the non-zero voxels (the viewer crops to it).
     uint32_t ylo = v.dims[1], yhi = 0;
     for (uint32_t z = 0; z < v.dims[2]; ++z)
       for (uint32_t y = 0; y < v.dims[1]; ++y)
         for (uint32_t x = 0; x < v.dims[0]; ++x)
           if (v.density[v.index(x, y, z)] > 0) ylo = std::min(ylo, y), yhi = std::max(yhi, y);
     baked.resize(v.density.size());
-    const double ny = yhi >= ylo ? double(yhi - ylo + 1) : 1.0;
+    double ny = yhi >= ylo ? double(yhi - ylo + 1) : 1.0;
+    double y0 = double(ylo);  // in voxels from v's origin
+    {
+      double min_y = 0, height = 0;
+      bool have_min = false, have_height = false;
+      for (const auto& [k, val] : v.metadata) {
+        char* end = nullptr;
+        double x = std::strtod(val.c_str(), &end);
+        bool ok = !val.empty() && end == val.c_str() + val.size() && std::isfinite(x);
+        if (k == "motion.box_min_y" && ok) min_y = x, have_min = true;
+        if (k == "motion.box_height" && ok && x > 0) height = x, have_height = true;
+      }
+      if (have_min && have_height) {
+        y0 = (min_y - v.origin[1]) / v.voxel_size;
+        ny = height / v.voxel_size;
+      }
+    }
     for (uint32_t z = 0; z < v.dims[2]; ++z)
       for (uint32_t y = 0; y < v.dims[1]; ++y)
         for (uint32_t x = 0; x < v.dims[0]; ++x) {
           const size_t i = v.index(x, y, z);
           baked[i] = float(eroded_density(v.density[i], v.detail[0][i], v.detail[1][i], v.detail[2][i],
-                                          (double(y) - double(ylo) + 0.5) / ny, look.erosion));
+                                          (double(y) - y0 + 0.5) / ny, look.erosion));
         }
     dens = &baked;
   }
-  openvdb::GridPtrVec grids{vdb::make_grid(v, *dens, "density", o.vdb_half, o.vdb_up)};
+  openvdb::GridPtrVec grids{make_grid(v, *dens, "density", o.vdb_half, o.vdb_up)};
   std::vector<std::pair<const std::vector<float>*, std::string>> todo;
   if (o.vdb_detail && !o.vdb_bake_erosion)
     for (int c = 0; c < 3; ++c)
       if (!v.detail[c].empty()) todo.push_back({&v.detail[c], v.detail_names[c]});
   grids.resize(todo.size() + 1);
   tbb::parallel_for(size_t(0), todo.size(), [&](size_t i) {
-    grids[i + 1] = vdb::make_grid(v, *todo[i].first, todo[i].second, o.vdb_half, o.vdb_up);
+    grids[i + 1] = make_grid(v, *todo[i].first, todo[i].second, o.vdb_half, o.vdb_up);
   });
   if (erosion_baked) *erosion_baked = all_detail ? look.erosion : 0.0;
   return grids;
 }
+
+openvdb::GridPtrVec read_grids(const std::string& path) { return VdbFile(path).grids(); }
+
 }  // namespace vdb
 
 void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o, OutputBatch& batch) {
   double erosion = 0;
-  const openvdb::GridPtrVec grids = vdb::export_grids(v, o, path, &erosion);
+  const openvdb::GridPtrVec grids = vdb::export_grids(v, path, o, &erosion);
   vdb::write_grids(v, grids, path, o, batch, erosion);
 }
 

@@ -1,5 +1,6 @@
 // The `view` section's JSON form, the Look it implies, and SceneInfo for non-VDB files.
 #include "cloudgen/view.h"
+#include "cloudgen/nvdb.h"
 
 #include <nlohmann/json.hpp>
 
@@ -92,6 +93,16 @@ Look look_of_view(const View& v, const std::string& source) {
 SceneInfo read_scene_info(const std::string& path) {
   const std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : "";
   if (ext == ".vdb" || ext == ".VDB") return read_vdb_scene_info(path);
+  if (path.size() >= 5 && (path.substr(path.size() - 5) == ".nvdb" || path.substr(path.size() - 5) == ".NVDB")) {
+    const NanoVolume n = read_nvdb(path);  // sparse: no dense copy for the view
+    SceneInfo s;
+    s.dims = n.dims;
+    s.voxel_size = n.voxel_size;
+    s.origin = n.origin;
+    s.metadata = n.metadata;
+    s.up = n.up;
+    return s;
+  }
   Volume v = read_volume(path);
   SceneInfo s;
   s.dims = v.dims;

@@ -6,8 +6,114 @@ layout(binding = CV_UNIT_OCCUPANCY) uniform sampler3D s_occupancy;  // R8: 1 whe
 layout(binding = CV_UNIT_MIE) uniform sampler1D s_mie;              // R32F: Mie phase over theta in [0, pi]
 layout(binding = CV_UNIT_COVERAGE) uniform sampler2D s_coverage;    // RG32F: layer coverage (R) and cloud type (G)
 
+// render.volume=nanovdb: the NanoVDB float grids back to back in one buffer (byte offsets in
+// u_nvdb_grid: density, then the three detail grids), read through PNanoVDB.h's GLSL mode (one
+// read accessor per tree walk; volume_nanovdb.glsl filters). The buffer is a storage buffer, or
+// an RGBA32UI buffer texture when the grids exceed a storage block (llvmpipe caps storage blocks
+// at 128 MiB, buffer textures at 2^27 texels, 2 GiB; nanovdb_storage.glsl switches at compile
+// time); PNANOVDB_BUF_CUSTOM lets the including side say how words are read.
+// Plain uniforms, not CloudParams members: they describe the storage, not the look, and the CPU
+// reference reads its own copy.
+#include "nanovdb_storage.glsl"
+#if CV_NANOVDB_BUFFER_TEXTURE
+layout(binding = CV_UNIT_NANOVDB_GRIDS) uniform usamplerBuffer s_nvdb_grids;
+#else
+layout(std430, binding = CV_BINDING_NANOVDB) readonly buffer NanoVdbGrids { uint nvdb_words[]; };
+#endif
+#define PNANOVDB_GLSL
+#define PNANOVDB_BUF_CUSTOM
+struct pnanovdb_buf_t {
+  uint unused;
+};
+uint pnanovdb_buf_read_uint32(pnanovdb_buf_t buf, uint byte_offset) {
+  uint w = byte_offset >> 2u;
+#if CV_NANOVDB_BUFFER_TEXTURE
+  return texelFetch(s_nvdb_grids, int(w >> 2u))[w & 3u];
+#else
+  return nvdb_words[w];
+#endif
+}
+uvec2 pnanovdb_buf_read_uint64(pnanovdb_buf_t buf, uint byte_offset) {
+  return uvec2(pnanovdb_buf_read_uint32(buf, byte_offset), pnanovdb_buf_read_uint32(buf, byte_offset + 4u));
+}
+#define pnanovdb_grid_type_t uint
+#define PNANOVDB_GRID_TYPE_GET(grid_typeIn, nameIn) pnanovdb_grid_type_constants[grid_typeIn].nameIn
+#include "PNanoVDB.h"
+uniform int u_nvdb_detail;      // 1: the three detail grids exist
+uniform ivec3 u_nvdb_index_min; // grid index of the volume's voxel (0, 0, 0)
+uniform uvec4 u_nvdb_grid;      // byte offsets of the density and detail grids in the buffer
+
+uniform int u_nvdb_shared;      // 1: the detail grids share one layout (cloudgen's: one mask), so the
+                                // address of a value in grid 1 plus the grids' offset is the value in 2, 3
+uniform int u_nvdb_table;       // 1: find voxels through the leaf page table, 0: PNanoVDB's accessor
+uniform ivec3 u_nvdb_page_origin; // grid index of the page table's first voxel (a multiple of 8)
+// cloudgen::NanoPages of the density (R) and first detail grid (G): per 8^3 leaf cell the word
+// index of the leaf's values, or 0x80000000 | the word index of the cell's one constant value.
+layout(binding = CV_UNIT_NANOVDB_PAGES) uniform usampler3D s_nvdb_pages;
+
+pnanovdb_readaccessor_t nvdb_acc[2];  // density, first detail grid
+bool nvdb_ready = false;
+
+pnanovdb_address_t nvdb_address(int grid, ivec3 ijk) {
+  pnanovdb_buf_t buf;
+  if (u_nvdb_table != 0) {
+    uint e = texelFetch(s_nvdb_pages, (ijk - u_nvdb_page_origin) >> 3, 0)[grid];
+    uint w = (e & 0x80000000u) != 0u ? (e & 0x7fffffffu)
+                                     : e + uint(((ijk.x & 7) << 6) | ((ijk.y & 7) << 3) | (ijk.z & 7));
+    pnanovdb_address_t a;
+    a.byte_offset = w << 2u;
+    return a;
+  }
+  if (!nvdb_ready) {
+    for (int g = 0; g < 2; ++g) {
+      pnanovdb_grid_handle_t h;
+      h.address.byte_offset = u_nvdb_grid[g];
+      pnanovdb_root_handle_t root = pnanovdb_tree_get_root(buf, pnanovdb_grid_get_tree(buf, h));
+      pnanovdb_readaccessor_init(nvdb_acc[g], root);
+    }
+    nvdb_ready = true;
+  }
+  return pnanovdb_readaccessor_get_value_address(PNANOVDB_GRID_TYPE_FLOAT, buf, nvdb_acc[grid], ijk);
+}
+Number nanovdb_density(ivec3 ijk) {
+  pnanovdb_buf_t buf;
+  return pnanovdb_read_float(buf, nvdb_address(0, ijk));
+}
+vec3 nanovdb_detail(ivec3 ijk) {
+  pnanovdb_buf_t buf;
+  pnanovdb_address_t a = nvdb_address(1, ijk);
+  if (u_nvdb_shared != 0) {
+    pnanovdb_address_t b = a, c = a;
+    b.byte_offset += u_nvdb_grid.z - u_nvdb_grid.y;
+    c.byte_offset += u_nvdb_grid.w - u_nvdb_grid.y;
+    return vec3(pnanovdb_read_float(buf, a), pnanovdb_read_float(buf, b), pnanovdb_read_float(buf, c));
+  }
+  // Separate layouts: a root-to-leaf walk per grid (rare: files from elsewhere; the page table
+  // is then off, see GlRenderer::set_volume).
+  vec3 r;
+  r.x = pnanovdb_read_float(buf, a);
+  for (int g = 2; g < 4; ++g) {
+    pnanovdb_grid_handle_t h;
+    h.address.byte_offset = u_nvdb_grid[g];
+    pnanovdb_root_handle_t root = pnanovdb_tree_get_root(buf, pnanovdb_grid_get_tree(buf, h));
+    r[g - 1] = pnanovdb_read_float(buf, pnanovdb_root_get_value_address(PNANOVDB_GRID_TYPE_FLOAT, buf, root, ijk));
+  }
+  return r;
+}
+ivec3 nanovdb_index_min() { return u_nvdb_index_min; }
+bool nanovdb_has_detail() { return u_nvdb_detail != 0; }
+vec4 nanovdb_texel(ivec3 texel);    // volume_nanovdb.glsl
+vec4 nanovdb_filtered(vec3 uvw);
+
+// The storage is chosen at compile time (nanovdb_storage.glsl): a run-time branch here made
+// llvmpipe's dense programs 4x slower and, at 512 steps with exact_filter, wrong.
+#if CV_NANOVDB
+vec4 volume_texel(ivec3 texel) { return nanovdb_texel(texel); }
+vec4 volume_filtered(vec3 uvw) { return nanovdb_filtered(uvw); }
+#else
 vec4 volume_texel(ivec3 texel) { return texelFetch(s_volume, texel, 0); }
 vec4 volume_filtered(vec3 uvw) { return texture(s_volume, uvw); }
+#endif
 Number occupancy_texel(ivec3 cell) { return texelFetch(s_occupancy, cell, 0).r; }
 Number mie_table_value(int i) { return texelFetch(s_mie, i, 0).r; }
 vec2 coverage_texel(ivec2 texel) { return texelFetch(s_coverage, texel, 0).rg; }

@@ -8,6 +8,7 @@
 #include "atmosphere_params.glsl"
 #include "atmosphere_bindings.glsl"
 #include "common.glsl"
+#include "volume_nanovdb.glsl"
 #include "phase.glsl"
 #include "cloud_type.glsl"
 #include "motion.glsl"

@@ -45,6 +45,12 @@
 #define CV_UNIT_PASS_INPUT3 10
 #define CV_UNIT_MOTION 11
 #define CV_UNIT_PASS_INPUT4 12
+// render.volume=nanovdb: the grids (a RGBA32UI buffer texture) and the leaf page table (RG32UI)
+// of the density and first detail grid.
+#define CV_UNIT_NANOVDB_GRIDS 14
+// Shader storage buffer binding (its own namespace): the same grids when they fit a storage block.
+#define CV_BINDING_NANOVDB 0
+#define CV_UNIT_NANOVDB_PAGES 15
 
 // Fixed sizes.
 #define CV_COVERAGE_MAP_SIZE 256   // layer-mode coverage map, texels per side

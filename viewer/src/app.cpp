@@ -174,7 +174,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   std::string dump_lut;
   CLI::App app{"cloudviewer: real-time volumetric cloud ray marcher (OpenGL 4.5) with a CPU reference"};
   app.add_option("input", o.input,
-                 "volume to view: .vdb, .raw/.json, .ktx2 (cloudgen), a preset .json, or synthetic:sphere|slab|blob|noise");
+                 "volume to view: .vdb, .nvdb, .raw/.json, .ktx2 (cloudgen), a preset .json, or synthetic:sphere|slab|blob|noise");
   app.add_flag("--headless", o.headless, "render without a display through EGL and exit");
   app.add_option("--size", size_text, "image size WIDTHxHEIGHT (default 320x180 headless, 1280x720 window)");
   app.add_option("--camera", camera_text, "camera EX,EY,EZ:TX,TY,TZ in world metres (default: frames the volume)");
@@ -265,7 +265,8 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
       << vol.voxel_size << " m" << (vol.tiles ? " (tiles in x,z)" : "") << ", occupancy "
       << vol.occ_dims[0] << "x" << vol.occ_dims[1] << "x" << vol.occ_dims[2] << " cells, "
       << std::lround(vol.occupied_fraction * 100) << "% occupied, loaded in "
-      << std::chrono::duration<double>(t1 - t0).count() << " s\n";
+      << std::chrono::duration<double>(t1 - t0).count() << " s; " << (vol.nano ? "nanovdb" : "dense") << " volume, "
+      << std::lround(double(volume_gpu_bytes(vol)) / (1 << 20) * 10) / 10.0 << " MiB on the GPU\n";
   if (!o.bench.empty()) return run_bench(o, vol, out, err);
 
   Camera cam = resolve_camera(o, vol, o.width, o.height);

@@ -11,9 +11,17 @@
 
 #include <tbb/parallel_for.h>
 
+// The nanovdb path samples the grids through PNanoVDB.h's C mode, the code the GLSL mode is.
+#define PNANOVDB_C
+#include <nanovdb/PNanoVDB.h>
+
 #include "cloudviewer/atmosphere.h"
 #include "cloudviewer/constants.h"
 #include "cloudviewer/renderer.h"
+
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+#include "cloudgen/nvdb.h"
+#endif
 
 namespace cloudviewer {
 namespace {
@@ -44,11 +52,74 @@ struct CpuShader {
 
   vec3 transmittance_texel(ivec2 t) const { return lut.texels[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
 
-  vec4 volume_texel(ivec3 t) const {
+  vec4 volume_texel(ivec3 t) {
+    if (vol.nano) return nanovdb_texel(t);
     const float* v = &vol.rgba[((size_t(t.z) * vol.dims[1] + t.y) * vol.dims[0] + t.x) * 4];
     return vec4(v[0], v[1], v[2], v[3]);
   }
-  vec4 volume_filtered(vec3 uvw) { return volume_trilinear(uvw); }
+  vec4 volume_filtered(vec3 uvw) { return vol.nano ? nanovdb_filtered(uvw) : volume_trilinear(uvw); }
+
+  // The nanovdb path's lookups (shaders/volume_nanovdb.glsl, cloud_bindings.glsl on the GPU): a
+  // PNanoVDB read accessor for the density and the first detail grid, kept across calls like the
+  // GLSL globals (a CpuShader serves one thread); the other detail grids at the same offsets when
+  // they share the first one's layout.
+  mutable pnanovdb_readaccessor_t nvdb_acc[2];
+  mutable bool nvdb_ready = false;
+  pnanovdb_buf_t nvdb_buf() const {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+    return pnanovdb_make_buf(reinterpret_cast<uint32_t*>(const_cast<uint8_t*>(vol.nano->data())), vol.nano->bytes() / 4);
+#else
+    return pnanovdb_make_buf(nullptr, 0);
+#endif
+  }
+  uint64_t nvdb_grid(int g) const {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+    const int index = g == 0 ? 0 : vol.nano->detail[size_t(g - 1)];
+    return vol.nano->grids[size_t(std::max(index, 0))].offset;
+#else
+    return 0;
+#endif
+  }
+  pnanovdb_root_handle_t nvdb_root(pnanovdb_buf_t buf, int g) const {
+    pnanovdb_grid_handle_t h;
+    h.address.byte_offset = nvdb_grid(g);
+    return pnanovdb_tree_get_root(buf, pnanovdb_grid_get_tree(buf, h));
+  }
+  pnanovdb_address_t nvdb_address(int grid, ivec3 ijk) const {
+    pnanovdb_buf_t buf = nvdb_buf();
+    if (!nvdb_ready) {
+      for (int g = 0; g < 2; ++g) pnanovdb_readaccessor_init(&nvdb_acc[g], nvdb_root(buf, g));
+      nvdb_ready = true;
+    }
+    pnanovdb_coord_t c{ijk.x, ijk.y, ijk.z};
+    return pnanovdb_readaccessor_get_value_address(PNANOVDB_GRID_TYPE_FLOAT, buf, &nvdb_acc[grid], &c);
+  }
+  Number nanovdb_density(ivec3 ijk) const { return pnanovdb_read_float(nvdb_buf(), nvdb_address(0, ijk)); }
+  vec3 nanovdb_detail(ivec3 ijk) const {
+    pnanovdb_buf_t buf = nvdb_buf();
+    pnanovdb_address_t a = nvdb_address(1, ijk);
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+    if (vol.nano->detail_shared_layout) {
+      pnanovdb_address_t b = a, c = a;
+      b.byte_offset += nvdb_grid(2) - nvdb_grid(1);
+      c.byte_offset += nvdb_grid(3) - nvdb_grid(1);
+      return vec3(pnanovdb_read_float(buf, a), pnanovdb_read_float(buf, b), pnanovdb_read_float(buf, c));
+    }
+#endif
+    vec3 r(pnanovdb_read_float(buf, a), 0.0, 0.0);
+    pnanovdb_coord_t c{ijk.x, ijk.y, ijk.z};
+    for (int g = 2; g < 4; ++g)
+      r[g - 1] = pnanovdb_read_float(buf, pnanovdb_root_get_value_address(PNANOVDB_GRID_TYPE_FLOAT, buf, nvdb_root(buf, g), &c));
+    return r;
+  }
+  ivec3 nanovdb_index_min() const {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+    return ivec3(vol.nano->index_min[0], vol.nano->index_min[1], vol.nano->index_min[2]);
+#else
+    return ivec3(0);
+#endif
+  }
+  bool nanovdb_has_detail() const { return vol.has_detail; }
   Number occupancy_texel(ivec3 c) const {
     return vol.occ[(size_t(c.z) * vol.occ_dims[1] + c.y) * vol.occ_dims[0] + c.x];
   }
@@ -73,6 +144,7 @@ struct CpuShader {
 #define INOUT(x) x&
 // The list and order of shaders/cloud_headers.glsl (after its GLSL-only bindings), plus post.glsl.
 #include "../shaders/common.glsl"
+#include "../shaders/volume_nanovdb.glsl"
 #include "../shaders/phase.glsl"
 #include "cloudgen/cloud_type.glsl"
 #include "cloudgen/motion.glsl"
@@ -448,6 +520,13 @@ struct PathTracer {
 double majorant_of(const PreparedVolume& vol, const ref::CloudParams& P) {
   double m = 0;
   for (size_t i = 0; i < vol.rgba.size(); i += 4) m = std::max(m, double(vol.rgba[i]));
+  if (vol.nano) {  // the density grid's root statistics (1 when absent: cloudgen's densities are <= 1)
+    CpuShader sh(P, vol, mie_phase_table(), no_lut());
+    pnanovdb_buf_t buf = sh.nvdb_buf();
+    pnanovdb_root_handle_t root = sh.nvdb_root(buf, 0);
+    double stat = pnanovdb_read_float(buf, pnanovdb_root_get_max_address(PNANOVDB_GRID_TYPE_FLOAT, buf, root));
+    m = std::max(std::isfinite(stat) ? stat : 0.0, 1.0);
+  }
   return m * std::max(P.density_scale, 0.0) * P.sigma_t_per_m;
 }
 

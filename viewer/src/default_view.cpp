@@ -82,8 +82,9 @@ Camera default_view_camera(const PreparedVolume& vol, const RenderSettings& s, d
   if (s.mode != PlaceMode::Box) return default_camera(vol, s, fov_y_deg, aspect);
   // The box of the voxels with density > 0: a dense texture (or a preset generated here) then
   // frames like the VDB made from it, which holds only those voxels (cloudgen blender frames that).
+  // The nanovdb path's box is already the density grid's active box (no dense copy to scan).
   int lo[3] = {vol.dims[0], vol.dims[1], vol.dims[2]}, hi[3] = {-1, -1, -1};
-  for (int z = 0; z < vol.dims[2]; ++z)
+  for (int z = 0; z < (vol.nano ? 0 : vol.dims[2]); ++z)
     for (int y = 0; y < vol.dims[1]; ++y)
       for (int x = 0; x < vol.dims[0]; ++x)
         if (vol.rgba[((size_t(z) * vol.dims[1] + y) * vol.dims[0] + x) * 4] > 0.f) {

@@ -15,6 +15,7 @@
 #include "cloudviewer/constants.h"
 #include "cloudviewer/errors.h"
 #include "cloudviewer/renderer.h"
+#include "cloudgen/nvdb.h"
 
 namespace cloudviewer {
 namespace {
@@ -222,6 +223,14 @@ struct GlRenderer::Impl {
   std::vector<double> light_key;      // what the light volume was built from; empty = not built
   int light_builds = 0;
   GLuint ubo_cloud = 0, ubo_frame = 0, ubo_atmo = 0;
+  GLuint buf_nano = 0, tex_nano = 0;  // render.volume=nanovdb: the grids and their buffer texture (else 32 bytes)
+  int nvdb_on = 0, nvdb_detail = 0, nvdb_shared = 0, nvdb_table = 0, nvdb_ssbo = 0;
+  GLuint tex_pages = 0;  // the leaf page table (cloudgen::NanoPages of the density and detail 1)
+  glm::ivec3 nvdb_page_origin{0};
+  bool nvdb_pages_ok = false;
+  uint64_t pages_bytes = 0;
+  glm::ivec3 nvdb_index_min{0};
+  glm::uvec4 nvdb_grid{0u};
   bool atmo_valid = false;            // the LUT targets hold `atmo_done`'s tables
   AtmosphereSettings atmo_done;
   GLuint vao_empty = 0, vao_ground = 0, vbo_ground = 0;
@@ -341,6 +350,26 @@ struct GlRenderer::Impl {
             p.exact_filter, p.light_mode, p.light_samples, p.light_step_m, p.light_growth, p.df_light,
             p.light_volume_dims.x, p.light_volume_dims.y, p.light_volume_dims.z};
   }
+  // nanovdb_storage.glsl's switches: rebuilds the programs when they change.
+  int storage = 0;  // 0 dense, 1 nanovdb from a storage buffer, 2 nanovdb from a buffer texture
+  void use_storage(int st) {
+    if (st == storage) return;
+    shaders.set_override("nanovdb_storage.glsl", std::string("#define CV_NANOVDB ") + (st ? "1" : "0") +
+                                                     "\n#define CV_NANOVDB_BUFFER_TEXTURE " + (st == 2 ? "1" : "0") + "\n");
+    storage = st;
+    build_programs();
+  }
+  // The nanovdb lookups' plain uniforms (cloud_bindings.glsl); passes without them skip them.
+  void set_volume_uniforms(GLuint program) const {
+    if (!nvdb_on || glGetUniformLocation(program, "u_nvdb_grid") < 0) return;
+    glUniform1i(glGetUniformLocation(program, "u_nvdb_detail"), nvdb_detail);
+    glUniform1i(glGetUniformLocation(program, "u_nvdb_shared"), nvdb_shared);
+    glUniform1i(glGetUniformLocation(program, "u_nvdb_table"), nvdb_table);
+    glUniform3i(glGetUniformLocation(program, "u_nvdb_page_origin"), nvdb_page_origin.x, nvdb_page_origin.y,
+                nvdb_page_origin.z);
+    glUniform3i(glGetUniformLocation(program, "u_nvdb_index_min"), nvdb_index_min.x, nvdb_index_min.y, nvdb_index_min.z);
+    glUniform4ui(glGetUniformLocation(program, "u_nvdb_grid"), nvdb_grid.x, nvdb_grid.y, nvdb_grid.z, nvdb_grid.w);
+  }
   void run(Pass& p, const FrameSetup& f) {
     Target& t = target(p.target);
     for (size_t i = 0; i < p.clear.size(); ++i) glClearNamedFramebufferfv(t.fbo[0], GL_COLOR, GLint(i), p.clear[i].data());
@@ -351,6 +380,7 @@ struct GlRenderer::Impl {
     if (p.enabled && !p.enabled(f)) return;
     if (t.volume_size) {  // one draw per layer of the 3D target (the layer in uniform location 0)
       glUseProgram(p.program);
+      set_volume_uniforms(p.program);
       glViewport(0, 0, t.w, t.h);
       glBindVertexArray(vao_empty);
       for (int z = 0; z < t.d; ++z) {
@@ -373,6 +403,7 @@ struct GlRenderer::Impl {
     glBindFramebuffer(GL_FRAMEBUFFER, t.fbo[0]);
     glViewport(0, 0, t.w, t.h);
     glUseProgram(p.program);
+    set_volume_uniforms(p.program);
     if (p.uniforms) p.uniforms(p.program);
     if (p.mesh) {
       bool layer = f.params.layer_on > 0.5;
@@ -460,6 +491,9 @@ GlRenderer::~GlRenderer() {
   GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_dist, m.tex_mie, m.tex_coverage, m.tex_motion};
   for (GLuint t : texs)
     if (t) glDeleteTextures(1, &t);
+  if (m.tex_nano) glDeleteTextures(1, &m.tex_nano);
+  if (m.buf_nano) glDeleteBuffers(1, &m.buf_nano);
+  if (m.tex_pages) glDeleteTextures(1, &m.tex_pages);
   glDeleteBuffers(1, &m.ubo_cloud);
   glDeleteBuffers(1, &m.ubo_frame);
   glDeleteBuffers(1, &m.ubo_atmo);
@@ -483,15 +517,82 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
   if (m.tex_occ) glDeleteTextures(1, &m.tex_occ);
   if (m.tex_dist) glDeleteTextures(1, &m.tex_dist);
   m.tex_dist = 0;
-  GLint max3d = 0;
-  glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max3d);
-  for (int i = 0; i < 3; ++i)
-    if (vol.dims[i] > max3d)
-      throw InputError("volume dimension " + std::to_string(vol.dims[i]) + " exceeds GL_MAX_3D_TEXTURE_SIZE " + std::to_string(max3d));
+  if (m.tex_nano) glDeleteTextures(1, &m.tex_nano);
+  if (m.buf_nano) glDeleteBuffers(1, &m.buf_nano);
+  if (m.tex_pages) glDeleteTextures(1, &m.tex_pages);
+  m.tex_volume = m.tex_occ = m.buf_nano = m.tex_nano = m.tex_pages = 0;
+  glCreateBuffers(1, &m.buf_nano);
+  glCreateTextures(GL_TEXTURE_BUFFER, 1, &m.tex_nano);
+  glCreateTextures(GL_TEXTURE_3D, 1, &m.tex_pages);
+  glTextureParameteri(m.tex_pages, GL_TEXTURE_MIN_FILTER, GL_NEAREST);  // integer: complete only unfiltered
+  glTextureParameteri(m.tex_pages, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   glCreateTextures(GL_TEXTURE_3D, 1, &m.tex_volume);
-  glTextureStorage3D(m.tex_volume, 1, GL_RGBA32F, vol.dims[0], vol.dims[1], vol.dims[2]);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  glTextureSubImage3D(m.tex_volume, 0, 0, 0, 0, vol.dims[0], vol.dims[1], vol.dims[2], GL_RGBA, GL_FLOAT, vol.rgba.data());
+  if (vol.nano) {
+    // The grids as they are in memory (NanoVDB is position-independent: offsets are relative);
+    // the dense texture becomes one texel the lookups never read.
+    GLint max_texels = 0;
+    GLint64 max_block = 0;
+    glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
+    glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
+    m.nvdb_ssbo = GLint64(vol.nano->bytes()) <= max_block ? 1 : 0;
+    m.use_storage(m.nvdb_ssbo ? 1 : 2);
+    if (!m.nvdb_ssbo && vol.nano->bytes() / 16 > uint64_t(max_texels))
+      throw GlError("the NanoVDB grids need " + std::to_string(vol.nano->bytes() >> 20) +
+                    " MiB, more than this GL's buffer textures hold (GL_MAX_TEXTURE_BUFFER_SIZE " +
+                    std::to_string(max_texels) + " RGBA32UI texels)");
+    glNamedBufferStorage(m.buf_nano, GLsizeiptr(vol.nano->bytes()), vol.nano->data(), 0);
+    if (vol.nano->bytes() / 16 <= uint64_t(max_texels)) glTextureBuffer(m.tex_nano, GL_RGBA32UI, m.buf_nano);
+    m.nvdb_on = 1;
+    m.nvdb_detail = vol.has_detail ? 1 : 0;
+    m.nvdb_shared = vol.has_detail && vol.nano->detail_shared_layout ? 1 : 0;
+    m.nvdb_index_min = glm::ivec3(vol.nano->index_min[0], vol.nano->index_min[1], vol.nano->index_min[2]);
+    for (int g = 0; g < 4; ++g) {
+      const int index = g == 0 ? 0 : std::max(vol.nano->detail[size_t(g - 1)], 0);
+      m.nvdb_grid[g] = GLuint(vol.nano->grids[size_t(index)].offset);
+    }
+    // The page table when every grid the shaders read has one (the detail grids through the
+    // first one's layout); otherwise the lookups walk the tree with PNanoVDB's accessor.
+    m.nvdb_pages_ok = !vol.has_detail || m.nvdb_shared;
+    if (m.nvdb_pages_ok) {
+      const cloudgen::NanoPages d = cloudgen::nano_pages(*vol.nano, 0);
+      const cloudgen::NanoPages g = vol.has_detail ? cloudgen::nano_pages(*vol.nano, size_t(vol.nano->detail[0])) : d;
+      if (d.origin != g.origin || d.dims != g.dims) throw GlError("NanoVDB page tables of different boxes");
+      std::vector<uint32_t> rg(d.entries.size() * 2);
+      for (size_t i = 0; i < d.entries.size(); ++i) rg[2 * i] = d.entries[i], rg[2 * i + 1] = g.entries[i];
+      glTextureStorage3D(m.tex_pages, 1, GL_RG32UI, GLsizei(d.dims[0]), GLsizei(d.dims[1]), GLsizei(d.dims[2]));
+      glTextureSubImage3D(m.tex_pages, 0, 0, 0, 0, GLsizei(d.dims[0]), GLsizei(d.dims[1]), GLsizei(d.dims[2]), GL_RG_INTEGER,
+                          GL_UNSIGNED_INT, rg.data());
+      m.nvdb_page_origin = glm::ivec3(d.origin[0], d.origin[1], d.origin[2]);
+      m.pages_bytes = rg.size() * 4;
+    } else {
+      const uint32_t none[2] = {0, 0};
+      glTextureStorage3D(m.tex_pages, 1, GL_RG32UI, 1, 1, 1);
+      glTextureSubImage3D(m.tex_pages, 0, 0, 0, 0, 1, 1, 1, GL_RG_INTEGER, GL_UNSIGNED_INT, none);
+    }
+    const float zero[4] = {0, 0, 0, 0};
+    glTextureStorage3D(m.tex_volume, 1, GL_RGBA32F, 1, 1, 1);
+    glTextureSubImage3D(m.tex_volume, 0, 0, 0, 0, 1, 1, 1, GL_RGBA, GL_FLOAT, zero);
+  } else {
+    const uint32_t placeholder[8] = {};
+    glNamedBufferStorage(m.buf_nano, sizeof placeholder, placeholder, 0);
+    glTextureBuffer(m.tex_nano, GL_RGBA32UI, m.buf_nano);
+    m.nvdb_on = 0;
+    m.nvdb_ssbo = 0;
+    m.use_storage(0);
+    m.nvdb_pages_ok = false;
+    const uint32_t none[2] = {0, 0};
+    glTextureStorage3D(m.tex_pages, 1, GL_RG32UI, 1, 1, 1);
+    glTextureSubImage3D(m.tex_pages, 0, 0, 0, 0, 1, 1, 1, GL_RG_INTEGER, GL_UNSIGNED_INT, none);
+    GLint max3d = 0;
+    glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max3d);
+    for (int i = 0; i < 3; ++i)
+      if (vol.dims[i] > max3d)
+        throw InputError("volume dimension " + std::to_string(vol.dims[i]) + " exceeds GL_MAX_3D_TEXTURE_SIZE " +
+                         std::to_string(max3d) + " (render.volume=nanovdb has no such limit)");
+    glTextureStorage3D(m.tex_volume, 1, GL_RGBA32F, vol.dims[0], vol.dims[1], vol.dims[2]);
+    glTextureSubImage3D(m.tex_volume, 0, 0, 0, 0, vol.dims[0], vol.dims[1], vol.dims[2], GL_RGBA, GL_FLOAT, vol.rgba.data());
+  }
   glTextureParameteri(m.tex_volume, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
   glTextureParameteri(m.tex_volume, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
   GLint wrap_xz = vol.tiles ? GL_REPEAT : GL_CLAMP_TO_EDGE;
@@ -573,6 +674,13 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glBindTextureUnit(CV_UNIT_VOLUME, m.tex_volume);
   glBindTextureUnit(CV_UNIT_OCCUPANCY, m.tex_occ);
   glBindTextureUnit(CV_UNIT_DISTANCE, m.tex_dist);
+  glBindTextureUnit(CV_UNIT_NANOVDB_GRIDS, m.tex_nano);
+  // Beyond a storage block the shaders read the buffer texture; the storage binding then covers
+  // only the first 32 bytes (a binding larger than GL_MAX_SHADER_STORAGE_BLOCK_SIZE is an error).
+  if (m.nvdb_ssbo) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CV_BINDING_NANOVDB, m.buf_nano);
+  else glBindBufferRange(GL_SHADER_STORAGE_BUFFER, CV_BINDING_NANOVDB, m.buf_nano, 0, 32);
+  glBindTextureUnit(CV_UNIT_NANOVDB_PAGES, m.tex_pages);
+  m.nvdb_table = m.nvdb_pages_ok && f.settings.nanovdb_lookup == NanoLookup::Table ? 1 : 0;
   glBindTextureUnit(CV_UNIT_MIE, m.tex_mie);
   glBindTextureUnit(CV_UNIT_COVERAGE, m.tex_coverage);
   glBindTextureUnit(CV_UNIT_MOTION, m.tex_motion);

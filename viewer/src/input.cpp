@@ -8,6 +8,12 @@
 #include "cloudviewer/scene.h"
 
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
+#include "cloudgen/io.h"
+#include "cloudgen/nvdb.h"
+#include "cloudgen/view.h"
+#endif
+
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
 #if __has_include("cloudgen/generate.h")
 #include "cloudgen/generate.h"
 #include "cloudgen/preset.h"
@@ -31,7 +37,7 @@ cloudgen::Volume load_volume(const std::string& input) {
   if (!std::filesystem::exists(input, ec))
     throw InputError("input '" + input + "': no such file");
   if (std::filesystem::is_directory(input, ec))
-    throw InputError("input '" + input + "': is a directory, expected a .vdb, .raw/.json, .ktx2 or preset .json file");
+    throw InputError("input '" + input + "': is a directory, expected a .vdb, .nvdb, .raw/.json, .ktx2 or preset .json file");
   std::string ext = std::filesystem::path(input).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
@@ -61,8 +67,62 @@ cloudgen::Volume load_volume(const std::string& input) {
 #endif
 }
 
+namespace {
+
+std::string mib(uint64_t bytes) { return std::to_string((bytes + (1u << 20) - 1) >> 20) + " MiB"; }
+
+/// The dense path under render.dense_budget: refuses, naming the setting, what would not fit.
+PreparedVolume prepare_dense(const cloudgen::Volume& v, const std::string& input, const RenderSettings& s) {
+  const uint64_t need = prepared_bytes(v.voxel_count());
+  if (s.dense_budget > 0 && need > dense_budget_bytes(s))
+    throw InputError("input '" + input + "': the dense volume (" + std::to_string(v.dims[0]) + "x" +
+                     std::to_string(v.dims[1]) + "x" + std::to_string(v.dims[2]) + " voxels) needs " + mib(need) +
+                     ", more than render.dense_budget=" + mib(dense_budget_bytes(s)) +
+                     "; use render.volume=nanovdb or auto, or raise the budget");
+  return prepare_volume(v, s.occupancy_cell, s.occupancy_padding);
+}
+
+}  // namespace
+
 PreparedVolume open_input(const std::string& input, const RenderSettings& s) {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+  std::string ext = std::filesystem::path(input).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  const bool file = input.rfind("synthetic:", 0) != 0 && std::filesystem::exists(input);
+  auto sparse = [&](cloudgen::NanoVolume n) {
+    return prepare_nano(std::make_shared<const cloudgen::NanoVolume>(std::move(n)), s.occupancy_cell,
+                        s.occupancy_padding);
+  };
+  if (file && ext == ".nvdb") {
+    cloudgen::NanoVolume n = cloudgen::read_nvdb(input);  // sparse either way; densified only for dense
+    const uint64_t voxels = uint64_t(n.dims[0]) * n.dims[1] * n.dims[2];
+    if (use_nanovdb(s, voxels)) return sparse(std::move(n));
+    return prepare_dense(cloudgen::dense_from_nano(n, cloudgen::kDefaultReadBudget, input), input, s);
+  }
+  if (file && ext == ".vdb") {
+    // The active box from the grid's metadata first: a field beyond the budget is never densified,
+    // and the choice is made once (the free memory changes as the volume loads).
+    const cloudgen::SceneInfo info = cloudgen::read_scene_info(input);
+    if (use_nanovdb(s, uint64_t(info.dims[0]) * info.dims[1] * info.dims[2]))
+      return sparse(cloudgen::nano_from_vdb(input));
+    return prepare_dense(load_volume(input), input, s);
+  }
+  const uint64_t budget = dense_budget_bytes(s);  // before loading, for the same reason
+  cloudgen::Volume v = load_volume(input);
+  RenderSettings fixed = s;
+  fixed.dense_budget = double(budget) / 1048576.0;
+  if (use_nanovdb(fixed, v.voxel_count())) {
+    cloudgen::ExportOptions o;  // every channel as a grid, y-up: the viewer's own copy
+    o.vdb_detail = true;
+    o.vdb_bake_erosion = false;
+    o.vdb_physical = false;
+    o.vdb_up = 'y';
+    return sparse(cloudgen::nano_from_volume(v, o));
+  }
+  return prepare_dense(v, input, s);
+#else
   return prepare_volume(load_volume(input), s.occupancy_cell, s.occupancy_padding);
+#endif
 }
 
 }  // namespace cloudviewer

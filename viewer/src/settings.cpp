@@ -124,6 +124,9 @@ std::vector<ParamDef> build() {
   t.push_back(enumeration("output", &RenderSettings::output, {"radiance", "transmittance", "iterations"}, "what the cloud pass writes (debug views)"));
   t.push_back(integer("frame", &RenderSettings::frame, 0, 1 << 30, "frame index of the jitter pattern (and of the temporal cross matrix)"));
   t.push_back(boolean("temporal", &RenderSettings::temporal, "temporal upsampling (seed 003): march one pixel of every 4x4 block per frame in the cross-matrix order, rebuild the rest from the reprojected history (GL only; the CPU reference renders every pixel)"));
+  t.push_back(enumeration("volume", &RenderSettings::volume, {"auto", "dense", "nanovdb"}, "how the volume reaches the shaders: dense (an RGBA float 3D texture, 16 bytes per voxel of the active box) or nanovdb (the sparse NanoVDB grids in a GPU buffer, marched through PNanoVDB.h; .nvdb and .vdb inputs load without a dense copy); auto: nanovdb when the dense texture plus occupancy (16.125 bytes per voxel) would exceed dense_budget, dense otherwise"));
+  t.push_back(enumeration("nanovdb_lookup", &RenderSettings::nanovdb_lookup, {"table", "accessor"}, "volume=nanovdb on the GPU: table (a page table of the grids' 8^3 leaves, one RG32UI texel per leaf cell of the box: one fetch and one buffer read per voxel) or accessor (PNanoVDB's read accessor walking the tree, 1.5-4x slower on llvmpipe); the same values, the same image; the CPU reference always walks with the accessor"));
+  t.push_back(real("dense_budget", &RenderSettings::dense_budget, 0, 1e9, "memory the dense path's RGBA copy and occupancy may use, MiB (0 = a third of the free memory when the input is opened: the reader's channels, the copy and the GL texture coexist); volume=dense refuses a volume beyond a set budget, volume=auto switches to nanovdb"));
   return t;
 }
 

@@ -23,6 +23,8 @@ std::vector<std::string> embedded_shader_names() {
 }
 
 std::string ShaderSource::load(const std::string& name) const {
+  auto over = overrides_.find(name);
+  if (over != overrides_.end()) return over->second;
   auto it = embedded_shaders().find(name);
   if (!dir_.empty()) {
     std::ifstream in(dir_ + "/" + name, std::ios::binary);

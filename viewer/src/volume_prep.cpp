@@ -12,6 +12,10 @@
 #include "cloudviewer/errors.h"
 #include "cloudviewer/scene.h"
 
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+#include "cloudgen/nvdb.h"
+#endif
+
 namespace cloudviewer {
 namespace {
 
@@ -203,6 +207,17 @@ PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_p
 }
 
 void build_occupancy(PreparedVolume& p, int occ_cell, int occ_padding) {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+  if (p.nano) {  // the nanovdb path: from the grid's leaves and tiles, no dense copy
+    std::array<uint32_t, 3> od{};
+    p.occ = cloudgen::nano_occupancy(*p.nano, uint32_t(occ_cell), uint32_t(occ_padding), od);
+    p.occ_cell = occ_cell;
+    p.occ_padding = occ_padding;
+    for (int i = 0; i < 3; ++i) p.occ_dims[size_t(i)] = int(od[size_t(i)]);
+    finish_occupancy(p);
+    return;
+  }
+#endif
   const size_t n = size_t(p.dims[0]) * p.dims[1] * p.dims[2];
   std::vector<float> density(n);
   for (size_t i = 0; i < n; ++i) density[i] = p.rgba[i * 4];

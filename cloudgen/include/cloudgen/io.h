@@ -15,7 +15,7 @@
 
 namespace cloudgen {
 
-enum class Format { Vdb, Raw, Ktx2, AtlasPng, AtlasExr };
+enum class Format { Vdb, Raw, Ktx2, AtlasPng, AtlasExr, Nvdb };
 /// "vdb", "raw", "ktx2", "atlas-png", "atlas-exr"; throws InputError naming the allowed values.
 Format parse_format(const std::string& s);
 /// From the extension: .vdb, .raw, .ktx2, .png (atlas-png), .exr (atlas-exr).
@@ -41,6 +41,10 @@ void write_volume(const Volume& v, const std::string& path, Format f, const Expo
 void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o, OutputBatch& batch);
 void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o);
 Volume read_vdb(const std::string& path, uint64_t max_bytes = kDefaultReadBudget);
+/// NanoVDB (.nvdb): the grids and metadata of the .vdb export as NanoVDB float grids
+/// (src/nvdb_io.cpp; sparse access in cloudgen/nvdb.h). read_nvdb_volume densifies.
+void write_nvdb(const Volume& v, const std::string& path, const ExportOptions& o, OutputBatch& batch);
+Volume read_nvdb_volume(const std::string& path, uint64_t max_bytes = kDefaultReadBudget);
 void write_raw(const Volume& v, const std::string& path, const ExportOptions& o, OutputBatch& batch);
 void write_raw(const Volume& v, const std::string& path, const ExportOptions& o);
 Volume read_raw(const std::string& path, uint64_t max_bytes = kDefaultReadBudget);

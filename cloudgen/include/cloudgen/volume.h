@@ -66,6 +66,9 @@ struct Volume {
 /// Builds the occupancy grid of `v.density` with v.occupancy_cell / v.occupancy_padding.
 /// Wraps the dilation around x and z when v.tiles_xz.
 void build_occupancy(Volume& v);
+/// build_occupancy's dilation: cells (od, x fastest) dilated by `padding` cells per axis (the
+/// union over the (2p+1)^3 box), wrapped in x and z when `tiles_xz`.
+void dilate_occupancy(std::vector<uint8_t>& cells, const std::array<uint32_t, 3>& od, uint32_t padding, bool tiles_xz);
 
 /// Memory a reader may use for the dense volume unless told otherwise (16 GiB).
 inline constexpr uint64_t kDefaultReadBudget = uint64_t(16) << 30;

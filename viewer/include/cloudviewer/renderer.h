@@ -3,6 +3,7 @@
 #pragma once
 #include <functional>
 #include <memory>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -34,11 +35,15 @@ class ShaderSource {
   /// back to files. `files` receives the file name of each source-string number.
   std::string expand(const std::string& name, std::vector<std::string>& files) const;
   const std::string& dir() const { return dir_; }
+  /// Replaces one file's text (before --shader-dir and the embedded copies): the renderer's
+  /// compile-time switches (nanovdb_storage.glsl).
+  void set_override(const std::string& name, std::string text) { overrides_[name] = std::move(text); }
 
  private:
   void expand_into(const std::string& name, std::vector<std::string>& files, std::string& out,
                    std::vector<std::string>& stack) const;
   std::string dir_;
+  std::map<std::string, std::string> overrides_;
 };
 
 /// Names of the embedded shader files.

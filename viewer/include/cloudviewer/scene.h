@@ -13,6 +13,10 @@
 #include "cloudviewer/params.h"
 #include "cloudviewer/settings.h"
 
+namespace cloudgen {
+struct NanoVolume;  // cloudgen/nvdb.h
+}
+
 namespace cloudviewer {
 
 /// True when this build links the cloudgen library (reads .vdb/.raw/.ktx2, generates .json presets).
@@ -52,6 +56,8 @@ struct PreparedVolume {
   /// A frame of a baked motion sequence (its metadata has time_seconds): already displaced, so the
   /// viewer shows it still.
   bool baked_motion = false;
+  /// render.volume=nanovdb: the NanoVDB grids both renderers march (rgba is then empty).
+  std::shared_ptr<const cloudgen::NanoVolume> nano;
   glm::dvec3 size() const { return glm::dvec3(dims[0], dims[1], dims[2]) * voxel_size; }
   glm::dvec3 center() const { return origin + 0.5 * size(); }
 };
@@ -77,13 +83,27 @@ std::vector<uint8_t> occupancy_distance(const std::vector<uint8_t>& occ, const s
 
 /// Bytes prepare_volume allocates for a volume of `voxels` voxels (RGBA floats, occupancy).
 uint64_t prepared_bytes(uint64_t voxels);
+/// The nanovdb path (render.volume=nanovdb): the volume fields, has_detail and the occupancy grid
+/// from the NanoVDB density grid's leaves and tiles (cloudgen::nano_occupancy: the same cells as
+/// the dense builder, no dense copy). Validates like prepare_volume. Needs cloudgen.
+PreparedVolume prepare_nano(std::shared_ptr<const cloudgen::NanoVolume> n, int occ_cell, int occ_padding = 2);
+/// Bytes the dense path's budget allows (render.dense_budget MiB, or a third of the free memory when 0).
+uint64_t dense_budget_bytes(const RenderSettings& s);
+/// Whether INPUT of `voxels` voxels goes through NanoVDB under s.volume (auto: the dense texture
+/// and occupancy, prepared_bytes(voxels), exceed dense_budget_bytes(s)).
+bool use_nanovdb(const RenderSettings& s, uint64_t voxels);
+/// Bytes the volume occupies on the GPU: the RGBA32F texture, or the NanoVDB buffer and its leaf
+/// page table (8 bytes per 8^3 cell), plus the R8 occupancy texture.
+uint64_t volume_gpu_bytes(const PreparedVolume& v);
 /// Bytes of memory this process may still allocate (MemAvailable, or physical memory).
 uint64_t available_memory_bytes();
 /// Throws InputError naming `what`, the estimate and what is available when `bytes` will not fit.
 void check_memory(const std::string& what, uint64_t bytes);
 
 /// The viewer's input dispatch, everything before OpenGL in one call (what main, the window, the
-/// bench and a fuzz target use): load_volume then prepare_volume with the settings' occupancy grid.
+/// bench and a fuzz target use): load_volume then prepare_volume with the settings' occupancy grid,
+/// or, when use_nanovdb says so, the NanoVDB grids (.nvdb read sparse, .vdb converted sparse,
+/// other inputs converted from their dense channels) through prepare_nano.
 /// Throws InputError / IoError as those do; never allocates what check_memory refuses.
 PreparedVolume open_input(const std::string& input, const RenderSettings& s);
 

@@ -22,6 +22,10 @@ enum class OutputMode {
 enum class PlaceMode { Box = 0, Layer = 1 };
 enum class Skipping { None = 0, Thesis = 1, Distance = 2 };
 enum class SkyMode { Analytic = CV_SKY_ANALYTIC, Precomputed = CV_SKY_PRECOMPUTED };
+/// How the volume reaches the shaders: a dense RGBA texture, or NanoVDB grids in a GPU buffer.
+enum class VolumeStorage { Auto = 0, Dense = 1, NanoVdb = 2 };
+/// How the GPU finds a NanoVDB voxel: a leaf page table, or PNanoVDB's read accessor walk.
+enum class NanoLookup { Table = 0, Accessor = 1 };
 
 struct RenderSettings {
   // placement
@@ -88,6 +92,10 @@ struct RenderSettings {
   double time = 0;                 ///< s: the clouds' time (`--time`; the window's clock)
   // Cloud motion (`--set motion.KEY=VALUE`; its table is cloudgen's, shared with its sequence bake).
   cloudgen::MotionParams motion;
+  // volume storage (docs/nanovdb.md)
+  VolumeStorage volume = VolumeStorage::Auto;  ///< auto: nanovdb when the dense texture exceeds dense_budget
+  double dense_budget = 0;         ///< MiB the dense path may use (RGBA floats + occupancy); 0 = a third of the free memory
+  NanoLookup nanovdb_lookup = NanoLookup::Table;  ///< GPU: leaf page table or PNanoVDB accessor
   // The atmosphere model (`--set atmosphere.KEY=VALUE`; its own table in atmosphere.h).
   AtmosphereSettings atmosphere;
 };
