@@ -56,6 +56,15 @@ void finish_occupancy(PreparedVolume& p) {
   // which only the thesis's one-cell step needs, would shorten every jump by its width.
   const int c = p.occ_cell;
   std::vector<uint8_t> holds(p.occ.size(), 0);
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+  if (p.nano) {  // no dense copy: the cells holding active voxels (a superset of density > 0), unpadded
+    std::array<uint32_t, 3> od{};
+    holds = cloudgen::nano_occupancy(*p.nano, uint32_t(c), 0, od);
+    if (holds.size() != p.occ.size()) holds.assign(p.occ.size(), 1);
+    p.dist = occupancy_distance(holds, p.occ_dims, p.tiles, p.dims, p.occ_cell);
+    return;
+  }
+#endif
   for (int z = 0; z < p.dims[2]; ++z)
     for (int y = 0; y < p.dims[1]; ++y) {
       const float* row = &p.rgba[((size_t(z) * p.dims[1] + y) * p.dims[0]) * 4];
