@@ -5,7 +5,6 @@
 #include <cstdlib>
 #include <sstream>
 
-#include "cloudgen/cli_parse.h"
 #include "cloudgen/volume.h"
 
 namespace cloudgen {
@@ -56,6 +55,19 @@ void set_motion_key(MotionParams& m, const std::string& key, const std::string& 
 
 bool motion_moves(const MotionParams& m) {
   return m.wind_speed > 0 || (m.flow_speed > 0 && (m.flow_up > 0 || m.flow_forward > 0));
+}
+
+bool motion_height_box(const std::vector<std::pair<std::string, std::string>>& metadata, double& min_y,
+                       double& height) {
+  bool have_min = false, have_height = false;
+  for (const auto& [k, val] : metadata) {
+    char* end = nullptr;
+    double x = std::strtod(val.c_str(), &end);
+    bool ok = !val.empty() && end == val.c_str() + val.size() && std::isfinite(x) && std::abs(x) <= 1e8;
+    if (k == "motion.box_min_y" && ok) min_y = x, have_min = true;
+    if (k == "motion.box_height" && ok && x > 0) height = x, have_height = true;
+  }
+  return have_min && have_height;
 }
 
 std::string motion_help() {

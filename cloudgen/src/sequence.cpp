@@ -130,15 +130,7 @@ MotionBox motion_box(const Volume& v) {
   // A region or tile of a preset measures heights in the whole preset's box (volume_header
   // records it), so its frames move like the one-process volume's.
   double min_y = 0, height = 0;
-  bool have_min = false, have_height = false;
-  for (const auto& [k, val] : v.metadata) {
-    char* end = nullptr;
-    double x = std::strtod(val.c_str(), &end);
-    bool ok = !val.empty() && end == val.c_str() + val.size() && std::isfinite(x);
-    if (k == "motion.box_min_y" && ok) min_y = x, have_min = true;
-    if (k == "motion.box_height" && ok && x > 0) height = x, have_height = true;
-  }
-  if (have_min && have_height) {
+  if (motion_height_box(v.metadata, min_y, height)) {
     b.origin[1] = min_y;
     b.dims[1] = uint32_t(std::max(1.0, std::round(height / v.voxel_size)));
   }

@@ -20,6 +20,7 @@
 #include <sstream>
 
 #include "cloudgen/io.h"
+#include "cloudgen/motion.h"
 #include "cloudgen/view.h"
 #include "vdb_internal.h"
 
@@ -452,20 +453,10 @@ openvdb::GridPtrVec export_grids(const Volume& v, const std::string& path, const
     baked.resize(v.density.size());
     double ny = yhi >= ylo ? double(yhi - ylo + 1) : 1.0;
     double y0 = double(ylo);  // in voxels from v's origin
-    {
-      double min_y = 0, height = 0;
-      bool have_min = false, have_height = false;
-      for (const auto& [k, val] : v.metadata) {
-        char* end = nullptr;
-        double x = std::strtod(val.c_str(), &end);
-        bool ok = !val.empty() && end == val.c_str() + val.size() && std::isfinite(x);
-        if (k == "motion.box_min_y" && ok) min_y = x, have_min = true;
-        if (k == "motion.box_height" && ok && x > 0) height = x, have_height = true;
-      }
-      if (have_min && have_height) {
-        y0 = (min_y - v.origin[1]) / v.voxel_size;
-        ny = height / v.voxel_size;
-      }
+    double min_y = 0, height = 0;
+    if (motion_height_box(v.metadata, min_y, height)) {
+      y0 = (min_y - v.origin[1]) / v.voxel_size;
+      ny = height / v.voxel_size;
     }
     for (uint32_t z = 0; z < v.dims[2]; ++z)
       for (uint32_t y = 0; y < v.dims[1]; ++y)

@@ -167,19 +167,9 @@ PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_p
   p.origin = glm::dvec3(v.origin[0], v.origin[1], v.origin[2]);
   p.height_min = p.origin.y;
   p.height_size = double(v.dims[1]) * v.voxel_size;
-  {
-    double min_y = 0, height = 0;
-    bool have_min = false, have_height = false;
-    for (const auto& [k, val] : v.metadata) {
-      char* end = nullptr;
-      double x = std::strtod(val.c_str(), &end);
-      bool ok = !val.empty() && end == val.c_str() + val.size() && std::isfinite(x) && std::abs(x) <= 1e8;
-      if (k == "motion.box_min_y" && ok) min_y = x, have_min = true;
-      if (k == "motion.box_height" && ok && x > 0) height = x, have_height = true;
-      if (k == "time_seconds") p.baked_motion = true;
-    }
-    if (have_min && have_height) p.height_min = min_y, p.height_size = height;
-  }
+  double box_min = 0, box_height = 0;
+  if (cloudgen::motion_height_box(v.metadata, box_min, box_height)) p.height_min = box_min, p.height_size = box_height;
+  for (const auto& kv : v.metadata) p.baked_motion |= kv.first == "time_seconds";
   p.tiles = v.tiles_xz;
   p.has_detail = true;
   for (int c = 0; c < 3; ++c) {

@@ -4,6 +4,7 @@
 #pragma once
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -36,6 +37,11 @@ const std::vector<MotionKey>& motion_keys();
 void set_motion_key(MotionParams& m, const std::string& key, const std::string& value, const std::string& where);
 /// True when any part of the motion is non-zero (a still setting skips the displacement entirely).
 bool motion_moves(const MotionParams& m);
+/// The box the motion measures heights in, as a volume's metadata records it (the volume header's
+/// motion.box_min_y / motion.box_height, metres): true and the two values when both are present
+/// and valid (finite, |min_y| <= 1e8, height > 0).
+bool motion_height_box(const std::vector<std::pair<std::string, std::string>>& metadata, double& min_y,
+                       double& height);
 /// `--help` text and the Markdown table (docs/viewer.md, docs/motion.md).
 std::string motion_help();
 std::string motion_markdown();
