@@ -286,6 +286,10 @@ TEST(NanoVdb, DamagedFilesGiveClearErrors) {
   b = good;
   b[14] = 1;  // codec: ZIP
   refused(b, "compressed", "compressed");
+  b = good;
+  b[14] = 0;  // codec 256: beyond NanoVDB's own name table (its toStr read past it; found by fuzz_nvdb)
+  b[15] = 1;
+  refused(b, "unknown codec", "unknown codec 256");
   // Flipped bytes anywhere in the grids: the checksum (or a structure check) catches them.
   for (size_t at = 300; at < good.size(); at += good.size() / 37) {
     b = good;

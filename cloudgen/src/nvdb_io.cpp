@@ -478,9 +478,13 @@ NanoVolume parse_nvdb(const uint8_t* data, size_t size, const std::string& name_
   if (h.version.getMajor() != NANOVDB_MAJOR_VERSION_NUMBER)
     bad("file version " + std::string(h.version.c_str()) + ", this reader reads major version " +
         std::to_string(NANOVDB_MAJOR_VERSION_NUMBER));
-  if (h.codec != nanovdb::io::Codec::NONE)
-    throw InputError(name + ": the NanoVDB file is compressed (" + nanovdb::io::toStr(h.codec) +
+  if (h.codec != nanovdb::io::Codec::NONE) {
+    // Not nanovdb::io::toStr: it indexes its table with the file's value (any 16 bits; found by fuzzing).
+    const auto c = static_cast<uint16_t>(h.codec);
+    const std::string codec = c == 1 ? "ZIP" : c == 2 ? "BLOSC" : "unknown codec " + std::to_string(c);
+    throw InputError(name + ": the NanoVDB file is compressed (" + codec +
                      "); cloudgen reads uncompressed .nvdb (nanovdb_convert without -z/-b, or cloudgen's own)");
+  }
   if (h.gridCount == 0 || h.gridCount > kMaxGrids)
     bad("it claims " + std::to_string(h.gridCount) + " grids (allowed: 1 to " + std::to_string(kMaxGrids) + ")");
   std::vector<std::pair<nanovdb::io::MetaData, std::string>> metas(h.gridCount);
