@@ -25,6 +25,11 @@
 
 namespace cloudgen {
 namespace {
+// NanoVDB's Version::c_str() returns a malloc'd buffer its callers must free (a leak on every
+// damaged file's message: found by fuzz_nvdb); the text from the version's parts instead.
+std::string version_text(const nanovdb::Version& v) {
+  return std::to_string(v.getMajor()) + "." + std::to_string(v.getMinor()) + "." + std::to_string(v.getPatch());
+}
 
 using json = nlohmann::json;
 using NanoGrid = nanovdb::NanoGrid<float>;
@@ -344,7 +349,7 @@ void check_grid(const uint8_t* p, uint64_t size, const std::string& where) {
   const auto* gd = reinterpret_cast<const nanovdb::GridData*>(p);
   if (gd->mMagic != NANOVDB_MAGIC_NUMBER) c.bad("no NanoVDB magic number at the start of the grid");
   if (gd->mVersion.getMajor() != NANOVDB_MAJOR_VERSION_NUMBER)
-    c.bad("grid version " + std::string(gd->mVersion.c_str()) + ", this reader reads major version " +
+    c.bad("grid version " + version_text(gd->mVersion) + ", this reader reads major version " +
           std::to_string(NANOVDB_MAJOR_VERSION_NUMBER));
   if (gd->mGridSize != size) c.bad("the grid says it has " + std::to_string(gd->mGridSize) + " bytes, the file " + std::to_string(size));
   if (gd->mGridName[nanovdb::GridData::MaxNameSize - 1] != '\0') c.bad("the grid name is not terminated");
@@ -476,7 +481,7 @@ NanoVolume parse_nvdb(const uint8_t* data, size_t size, const std::string& name_
   if (h.magic == nanovdb::io::reverseEndianness(NANOVDB_MAGIC_NUMBER)) bad("it has the other byte order");
   if (h.magic != NANOVDB_MAGIC_NUMBER) bad("no NanoVDB magic number at the start");
   if (h.version.getMajor() != NANOVDB_MAJOR_VERSION_NUMBER)
-    bad("file version " + std::string(h.version.c_str()) + ", this reader reads major version " +
+    bad("file version " + version_text(h.version) + ", this reader reads major version " +
         std::to_string(NANOVDB_MAJOR_VERSION_NUMBER));
   if (h.codec != nanovdb::io::Codec::NONE) {
     // Not nanovdb::io::toStr: it indexes its table with the file's value (any 16 bits; found by fuzzing).
