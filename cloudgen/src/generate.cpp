@@ -330,18 +330,6 @@ BrickPlan plan_bricks(const Preset& p, const GenerateOptions& opt, size_t first,
   return plan;
 }
 
-namespace {
-// Shortest text that reads back as the same double.
-std::string format_double(double x) {
-  char buf[32];
-  for (int prec = 6; prec <= 17; ++prec) {
-    std::snprintf(buf, sizeof buf, "%.*g", prec, x);
-    if (std::strtod(buf, nullptr) == x) break;
-  }
-  return buf;
-}
-}  // namespace
-
 Volume volume_header(const Preset& p, const BrickPlan& plan) {
   Volume v;
   for (int a = 0; a < 3; ++a) v.dims[a] = plan.region_hi[a] - plan.region_lo[a];
@@ -356,8 +344,7 @@ Volume volume_header(const Preset& p, const BrickPlan& plan) {
                 {"preset_hash", preset_hash(p)}};
   // The box heights are measured in for the motion (motion.glsl's h): the whole preset's, so a
   // cropped VDB, a tile or a region moves exactly like the full volume (sequence.h motion_box).
-  v.metadata.push_back({"motion.box_min_y", format_double(p.origin[1])});
-  v.metadata.push_back({"motion.box_height", format_double(double(plan.dims[1]) * p.voxel_size)});
+  set_motion_height_box(v.metadata, p.origin[1], double(plan.dims[1]) * p.voxel_size);
   // The preset's view travels with every output of every path (one process, MPI, tiles).
   add_view_metadata(v.metadata, p.view);
   // A sub-box says which (the VDB writer keeps the detail on its faces, whose neighbours it

@@ -1,6 +1,8 @@
 #include "cloudgen/motion.h"
 
+#include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cmath>
 #include <cstdlib>
 #include <sstream>
@@ -68,6 +70,22 @@ bool motion_height_box(const std::vector<std::pair<std::string, std::string>>& m
     if (k == "motion.box_height" && ok && x > 0) height = x, have_height = true;
   }
   return have_min && have_height;
+}
+
+void set_motion_height_box(std::vector<std::pair<std::string, std::string>>& metadata, double min_y, double height) {
+  auto exact = [](double x) {
+    char buf[32];
+    for (int prec = 6; prec <= 17; ++prec) {
+      std::snprintf(buf, sizeof buf, "%.*g", prec, x);
+      if (std::strtod(buf, nullptr) == x) break;
+    }
+    return std::string(buf);
+  };
+  metadata.erase(std::remove_if(metadata.begin(), metadata.end(),
+                                [](const auto& kv) { return kv.first == "motion.box_min_y" || kv.first == "motion.box_height"; }),
+                 metadata.end());
+  metadata.push_back({"motion.box_min_y", exact(min_y)});
+  metadata.push_back({"motion.box_height", exact(height)});
 }
 
 std::string motion_help() {

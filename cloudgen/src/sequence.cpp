@@ -24,15 +24,6 @@ std::string fmt(double v) {
   s << v;
   return s.str();
 }
-// Shortest text that reads back as the same double (metadata other programs parse).
-std::string exact(double x) {
-  char buf[32];
-  for (int prec = 6; prec <= 17; ++prec) {
-    std::snprintf(buf, sizeof buf, "%.*g", prec, x);
-    if (std::strtod(buf, nullptr) == x) break;
-  }
-  return buf;
-}
 
 int64_t mod(int64_t a, int64_t n) { return ((a % n) + n) % n; }
 
@@ -263,11 +254,7 @@ MotionFrame bake_frame(const Volume& s, const MotionParams& m, int64_t frame, do
   v.tiles_xz = s.tiles_xz;
   v.metadata = s.metadata;
   // The box the heights were measured in travels with the frame (its own box follows the cloud).
-  v.metadata.erase(std::remove_if(v.metadata.begin(), v.metadata.end(),
-                                  [](const auto& kv) { return kv.first == "motion.box_min_y" || kv.first == "motion.box_height"; }),
-                   v.metadata.end());
-  v.metadata.push_back({"motion.box_min_y", exact(f.box.min_y())});
-  v.metadata.push_back({"motion.box_height", exact(f.box.height())});
+  set_motion_height_box(v.metadata, f.box.min_y(), f.box.height());
   v.detail_names = s.detail_names;
   v.occupancy_cell = s.occupancy_cell;
   v.occupancy_padding = s.occupancy_padding;

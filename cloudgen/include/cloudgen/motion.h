@@ -42,6 +42,9 @@ bool motion_moves(const MotionParams& m);
 /// and valid (finite, |min_y| <= 1e8, height > 0).
 bool motion_height_box(const std::vector<std::pair<std::string, std::string>>& metadata, double& min_y,
                        double& height);
+/// Records that box in `metadata` (replacing an earlier record), each value as the shortest text
+/// that reads back as the same double: what motion_height_box reads.
+void set_motion_height_box(std::vector<std::pair<std::string, std::string>>& metadata, double min_y, double height);
 /// `--help` text and the Markdown table (docs/viewer.md, docs/motion.md).
 std::string motion_help();
 std::string motion_markdown();
