@@ -681,8 +681,9 @@ TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
   CV_EXPECT_OFFSET(flow_speed_hz);
   CV_EXPECT_OFFSET(motion_pad);
 #undef CV_EXPECT_OFFSET
-  EXPECT_EQ(r.pass_names().front(), "atmosphere_transmittance");  // the LUT precompute comes first
-  EXPECT_EQ(r.pass_names().at(1), "ground");
+  EXPECT_EQ(r.pass_names().front(), "atmosphere_transmittance");  // the LUT precomputes come first
+  EXPECT_EQ(r.pass_names().at(1), "atmosphere_multiple_scattering");
+  EXPECT_EQ(r.pass_names().at(2), "ground");
   EXPECT_EQ(r.pass_names().back(), "tonemap");
 }
 

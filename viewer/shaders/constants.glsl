@@ -45,6 +45,7 @@
 #define CV_UNIT_PASS_INPUT3 10
 #define CV_UNIT_MOTION 11
 #define CV_UNIT_PASS_INPUT4 12
+#define CV_UNIT_MULTIPLE_SCATTERING 13  // RGBA32F: the atmosphere's multiple-scattering LUT
 // render.volume=nanovdb: the grids (a RGBA32UI buffer texture) and the leaf page table (RG32UI)
 // of the density and first detail grid.
 #define CV_UNIT_NANOVDB_GRIDS 14
@@ -65,6 +66,13 @@
 #define CV_TRANSMITTANCE_H 64
 #define CV_TRANSMITTANCE_SAMPLES 500
 #define CV_SKY_SAMPLES 32           // per-pixel single-scattering samples along a view ray
+// Multiple scattering LUT (Hillaire 2020): Psi_ms(h, mu_s), mu_s x altitude texels, each integrating
+// over the sphere (sky bands + ground bands) x sectors directions with CV_MS_STEPS samples along each.
+#define CV_MS_LUT_SIZE 32
+#define CV_MS_SKY_BANDS 8
+#define CV_MS_GROUND_BANDS 4
+#define CV_MS_SECTORS 8
+#define CV_MS_STEPS 20
 
 // Marching.
 #define CV_TRANSMITTANCE_EPSILON 1e-3  // default render.transmittance_cutoff: stop marching below this

@@ -53,6 +53,22 @@ AtmosphereParamDef boolean(const std::string& key, int index, const std::string&
   return d;
 }
 
+AtmosphereParamDef integer(const std::string& key, int AtmosphereSettings::*member, int lo, int hi,
+                           const std::string& doc) {
+  AtmosphereParamDef d;
+  d.key = key, d.type = "int", d.range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]", d.doc = doc;
+  d.lo = lo, d.hi = hi;
+  d.set = [=](AtmosphereSettings& s, const std::string& v) {
+    double x = parse_number(key, v, lo, hi);
+    if (x != std::floor(x))
+      throw InputError("atmosphere." + key + "=" + v + ": expected an integer in [" + std::to_string(lo) + ", " +
+                       std::to_string(hi) + "]");
+    s.*member = int(x);
+  };
+  d.get = [=](const AtmosphereSettings& s) { return std::to_string(s.*member); };
+  return d;
+}
+
 std::vector<AtmosphereParamDef> build() {
   std::vector<AtmosphereParamDef> t;
   t.push_back(real("bottom_radius", 0, 1e3, 1e9, "planet radius (the ground), m"));
@@ -76,6 +92,9 @@ std::vector<AtmosphereParamDef> build() {
   t.push_back(real("ozone_top", 15, 0, 1e6, "ozone tent profile: zero above this altitude, m"));
   t.push_back(real("ground_albedo", 16, 0, 1, "ground albedo of the planet beyond the ground mesh (seen through the air)"));
   t.push_back(real("sun_angular_radius", 17, 0.01, 10, "sun angular radius, degrees (the disc, and the smooth set of the sunlight below the horizon)"));
+  t.push_back(integer("scattering_orders", &AtmosphereSettings::scattering_orders, 1, 64,
+                      "scattering orders of the sky: 1 = single scattering; N adds orders 2..N from the "
+                      "multiple-scattering LUT (Hillaire 2020; large N tends to its infinite series L2 / (1 - f))"));
   return t;
 }
 
@@ -85,7 +104,7 @@ bool AtmosphereSettings::operator==(const AtmosphereSettings& o) const {
   for (int i = 0; i < 18; ++i)
     if (*real_member(const_cast<AtmosphereSettings&>(*this), i) != *real_member(const_cast<AtmosphereSettings&>(o), i))
       return false;
-  return rayleigh == o.rayleigh && mie == o.mie && ozone == o.ozone;
+  return rayleigh == o.rayleigh && mie == o.mie && ozone == o.ozone && scattering_orders == o.scattering_orders;
 }
 
 const std::vector<AtmosphereParamDef>& atmosphere_params() {
@@ -156,6 +175,7 @@ ref::AtmosphereParams make_atmosphere_params(const AtmosphereSettings& s) {
   p.ozone_peak_m = s.ozone_peak;
   p.ozone_top_m = s.ozone_top;
   p.sun_angular_radius = s.sun_angular_radius_deg * M_PI / 180.0;
+  p.scattering_orders = s.scattering_orders;
   return p;
 }
 
@@ -190,9 +210,11 @@ struct AtmosphereShader {
   using uint = uint32_t;
 
   const ref::AtmosphereParams& u_atmo;
-  const std::vector<glm::dvec3>* lut = nullptr;
+  const std::vector<glm::dvec3>* lut = nullptr;  // transmittance
+  const std::vector<glm::dvec3>* ms = nullptr;   // multiple scattering
 
   vec3 transmittance_texel(ivec2 t) const { return (*lut)[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
+  vec3 multiple_scattering_texel(ivec2 t) const { return (*ms)[size_t(t.y) * CV_MS_LUT_SIZE + size_t(t.x)]; }
 
 #define IN(x) const x&
 #define OUT(x) x&
@@ -224,6 +246,7 @@ struct SizedAtmosphereShader {
 #define CV_TRANSMITTANCE_H (64 * Num / Den)
   static constexpr int W = CV_TRANSMITTANCE_W, H = CV_TRANSMITTANCE_H;
   vec3 transmittance_texel(ivec2 t) const { return (*lut)[size_t(t.y) * W + size_t(t.x)]; }
+  vec3 multiple_scattering_texel(ivec2) const { return vec3(0.0); }  // not studied at other sizes
 #define IN(x) const x&
 #define OUT(x) x&
 #define INOUT(x) x&
@@ -263,34 +286,54 @@ std::vector<glm::dvec3> transmittance_lookups_at_size(const ref::AtmosphereParam
   }
 }
 
-TransmittanceLut compute_transmittance_lut(const ref::AtmosphereParams& p) {
-  TransmittanceLut lut;
-  lut.params = p;
-  lut.texels.resize(size_t(CV_TRANSMITTANCE_W) * CV_TRANSMITTANCE_H);
+AtmosphereLuts compute_atmosphere_luts(const ref::AtmosphereParams& p) {
+  AtmosphereLuts luts;
+  luts.params = p;
+  luts.transmittance.resize(size_t(CV_TRANSMITTANCE_W) * CV_TRANSMITTANCE_H);
   tbb::parallel_for(0, CV_TRANSMITTANCE_H, [&](int y) {
-    AtmosphereShader sh{lut.params};
+    AtmosphereShader sh{luts.params};
     for (int x = 0; x < CV_TRANSMITTANCE_W; ++x)
-      lut.texels[size_t(y) * CV_TRANSMITTANCE_W + size_t(x)] = sh.compute_transmittance_texel(glm::ivec2(x, y));
+      luts.transmittance[size_t(y) * CV_TRANSMITTANCE_W + size_t(x)] = sh.compute_transmittance_texel(glm::ivec2(x, y));
   });
-  return lut;
+  luts.multiple_scattering.assign(size_t(CV_MS_LUT_SIZE) * CV_MS_LUT_SIZE, glm::dvec3(0.0));
+  if (p.scattering_orders > 1.5)
+    tbb::parallel_for(0, CV_MS_LUT_SIZE, [&](int y) {
+      AtmosphereShader sh{luts.params, &luts.transmittance};
+      for (int x = 0; x < CV_MS_LUT_SIZE; ++x)
+        luts.multiple_scattering[size_t(y) * CV_MS_LUT_SIZE + size_t(x)] =
+            sh.compute_multiple_scattering_texel(glm::ivec2(x, y));
+    });
+  return luts;
 }
 
-glm::dvec3 TransmittanceLut::to_top(double r, double mu) const {
-  AtmosphereShader sh{params, &texels};
+glm::dvec3 AtmosphereLuts::to_top(double r, double mu) const {
+  AtmosphereShader sh{params, &transmittance, &multiple_scattering};
   if (sh.ray_intersects_ground(r, mu)) return glm::dvec3(0.0);
   return sh.transmittance_to_top(r, mu);
 }
 
-std::shared_ptr<const TransmittanceLut> shared_transmittance_lut(const AtmosphereSettings& s) {
+glm::dvec3 AtmosphereLuts::psi_ms(double r, double mu_s) const {
+  AtmosphereShader sh{params, &transmittance, &multiple_scattering};
+  return sh.multiple_scattering_at(r, mu_s);
+}
+
+glm::dvec3 AtmosphereLuts::sky_radiance(double alt, const glm::dvec3& v, const glm::dvec3& s) const {
+  AtmosphereShader sh{params, &transmittance, &multiple_scattering};
+  glm::dvec3 t, g;
+  double t_end = 0;
+  return sh.atmosphere_scattering(alt, v, s, glm::dvec3(1.0), CV_NO_HIT, t, t_end, g);
+}
+
+std::shared_ptr<const AtmosphereLuts> shared_atmosphere_luts(const AtmosphereSettings& s) {
   static std::mutex mutex;
   static AtmosphereSettings last;
-  static std::shared_ptr<const TransmittanceLut> lut;
+  static std::shared_ptr<const AtmosphereLuts> luts;
   std::lock_guard<std::mutex> lock(mutex);
-  if (!lut || last != s) {
-    lut = std::make_shared<const TransmittanceLut>(compute_transmittance_lut(rounded_to_float(make_atmosphere_params(s))));
+  if (!luts || last != s) {
+    luts = std::make_shared<const AtmosphereLuts>(compute_atmosphere_luts(rounded_to_float(make_atmosphere_params(s))));
     last = s;
   }
-  return lut;
+  return luts;
 }
 
 glm::dvec3 sky_ambient_color(const AtmosphereSettings& s, const glm::dvec3& sun_dir, double solar, double altitude) {
@@ -303,8 +346,8 @@ glm::dvec3 sky_ambient_color(const AtmosphereSettings& s, const glm::dvec3& sun_
     std::lock_guard<std::mutex> lock(mutex);
     if (last_s == s && last_sun == sun_dir && last_solar == solar && last_alt == altitude) return last_value;
   }
-  std::shared_ptr<const TransmittanceLut> lut = shared_transmittance_lut(s);
-  AtmosphereShader sh{lut->params, &lut->texels};
+  std::shared_ptr<const AtmosphereLuts> luts = shared_atmosphere_luts(s);
+  AtmosphereShader sh{luts->params, &luts->transmittance, &luts->multiple_scattering};
   // Midpoint rule over the hemisphere in (cos theta, phi): E = int L cos theta d(cos theta) d phi.
   const int n_theta = 16, n_phi = 32;
   glm::dvec3 e(0.0);
@@ -324,7 +367,9 @@ glm::dvec3 sky_ambient_color(const AtmosphereSettings& s, const glm::dvec3& sun_
 }
 
 std::vector<glm::dvec3> transmittance_dump_cpu(const AtmosphereSettings& s) {
-  TransmittanceLut lut = compute_transmittance_lut(make_atmosphere_params(s));
+  AtmosphereSettings single = s;
+  single.scattering_orders = 1;  // the transmittance only
+  AtmosphereLuts lut = compute_atmosphere_luts(make_atmosphere_params(single));
   std::vector<glm::dvec3> v;
   for (int j = 0; j < kDumpAltitudes; ++j)
     for (int i = 0; i < kDumpMus; ++i) {

@@ -41,16 +41,19 @@ struct CpuShader {
   const ref::CloudParams& u_cloud;
   const PreparedVolume& vol;
   const std::vector<float>& mie;
-  const TransmittanceLut& lut;
+  const AtmosphereLuts& lut;
   const ref::AtmosphereParams& u_atmo;
   const std::vector<dvec3>* motion = nullptr;  // FrameSetup::motion_table (2 rows)
   const std::vector<double>* light_volume = nullptr;  ///< light_volume_dims texels, x fastest
 
-  CpuShader(const ref::CloudParams& p, const PreparedVolume& v, const std::vector<float>& m, const TransmittanceLut& t,
+  CpuShader(const ref::CloudParams& p, const PreparedVolume& v, const std::vector<float>& m, const AtmosphereLuts& t,
             const std::vector<dvec3>* motion_table = nullptr)
       : u_cloud(p), vol(v), mie(m), lut(t), u_atmo(t.params), motion(motion_table) {}
 
-  vec3 transmittance_texel(ivec2 t) const { return lut.texels[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
+  vec3 transmittance_texel(ivec2 t) const { return lut.transmittance[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
+  vec3 multiple_scattering_texel(ivec2 t) const {
+    return lut.multiple_scattering[size_t(t.y) * CV_MS_LUT_SIZE + size_t(t.x)];
+  }
 
   vec4 volume_texel(ivec3 t) {
     if (vol.nano) return nanovdb_texel(t);
@@ -197,8 +200,8 @@ void blur(CpuShader& sh, const Buffer& src, Buffer& dst, ivec2 direction) {
 }
 
 // A LUT for CpuShaders that never read it (the analytic sky, the phase and gradient helpers).
-const TransmittanceLut& no_lut() {
-  static const TransmittanceLut empty{};
+const AtmosphereLuts& no_lut() {
+  static const AtmosphereLuts empty{};
   return empty;
 }
 
@@ -285,17 +288,17 @@ void scene_hit(CpuShader& sh, const ref::CloudParams& P, const dvec3& rd, double
 }
 
 struct Lookups {
-  std::shared_ptr<const TransmittanceLut> shared;
-  const TransmittanceLut& lut;
+  std::shared_ptr<const AtmosphereLuts> shared;
+  const AtmosphereLuts& lut;
   explicit Lookups(const FrameSetup& frame)
-      : shared(int(frame.params.sky_mode) == CV_SKY_PRECOMPUTED ? shared_transmittance_lut(frame.settings.atmosphere)
+      : shared(int(frame.params.sky_mode) == CV_SKY_PRECOMPUTED ? shared_atmosphere_luts(frame.settings.atmosphere)
                                                                  : nullptr),
         lut(shared ? *shared : no_lut()) {}
 };
 
 // Bloom (half-resolution bright pass, separable Gaussian, added before tone mapping) and the tone
 // map: the same passes and taps as bloom_bright.frag, bloom_blur.frag, tonemap.frag.
-FrameImages finish(const PreparedVolume& vol, const FrameSetup& frame, const TransmittanceLut& lut, const Buffer& hdr) {
+FrameImages finish(const PreparedVolume& vol, const FrameSetup& frame, const AtmosphereLuts& lut, const Buffer& hdr) {
   const int w = frame.width, h = frame.height;
   const ref::CloudParams& P = frame.params;
   const double exposure = frame.settings.exposure, strength = frame.settings.bloom;

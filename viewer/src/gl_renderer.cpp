@@ -101,6 +101,7 @@ struct Pass {
   std::function<bool(const FrameSetup&)> enabled;    // null = always
   std::function<void(GLuint program)> uniforms;      // per-pass uniforms, null = none
   bool precompute = false;                           // an atmosphere LUT: runs only when atmosphere.* changed
+  int lut_unit = -1;                                 // precompute: the unit its LUT is bound to for later passes
   bool light_volume = false;                         // runs only when the light volume's inputs changed
   GLuint program = 0;
 };
@@ -121,6 +122,10 @@ std::vector<Target> make_targets() {
   t[6].name = "cloud_quarter", t[6].colors = {GL_RGBA32F, GL_R32F, GL_RGBA32F, GL_RGBA32F};
   t[6].divisor = 4, t[6].round_up = true;
   t[7].name = "cloud_layer", t[7].colors = {GL_RGBA32F, GL_R32F}, t[7].history = true;
+  Target ms;     // atmosphere LUT Psi_ms(r, mu_s): orders 2..N of the sky's scattering
+  ms.name = "multiple_scattering", ms.colors = {GL_RGBA32F};
+  ms.fixed_w = CV_MS_LUT_SIZE, ms.fixed_h = CV_MS_LUT_SIZE;
+  t.push_back(ms);
   Target light;  // optical depth toward the sun over the box (render.light_volume)
   light.name = "light_volume", light.colors = {GL_R32F};
   light.volume_size = [](const FrameSetup& f) { return glm::ivec3(f.params.light_volume_dims); };
@@ -140,7 +145,14 @@ std::vector<Pass> make_passes() {
   transmittance.name = "atmosphere_transmittance", transmittance.vs = "fullscreen.vert";
   transmittance.fs = "atmosphere_transmittance.frag", transmittance.target = "transmittance";
   transmittance.group = Group::Atmosphere, transmittance.precompute = true;
+  transmittance.lut_unit = CV_UNIT_TRANSMITTANCE;
   p.push_back(transmittance);
+  Pass multiple;  // reads the transmittance LUT
+  multiple.name = "atmosphere_multiple_scattering", multiple.vs = "fullscreen.vert";
+  multiple.fs = "atmosphere_multiple_scattering.frag", multiple.target = "multiple_scattering";
+  multiple.group = Group::Atmosphere, multiple.precompute = true;
+  multiple.lut_unit = CV_UNIT_MULTIPLE_SCATTERING;
+  p.push_back(multiple);
   Pass ground;
   ground.name = "ground", ground.vs = "ground.vert", ground.fs = "ground.frag", ground.target = "scene";
   ground.group = Group::Ground, ground.mesh = true;
@@ -432,7 +444,13 @@ struct GlRenderer::Impl {
     atmo_valid = true, atmo_done = a;
     return dirty;
   }
-  void bind_luts() { glBindTextureUnit(CV_UNIT_TRANSMITTANCE, target("transmittance").tex[0][0]); }
+  // An atmosphere LUT pass (run when `dirty`), its output then bound to its unit for the passes
+  // after it: each LUT pass reads the LUTs before it, and none samples its own target.
+  void run_lut(Pass& p, const FrameSetup& f, bool dirty) {
+    glBindTextureUnit(GLuint(p.lut_unit), 0);
+    if (dirty) run(p, f);
+    glBindTextureUnit(GLuint(p.lut_unit), target(p.target).tex[0][0]);
+  }
   void swap_history() {
     for (Target& t : targets)
       if (t.history) {
@@ -709,8 +727,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glQueryCounter(m.queries[0], GL_TIMESTAMP);
   for (size_t i = 0; i < m.passes.size(); ++i) {
     if (m.passes[i].precompute) {
-      if (atmo_dirty) m.run(m.passes[i], f);
-      if (i + 1 < m.passes.size() && !m.passes[i + 1].precompute) m.bind_luts();
+      m.run_lut(m.passes[i], f, atmo_dirty);
     } else if (m.passes[i].light_volume) {
       if (light_dirty) {
         m.run(m.passes[i], f);
@@ -778,9 +795,8 @@ std::vector<glm::vec3> GlRenderer::transmittance_dump(const AtmosphereSettings& 
   glCreateQueries(GL_TIMESTAMP, 2, q);
   glQueryCounter(q[0], GL_TIMESTAMP);
   for (Pass& p : m.passes)
-    if (p.precompute && dirty) m.run(p, none);
+    if (p.precompute) m.run_lut(p, none, dirty);
   glQueryCounter(q[1], GL_TIMESTAMP);
-  m.bind_luts();
   // The grid through the shaders' lookup (atmosphere_dump.frag) into a scratch target.
   GLuint prog = link_program(m.shaders, "fullscreen.vert", "atmosphere_dump.frag");
   GLuint tex = make_texture_2d(GL_RGBA32F, kDumpMus, kDumpAltitudes), fbo = 0;

@@ -139,6 +139,9 @@ void Panel::draw(RenderSettings& s, const GpuTimings& t, const std::string& hint
         if (p.type == "bool") {
           bool b = value == "true";
           if (ImGui::Checkbox(label.c_str(), &b)) p.set(next, b ? "true" : "false"), changed = true;
+        } else if (p.type == "int") {
+          int v = std::stoi(value);
+          if (ImGui::SliderInt(label.c_str(), &v, int(p.lo), int(p.hi))) p.set(next, std::to_string(v)), changed = true;
         } else {
           float v = std::stof(value);
           const bool log_scale = p.lo >= 0 && p.hi / std::max(p.lo, 1e-12) > 1e3;

@@ -34,6 +34,7 @@ struct AtmosphereSettings {
   double ozone_top = 40e3;
   double ground_albedo = 0.1;
   double sun_angular_radius_deg = 0.2678;
+  int scattering_orders = 4;  ///< 1: single scattering; N: orders 2..N from the multiple-scattering LUT
   bool operator==(const AtmosphereSettings& o) const;
   bool operator!=(const AtmosphereSettings& o) const { return !(*this == o); }
 };
@@ -72,7 +73,7 @@ using Number = double;
 using vec3 = glm::dvec3;
 #include "../../shaders/atmosphere_params.glsl"
 }  // namespace ref
-constexpr int kAtmosphereParamsScalars = 24;
+constexpr int kAtmosphereParamsScalars = 28;
 static_assert(sizeof(gpu::AtmosphereParams) == kAtmosphereParamsScalars * 4, "std140 AtmosphereBlock size");
 static_assert(sizeof(ref::AtmosphereParams) == kAtmosphereParamsScalars * 8, "double AtmosphereParams size");
 
@@ -82,24 +83,31 @@ gpu::AtmosphereParams to_gpu(const ref::AtmosphereParams& d);
 /// The double parameters the GPU sees (each value rounded to float).
 ref::AtmosphereParams rounded_to_float(const ref::AtmosphereParams& d);
 
-/// The transmittance LUT (CV_TRANSMITTANCE_W x CV_TRANSMITTANCE_H, RGB, row-major from (0, 0)) as
-/// the CPU reference computes it, and the shaders' lookup over it.
-struct TransmittanceLut {
+/// The atmosphere LUTs as the CPU reference computes them, and the shaders' lookups over them:
+/// the transmittance (CV_TRANSMITTANCE_W x CV_TRANSMITTANCE_H) and the multiple scattering
+/// (CV_MS_LUT_SIZE^2), RGB, row-major from (0, 0).
+struct AtmosphereLuts {
   ref::AtmosphereParams params;
-  std::vector<glm::dvec3> texels;
+  std::vector<glm::dvec3> transmittance;
+  std::vector<glm::dvec3> multiple_scattering;
   /// transmittance_to_top(r, mu) of atmosphere.glsl (bilinear by hand); rays that hit the ground: 0.
   glm::dvec3 to_top(double r, double mu) const;
+  /// multiple_scattering_at(r, mu_s) of atmosphere.glsl: Psi_ms for unit solar irradiance.
+  glm::dvec3 psi_ms(double r, double mu_s) const;
+  /// atmosphere_scattering() of atmosphere.glsl: the sky's radiance from altitude `alt` along unit
+  /// `v` (zenith +y) with the sun along unit `s` and unit solar irradiance, to the top or the ground.
+  glm::dvec3 sky_radiance(double alt, const glm::dvec3& v, const glm::dvec3& s) const;
 };
-TransmittanceLut compute_transmittance_lut(const ref::AtmosphereParams& p);
+AtmosphereLuts compute_atmosphere_luts(const ref::AtmosphereParams& p);
 
 /// For the size-against-error study: the LUT at half (size_index 0), the shipped (1) or double (2)
 /// the 256x64 size, computed by the same header, looked up at each (r, mu); `size` receives W x H.
 std::vector<glm::dvec3> transmittance_lookups_at_size(const ref::AtmosphereParams& p, int size_index,
                                                       const std::vector<glm::dvec2>& r_mu, glm::ivec2& size);
 
-/// The LUT of `s` as the renderers use it (parameters rounded to float, what the GPU sees), computed
-/// once per distinct atmosphere and shared (thread-safe).
-std::shared_ptr<const TransmittanceLut> shared_transmittance_lut(const AtmosphereSettings& s);
+/// The LUTs of `s` as the renderers use them (parameters rounded to float, what the GPU sees),
+/// computed once per distinct atmosphere and shared (thread-safe).
+std::shared_ptr<const AtmosphereLuts> shared_atmosphere_luts(const AtmosphereSettings& s);
 
 /// The sky's irradiance at `altitude` (m above the ground) from the upper hemisphere, divided by pi:
 /// the isotropic radiance with the same irradiance, the clouds' ambient colour with
