@@ -629,3 +629,44 @@ TEST(Atmosphere, EachScatteringOrderAddsLessLightThanTheOneBefore) {
       }
   }
 }
+
+// The ground irradiance LUT: the sky's irradiance on the ground against the sunlight's, the sun 60
+// degrees up. A first-order estimate for this optically thin atmosphere: of the sunlight E0 mu_s
+// crossing the air, 1 - exp(-tau_s / mu_s) is scattered, half of the Rayleigh part downwards
+// (its phase function is symmetric) and ~90% of the Mie part (g = 0.8, forward); the direct beam
+// keeps exp(-tau / mu_s). The LUT's diffuse fraction must lie within 0.9-1.3x that estimate per
+// channel (more light from the higher orders, less from the scattered light's own extinction:
+// measured 1.05-1.09x). The LUT lookup also agrees with the clouds' ambient (sky_ambient_color:
+// the same sky on a finer, full-circle grid) at the ground to 1%, and multiple scattering raises it.
+TEST(Atmosphere, GroundIrradianceLutGivesAClearSkyDiffuseFraction) {
+  AtmosphereSettings a;
+  AtmosphereLuts luts = compute_atmosphere_luts(make_atmosphere_params(a));
+  double mu_s = std::sin(60 * M_PI / 180);
+  glm::dvec3 sky = luts.ground_irradiance(mu_s);
+  glm::dvec3 sun = luts.to_top(a.bottom_radius, mu_s) * mu_s;
+  glm::dvec3 fraction = sky / (sky + sun);
+  const double depth = a.top_radius - a.bottom_radius;
+  glm::dvec3 tau_r = a.rayleigh_scattering * a.rayleigh_height * (1 - std::exp(-depth / a.rayleigh_height));
+  double tau_ms = a.mie_scattering * a.mie_height, tau_me = a.mie_extinction * a.mie_height;
+  glm::dvec3 tau_o = a.ozone_absorption * ((a.ozone_top - a.ozone_bottom) / 2);
+  glm::dvec3 est_sky = 0.5 * (1.0 - glm::exp(-tau_r / mu_s)) + 0.9 * (1 - std::exp(-tau_ms / mu_s));
+  glm::dvec3 est_sun = glm::exp(-(tau_r + tau_me + tau_o) / mu_s);
+  glm::dvec3 estimate = est_sky / (est_sky + est_sun);
+  std::cout << "diffuse fraction at sun 60: " << fraction.x << " " << fraction.y << " " << fraction.z << " (estimate "
+            << estimate.x << " " << estimate.y << " " << estimate.z << ")\n";
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_GT(fraction[c], 0.9 * estimate[c]) << c;
+    EXPECT_LT(fraction[c], 1.3 * estimate[c]) << c;
+  }
+  glm::dvec3 s = Sun{0, 60}.direction();
+  glm::dvec3 ambient = sky_ambient_color(a, s, 1.0, 0.0) * M_PI;
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(sky[c], ambient[c], 0.01 * ambient[c]) << c;
+  AtmosphereSettings single = with({"atmosphere.scattering_orders=1"});
+  AtmosphereLuts single_luts = compute_atmosphere_luts(make_atmosphere_params(single));
+  for (int c = 0; c < 3; ++c) EXPECT_GT(sky[c], 1.05 * single_luts.ground_irradiance(mu_s)[c]) << c;
+  // Below the horizon by more than the sun's radius the ground gets only sky light, less than at
+  // sunrise, and none once the whole atmosphere above is in the Earth's shadow.
+  EXPECT_GT(luts.ground_irradiance(std::sin(-2 * M_PI / 180)).y, 0.0);
+  EXPECT_LT(luts.ground_irradiance(std::sin(-2 * M_PI / 180)).y, luts.ground_irradiance(0.0).y);
+  EXPECT_EQ(luts.ground_irradiance(-1.0), glm::dvec3(0.0));
+}

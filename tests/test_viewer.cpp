@@ -683,7 +683,8 @@ TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
 #undef CV_EXPECT_OFFSET
   EXPECT_EQ(r.pass_names().front(), "atmosphere_transmittance");  // the LUT precomputes come first
   EXPECT_EQ(r.pass_names().at(1), "atmosphere_multiple_scattering");
-  EXPECT_EQ(r.pass_names().at(2), "ground");
+  EXPECT_EQ(r.pass_names().at(2), "atmosphere_irradiance");
+  EXPECT_EQ(r.pass_names().at(3), "ground");
   EXPECT_EQ(r.pass_names().back(), "tonemap");
 }
 

@@ -3,9 +3,9 @@
 // parametrisation follow its functions.glsl; this is an independent write-up of them). Written in
 // the GLSL subset that C++ also compiles (see march.glsl): the GL precompute passes and the CPU
 // reference (src/atmosphere.cpp, double precision) run these same lines.
-// Needs constants.glsl, `u_atmo` (AtmosphereParams) and the lookups `transmittance_texel(ivec2)` and
-// `multiple_scattering_texel(ivec2)` (the LUTs' texels, RGB; GLSL: texelFetch in
-// atmosphere_bindings.glsl).
+// Needs constants.glsl, `u_atmo` (AtmosphereParams) and the lookups `transmittance_texel(ivec2)`,
+// `multiple_scattering_texel(ivec2)` and `irradiance_texel(int)` (the LUTs' texels, RGB; GLSL:
+// texelFetch in atmosphere_bindings.glsl).
 //
 // Geometry: a point at distance r from the planet centre looking along a direction whose cosine
 // with the local zenith is mu. All radii in metres.
@@ -245,14 +245,24 @@ vec3 multiple_scattering_at(Number r, Number mu_s) {
   return mix(a, b, w.y);
 }
 
+// The ground irradiance LUT's lookup (compute_irradiance_texel below fills it): linear between
+// the two nearest texels.
+Number irradiance_u(Number mu_s) { return unit_to_texcoord(clamp(mu_s * 0.5 + 0.5, 0.0, 1.0), CV_IRRADIANCE_W); }
+vec3 ground_sky_irradiance(Number mu_s) {
+  Number p = irradiance_u(mu_s) * Number(CV_IRRADIANCE_W) - 0.5;
+  int i0 = int(clamp(floor(p), 0.0, Number(CV_IRRADIANCE_W - 2)));
+  Number w = clamp(p - Number(i0), 0.0, 1.0);
+  return mix(irradiance_texel(i0), irradiance_texel(i0 + 1), w);
+}
+
 // Radiance of the sky seen from altitude `alt` (planet centre straight below, zenith +y) along unit
 // `v`, with the sun along unit `s` and `solar` its irradiance at the top of the atmosphere: single
 // Rayleigh + Mie scattering, plus orders 2..N from the multiple-scattering LUT, ray-marched per
 // pixel (CV_SKY_SAMPLES midpoint samples, each reading the transmittance LUT and the multiple-
 // scattering LUT) up to the top, the ground or t_max. `transmittance` receives the view
 // ray's transmittance over that segment (0 when it ends on the ground), `t_end` its length from the
-// camera (CV_NO_HIT when the ray misses the atmosphere) and `ground` the sunlit ground radiance
-// there (albedo / pi * direct sun; 0 when the ray does not end on the ground).
+// camera (CV_NO_HIT when the ray misses the atmosphere) and `ground` the ground radiance there
+// (albedo / pi * (direct sun + the sky's irradiance); 0 when the ray does not end on the ground).
 vec3 atmosphere_scattering(Number alt, vec3 v, vec3 s, vec3 solar, Number t_max, OUT(vec3) transmittance,
                            OUT(Number) t_end, OUT(vec3) ground) {
   Number bottom = u_atmo.bottom_radius_m, top = u_atmo.top_radius_m;
@@ -296,10 +306,36 @@ vec3 atmosphere_scattering(Number alt, vec3 v, vec3 s, vec3 solar, Number t_max,
   transmittance = transmittance_along(r, mu, d_end, hits_ground);
   if (hits_ground && d_end >= d_atmo) {
     Number mu_s_g = clamp((r * mu_s + d_end * nu) / bottom, -1.0, 1.0);
-    ground = u_atmo.ground_albedo / CV_PI * solar * transmittance_to_sun(bottom, mu_s_g) * max(mu_s_g, 0.0);
+    ground = u_atmo.ground_albedo / CV_PI * solar *
+             (transmittance_to_sun(bottom, mu_s_g) * max(mu_s_g, 0.0) + ground_sky_irradiance(mu_s_g));
   }
   return solar * dx * (rayleigh * u_atmo.rayleigh_scattering_per_m * rayleigh_phase(nu) +
                        mie * u_atmo.mie_scattering_per_m * mie_phase(u_atmo.mie_g, nu) + ms);
+}
+
+// ------------------------------------------------------------------------------ ground irradiance
+// The sky's irradiance on the horizontal ground (Bruneton's indirect irradiance, here of all the
+// orders the sky holds) for unit solar irradiance, as a function of the sun's cosine mu_s:
+// E(mu_s) = int_hemisphere L_sky(w) cos(theta) dw, from atmosphere_scattering (whose rays from the
+// ground upwards never read this LUT). The direct sunlight stays analytic.
+vec3 compute_irradiance_texel(int texel) {
+  Number x = texcoord_to_unit((Number(texel) + 0.5) / Number(CV_IRRADIANCE_W), CV_IRRADIANCE_W);
+  Number mu_s = clamp(2.0 * x - 1.0, -1.0, 1.0);
+  vec3 s = vec3(sqrt(max(1.0 - mu_s * mu_s, 0.0)), mu_s, 0.0);
+  vec3 e = vec3(0.0);
+  for (int i = 0; i < CV_IRRADIANCE_BANDS; ++i) {
+    Number mu = (Number(i) + 0.5) / Number(CV_IRRADIANCE_BANDS);
+    Number sin_t = sqrt(max(1.0 - mu * mu, 0.0));
+    for (int j = 0; j < CV_IRRADIANCE_SECTORS; ++j) {
+      Number phi = CV_PI * (Number(j) + 0.5) / Number(CV_IRRADIANCE_SECTORS);
+      vec3 v = vec3(sin_t * cos(phi), mu, sin_t * sin(phi));
+      vec3 t = vec3(1.0);
+      vec3 g = vec3(0.0);
+      Number t_end = 0.0;
+      e += atmosphere_scattering(0.0, v, s, vec3(1.0), CV_NO_HIT, t, t_end, g) * mu;
+    }
+  }
+  return e * (2.0 * CV_PI / Number(CV_IRRADIANCE_BANDS * CV_IRRADIANCE_SECTORS));  // d(mu) d(phi), phi over 2 pi
 }
 
 // The sun's disc along unit `v` (radiance relative to `disc_radiance`): limb darkening

@@ -4,5 +4,8 @@ layout(std140, binding = CV_BINDING_ATMOSPHERE) uniform AtmosphereBlock { Atmosp
 layout(binding = CV_UNIT_TRANSMITTANCE) uniform sampler2D s_transmittance;  // RGBA32F, CV_TRANSMITTANCE_W x _H
 layout(binding = CV_UNIT_MULTIPLE_SCATTERING) uniform sampler2D s_multiple_scattering;  // RGBA32F, CV_MS_LUT_SIZE^2
 
+layout(binding = CV_UNIT_IRRADIANCE) uniform sampler2D s_irradiance;  // RGBA32F, CV_IRRADIANCE_W x 1
+
 vec3 transmittance_texel(ivec2 texel) { return texelFetch(s_transmittance, texel, 0).rgb; }
 vec3 multiple_scattering_texel(ivec2 texel) { return texelFetch(s_multiple_scattering, texel, 0).rgb; }
+vec3 irradiance_texel(int texel) { return texelFetch(s_irradiance, ivec2(texel, 0), 0).rgb; }

@@ -52,6 +52,7 @@
 // Shader storage buffer binding (its own namespace): the same grids when they fit a storage block.
 #define CV_BINDING_NANOVDB 0
 #define CV_UNIT_NANOVDB_PAGES 15
+#define CV_UNIT_IRRADIANCE 16         // RGBA32F: the sky's irradiance on the ground (atmosphere LUT)
 
 // Fixed sizes.
 #define CV_COVERAGE_MAP_SIZE 256   // layer-mode coverage map, texels per side
@@ -73,6 +74,12 @@
 #define CV_MS_GROUND_BANDS 4
 #define CV_MS_SECTORS 8
 #define CV_MS_STEPS 20
+// Ground irradiance LUT: the sky's irradiance E(mu_s) on the horizontal ground, CV_IRRADIANCE_W
+// texels over mu_s in [-1, 1], each integrating the sky radiance over CV_IRRADIANCE_BANDS bands of
+// cos(theta) x CV_IRRADIANCE_SECTORS sectors of phi in [0, pi] (counted twice).
+#define CV_IRRADIANCE_W 64
+#define CV_IRRADIANCE_BANDS 16
+#define CV_IRRADIANCE_SECTORS 16
 
 // Marching.
 #define CV_TRANSMITTANCE_EPSILON 1e-3  // default render.transmittance_cutoff: stop marching below this

@@ -313,6 +313,12 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
       out << label << "gpu: " << o.width << "x" << o.height << " total " << t.total_ms << " ms (atmosphere LUTs "
           << t.atmosphere_ms << ", ground " << t.ground_ms << ", clouds " << t.cloud_ms << ", post " << t.post_ms
           << ")\n";
+      if (t.atmosphere_ms > 0) {  // the LUTs were recomputed this frame: each one's time
+        out << label << "gpu: atmosphere LUTs:";
+        for (const auto& p : t.passes)
+          if (p.first.rfind("atmosphere_", 0) == 0) out << " " << p.first.substr(11) << " " << p.second << " ms";
+        out << "\n";
+      }
     }
     if (!pattern && i + 1 < o.frames) continue;  // a plain --out keeps only the last frame
     ImageStats st = image_stats(img.linear);

@@ -212,9 +212,11 @@ struct AtmosphereShader {
   const ref::AtmosphereParams& u_atmo;
   const std::vector<glm::dvec3>* lut = nullptr;  // transmittance
   const std::vector<glm::dvec3>* ms = nullptr;   // multiple scattering
+  const std::vector<glm::dvec3>* irr = nullptr;  // ground irradiance
 
   vec3 transmittance_texel(ivec2 t) const { return (*lut)[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
   vec3 multiple_scattering_texel(ivec2 t) const { return (*ms)[size_t(t.y) * CV_MS_LUT_SIZE + size_t(t.x)]; }
+  vec3 irradiance_texel(int t) const { return (*irr)[size_t(t)]; }
 
 #define IN(x) const x&
 #define OUT(x) x&
@@ -247,6 +249,7 @@ struct SizedAtmosphereShader {
   static constexpr int W = CV_TRANSMITTANCE_W, H = CV_TRANSMITTANCE_H;
   vec3 transmittance_texel(ivec2 t) const { return (*lut)[size_t(t.y) * W + size_t(t.x)]; }
   vec3 multiple_scattering_texel(ivec2) const { return vec3(0.0); }  // not studied at other sizes
+  vec3 irradiance_texel(int) const { return vec3(0.0); }
 #define IN(x) const x&
 #define OUT(x) x&
 #define INOUT(x) x&
@@ -303,22 +306,32 @@ AtmosphereLuts compute_atmosphere_luts(const ref::AtmosphereParams& p) {
         luts.multiple_scattering[size_t(y) * CV_MS_LUT_SIZE + size_t(x)] =
             sh.compute_multiple_scattering_texel(glm::ivec2(x, y));
     });
+  luts.irradiance.assign(CV_IRRADIANCE_W, glm::dvec3(0.0));
+  tbb::parallel_for(0, CV_IRRADIANCE_W, [&](int x) {
+    AtmosphereShader sh{luts.params, &luts.transmittance, &luts.multiple_scattering, &luts.irradiance};
+    luts.irradiance[size_t(x)] = sh.compute_irradiance_texel(x);
+  });
   return luts;
 }
 
 glm::dvec3 AtmosphereLuts::to_top(double r, double mu) const {
-  AtmosphereShader sh{params, &transmittance, &multiple_scattering};
+  AtmosphereShader sh{params, &transmittance, &multiple_scattering, &irradiance};
   if (sh.ray_intersects_ground(r, mu)) return glm::dvec3(0.0);
   return sh.transmittance_to_top(r, mu);
 }
 
 glm::dvec3 AtmosphereLuts::psi_ms(double r, double mu_s) const {
-  AtmosphereShader sh{params, &transmittance, &multiple_scattering};
+  AtmosphereShader sh{params, &transmittance, &multiple_scattering, &irradiance};
   return sh.multiple_scattering_at(r, mu_s);
 }
 
+glm::dvec3 AtmosphereLuts::ground_irradiance(double mu_s) const {
+  AtmosphereShader sh{params, &transmittance, &multiple_scattering, &irradiance};
+  return sh.ground_sky_irradiance(mu_s);
+}
+
 glm::dvec3 AtmosphereLuts::sky_radiance(double alt, const glm::dvec3& v, const glm::dvec3& s) const {
-  AtmosphereShader sh{params, &transmittance, &multiple_scattering};
+  AtmosphereShader sh{params, &transmittance, &multiple_scattering, &irradiance};
   glm::dvec3 t, g;
   double t_end = 0;
   return sh.atmosphere_scattering(alt, v, s, glm::dvec3(1.0), CV_NO_HIT, t, t_end, g);
@@ -347,7 +360,7 @@ glm::dvec3 sky_ambient_color(const AtmosphereSettings& s, const glm::dvec3& sun_
     if (last_s == s && last_sun == sun_dir && last_solar == solar && last_alt == altitude) return last_value;
   }
   std::shared_ptr<const AtmosphereLuts> luts = shared_atmosphere_luts(s);
-  AtmosphereShader sh{luts->params, &luts->transmittance, &luts->multiple_scattering};
+  AtmosphereShader sh{luts->params, &luts->transmittance, &luts->multiple_scattering, &luts->irradiance};
   // Midpoint rule over the hemisphere in (cos theta, phi): E = int L cos theta d(cos theta) d phi.
   const int n_theta = 16, n_phi = 32;
   glm::dvec3 e(0.0);

@@ -54,6 +54,7 @@ struct CpuShader {
   vec3 multiple_scattering_texel(ivec2 t) const {
     return lut.multiple_scattering[size_t(t.y) * CV_MS_LUT_SIZE + size_t(t.x)];
   }
+  vec3 irradiance_texel(int t) const { return lut.irradiance[size_t(t)]; }
 
   vec4 volume_texel(ivec3 t) {
     if (vol.nano) return nanovdb_texel(t);

@@ -126,6 +126,10 @@ std::vector<Target> make_targets() {
   ms.name = "multiple_scattering", ms.colors = {GL_RGBA32F};
   ms.fixed_w = CV_MS_LUT_SIZE, ms.fixed_h = CV_MS_LUT_SIZE;
   t.push_back(ms);
+  Target irradiance;  // atmosphere LUT E(mu_s): the sky's irradiance on the ground
+  irradiance.name = "irradiance", irradiance.colors = {GL_RGBA32F};
+  irradiance.fixed_w = CV_IRRADIANCE_W, irradiance.fixed_h = 1;
+  t.push_back(irradiance);
   Target light;  // optical depth toward the sun over the box (render.light_volume)
   light.name = "light_volume", light.colors = {GL_R32F};
   light.volume_size = [](const FrameSetup& f) { return glm::ivec3(f.params.light_volume_dims); };
@@ -153,6 +157,12 @@ std::vector<Pass> make_passes() {
   multiple.group = Group::Atmosphere, multiple.precompute = true;
   multiple.lut_unit = CV_UNIT_MULTIPLE_SCATTERING;
   p.push_back(multiple);
+  Pass irradiance;  // reads both LUTs before it
+  irradiance.name = "atmosphere_irradiance", irradiance.vs = "fullscreen.vert";
+  irradiance.fs = "atmosphere_irradiance.frag", irradiance.target = "irradiance";
+  irradiance.group = Group::Atmosphere, irradiance.precompute = true;
+  irradiance.lut_unit = CV_UNIT_IRRADIANCE;
+  p.push_back(irradiance);
   Pass ground;
   ground.name = "ground", ground.vs = "ground.vert", ground.fs = "ground.frag", ground.target = "scene";
   ground.group = Group::Ground, ground.mesh = true;

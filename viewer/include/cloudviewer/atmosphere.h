@@ -84,12 +84,17 @@ gpu::AtmosphereParams to_gpu(const ref::AtmosphereParams& d);
 ref::AtmosphereParams rounded_to_float(const ref::AtmosphereParams& d);
 
 /// The atmosphere LUTs as the CPU reference computes them, and the shaders' lookups over them:
-/// the transmittance (CV_TRANSMITTANCE_W x CV_TRANSMITTANCE_H) and the multiple scattering
-/// (CV_MS_LUT_SIZE^2), RGB, row-major from (0, 0).
+/// the transmittance (CV_TRANSMITTANCE_W x CV_TRANSMITTANCE_H), the multiple scattering
+/// (CV_MS_LUT_SIZE^2) and the sky's irradiance on the ground (CV_IRRADIANCE_W), RGB, row-major
+/// from (0, 0).
 struct AtmosphereLuts {
   ref::AtmosphereParams params;
   std::vector<glm::dvec3> transmittance;
   std::vector<glm::dvec3> multiple_scattering;
+  std::vector<glm::dvec3> irradiance;
+  /// ground_sky_irradiance(mu_s) of atmosphere.glsl: the sky's irradiance on the ground for unit
+  /// solar irradiance.
+  glm::dvec3 ground_irradiance(double mu_s) const;
   /// transmittance_to_top(r, mu) of atmosphere.glsl (bilinear by hand); rays that hit the ground: 0.
   glm::dvec3 to_top(double r, double mu) const;
   /// multiple_scattering_at(r, mu_s) of atmosphere.glsl: Psi_ms for unit solar irradiance.
