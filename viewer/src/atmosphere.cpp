@@ -277,6 +277,53 @@ std::vector<glm::dvec3> sized_lookups(const ref::AtmosphereParams& p, const std:
   return out;
 }
 
+// The header with the multiple-scattering LUT at N x N texels (the transmittance at its shipped
+// size), for the size-against-error study only.
+template <int N>
+struct SizedMsShader {
+  using Number = double;
+  using vec2 = glm::dvec2;
+  using vec3 = glm::dvec3;
+  using vec4 = glm::dvec4;
+  using ivec2 = glm::ivec2;
+  using uint = uint32_t;
+
+  const ref::AtmosphereParams& u_atmo;
+  const std::vector<glm::dvec3>* lut = nullptr;
+  const std::vector<glm::dvec3>* ms = nullptr;
+
+#pragma push_macro("CV_MS_LUT_SIZE")
+#undef CV_MS_LUT_SIZE
+#define CV_MS_LUT_SIZE N
+  vec3 transmittance_texel(ivec2 t) const { return (*lut)[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
+  vec3 multiple_scattering_texel(ivec2 t) const { return (*ms)[size_t(t.y) * N + size_t(t.x)]; }
+  vec3 irradiance_texel(int) const { return vec3(0.0); }
+#define IN(x) const x&
+#define OUT(x) x&
+#define INOUT(x) x&
+#include "../shaders/atmosphere.glsl"
+#undef IN
+#undef OUT
+#undef INOUT
+#pragma pop_macro("CV_MS_LUT_SIZE")
+};
+
+template <int N>
+std::vector<glm::dvec3> sized_ms_lookups(const ref::AtmosphereParams& p, const std::vector<glm::dvec2>& r_mu_s,
+                                         int& size) {
+  AtmosphereLuts base = compute_atmosphere_luts(p);
+  std::vector<glm::dvec3> texels(static_cast<size_t>(N) * N);
+  tbb::parallel_for(0, N, [&](int y) {
+    SizedMsShader<N> sh{p, &base.transmittance};
+    for (int x = 0; x < N; ++x) texels[size_t(y) * N + size_t(x)] = sh.compute_multiple_scattering_texel(glm::ivec2(x, y));
+  });
+  SizedMsShader<N> sh{p, &base.transmittance, &texels};
+  std::vector<glm::dvec3> out;
+  for (const glm::dvec2& q : r_mu_s) out.push_back(sh.multiple_scattering_at(q.x, q.y));
+  size = N;
+  return out;
+}
+
 }  // namespace
 
 std::vector<glm::dvec3> transmittance_lookups_at_size(const ref::AtmosphereParams& p, int size_index,
@@ -286,6 +333,16 @@ std::vector<glm::dvec3> transmittance_lookups_at_size(const ref::AtmosphereParam
     case 1: return sized_lookups<1, 1>(p, r_mu, size);
     case 2: return sized_lookups<2, 1>(p, r_mu, size);
     default: throw std::invalid_argument("transmittance_lookups_at_size: size_index must be 0, 1 or 2");
+  }
+}
+
+std::vector<glm::dvec3> multiple_scattering_lookups_at_size(const ref::AtmosphereParams& p, int size_index,
+                                                            const std::vector<glm::dvec2>& r_mu_s, int& size) {
+  switch (size_index) {
+    case 0: return sized_ms_lookups<16>(p, r_mu_s, size);
+    case 1: return sized_ms_lookups<32>(p, r_mu_s, size);
+    case 2: return sized_ms_lookups<64>(p, r_mu_s, size);
+    default: throw std::invalid_argument("multiple_scattering_lookups_at_size: size_index must be 0, 1 or 2");
   }
 }
 

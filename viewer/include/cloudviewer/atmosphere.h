@@ -110,6 +110,11 @@ AtmosphereLuts compute_atmosphere_luts(const ref::AtmosphereParams& p);
 std::vector<glm::dvec3> transmittance_lookups_at_size(const ref::AtmosphereParams& p, int size_index,
                                                       const std::vector<glm::dvec2>& r_mu, glm::ivec2& size);
 
+/// The same study for the multiple-scattering LUT: Psi_ms at (r, mu_s) through the LUT at 16 x 16
+/// (size_index 0), the shipped 32 x 32 (1) or 64 x 64 (2); `size` receives the edge.
+std::vector<glm::dvec3> multiple_scattering_lookups_at_size(const ref::AtmosphereParams& p, int size_index,
+                                                            const std::vector<glm::dvec2>& r_mu_s, int& size);
+
 /// The LUTs of `s` as the renderers use them (parameters rounded to float, what the GPU sees),
 /// computed once per distinct atmosphere and shared (thread-safe).
 std::shared_ptr<const AtmosphereLuts> shared_atmosphere_luts(const AtmosphereSettings& s);
