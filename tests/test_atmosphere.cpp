@@ -611,8 +611,9 @@ TEST(Atmosphere, EachScatteringOrderAddsLessLightThanTheOneBefore) {
     for (int orders : {1, 2, 3, 4, 8}) {
       AtmosphereSettings a = with({("atmosphere.scattering_orders=" + std::to_string(orders)).c_str()});
       AtmosphereLuts luts = compute_atmosphere_luts(make_atmosphere_params(a));
-      if (orders == 1)
+      if (orders == 1) {
         for (const glm::dvec3& v : luts.multiple_scattering) ASSERT_EQ(v, glm::dvec3(0.0));
+      }
       sky.emplace_back();
       for (const glm::dvec3& v : dirs) sky.back().push_back(luts.sky_radiance(1000, v, s));
     }

@@ -14,7 +14,8 @@
 // The GL passes include them, in this order, after prelude_glsl.glsl, cloud_params.glsl and
 // cloud_bindings.glsl; src/cpu_renderer.cpp includes the same files inside a C++ class with
 // double-precision glm types. The including side provides the types Number/vec2/vec3/vec4/ivec2/
-// ivec3/uint/mat4, the IN/OUT macros, `CloudParams u_cloud` and the lookups:
+// ivec3/uint/mat4 and the IN/OUT macros (GLSL: prelude_glsl.glsl; C++: src/glsl_cpp.h, for every
+// class that includes shader headers), `CloudParams u_cloud` and the lookups:
 //   vec4   volume_texel(ivec3 texel)     texel of the RGBA volume, texel inside the grid
 //   vec4   volume_filtered(vec3 uvw)     filtered lookup (the GPU's texture unit; exact on the CPU)
 //   Number occupancy_texel(ivec3 cell)   1 where the coarse cell may hold density, else 0

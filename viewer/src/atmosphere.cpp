@@ -14,6 +14,7 @@
 #include "cloudgen/output.h"
 #include "cloudviewer/errors.h"
 #include "param_parse.h"
+#include "glsl_cpp.h"  // last: defines IN/OUT/INOUT
 
 namespace cloudviewer {
 namespace {
@@ -202,12 +203,7 @@ using namespace glm;
 
 // atmosphere.glsl in double precision; the LUT lookup reads `lut` (may be empty while computing).
 struct AtmosphereShader {
-  using Number = double;
-  using vec2 = glm::dvec2;
-  using vec3 = glm::dvec3;
-  using vec4 = glm::dvec4;
-  using ivec2 = glm::ivec2;
-  using uint = uint32_t;
+  CV_GLSL_DOUBLE_TYPES;
 
   const ref::AtmosphereParams& u_atmo;
   const std::vector<glm::dvec3>* lut = nullptr;  // transmittance
@@ -218,24 +214,13 @@ struct AtmosphereShader {
   vec3 multiple_scattering_texel(ivec2 t) const { return (*ms)[size_t(t.y) * CV_MS_LUT_SIZE + size_t(t.x)]; }
   vec3 irradiance_texel(int t) const { return (*irr)[size_t(t)]; }
 
-#define IN(x) const x&
-#define OUT(x) x&
-#define INOUT(x) x&
 #include "../shaders/atmosphere.glsl"
-#undef IN
-#undef OUT
-#undef INOUT
 };
 
 // The same header at other LUT sizes (Num/Den times 256x64), for the size-against-error study only.
 template <int Num, int Den>
 struct SizedAtmosphereShader {
-  using Number = double;
-  using vec2 = glm::dvec2;
-  using vec3 = glm::dvec3;
-  using vec4 = glm::dvec4;
-  using ivec2 = glm::ivec2;
-  using uint = uint32_t;
+  CV_GLSL_DOUBLE_TYPES;
 
   const ref::AtmosphereParams& u_atmo;
   const std::vector<glm::dvec3>* lut = nullptr;
@@ -250,13 +235,7 @@ struct SizedAtmosphereShader {
   vec3 transmittance_texel(ivec2 t) const { return (*lut)[size_t(t.y) * W + size_t(t.x)]; }
   vec3 multiple_scattering_texel(ivec2) const { return vec3(0.0); }  // not studied at other sizes
   vec3 irradiance_texel(int) const { return vec3(0.0); }
-#define IN(x) const x&
-#define OUT(x) x&
-#define INOUT(x) x&
 #include "../shaders/atmosphere.glsl"
-#undef IN
-#undef OUT
-#undef INOUT
 #pragma pop_macro("CV_TRANSMITTANCE_W")
 #pragma pop_macro("CV_TRANSMITTANCE_H")
 };
@@ -281,12 +260,7 @@ std::vector<glm::dvec3> sized_lookups(const ref::AtmosphereParams& p, const std:
 // size), for the size-against-error study only.
 template <int N>
 struct SizedMsShader {
-  using Number = double;
-  using vec2 = glm::dvec2;
-  using vec3 = glm::dvec3;
-  using vec4 = glm::dvec4;
-  using ivec2 = glm::ivec2;
-  using uint = uint32_t;
+  CV_GLSL_DOUBLE_TYPES;
 
   const ref::AtmosphereParams& u_atmo;
   const std::vector<glm::dvec3>* lut = nullptr;
@@ -298,13 +272,7 @@ struct SizedMsShader {
   vec3 transmittance_texel(ivec2 t) const { return (*lut)[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
   vec3 multiple_scattering_texel(ivec2 t) const { return (*ms)[size_t(t.y) * N + size_t(t.x)]; }
   vec3 irradiance_texel(int) const { return vec3(0.0); }
-#define IN(x) const x&
-#define OUT(x) x&
-#define INOUT(x) x&
 #include "../shaders/atmosphere.glsl"
-#undef IN
-#undef OUT
-#undef INOUT
 #pragma pop_macro("CV_MS_LUT_SIZE")
 };
 

@@ -22,6 +22,7 @@
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
 #include "cloudgen/nvdb.h"
 #endif
+#include "glsl_cpp.h"  // last: defines IN/OUT/INOUT
 
 namespace cloudviewer {
 namespace {
@@ -29,14 +30,7 @@ namespace {
 using namespace glm;
 
 struct CpuShader {
-  using Number = double;
-  using vec2 = glm::dvec2;
-  using vec3 = glm::dvec3;
-  using vec4 = glm::dvec4;
-  using mat4 = glm::dmat4;
-  using ivec2 = glm::ivec2;
-  using ivec3 = glm::ivec3;
-  using uint = uint32_t;
+  CV_GLSL_DOUBLE_TYPES;
 
   const ref::CloudParams& u_cloud;
   const PreparedVolume& vol;
@@ -143,9 +137,6 @@ struct CpuShader {
   ivec2 coverage_size() const { return ivec2(CV_COVERAGE_MAP_SIZE, CV_COVERAGE_MAP_SIZE); }
   vec3 motion_texel(int i, int row) const { return (*motion)[size_t(row) * CV_MOTION_LUT_SIZE + size_t(i)]; }
 
-#define IN(x) const x&
-#define OUT(x) x&
-#define INOUT(x) x&
 // The list and order of shaders/cloud_headers.glsl (after its GLSL-only bindings), plus post.glsl.
 #include "../shaders/common.glsl"
 #include "../shaders/volume_nanovdb.glsl"
@@ -161,9 +152,6 @@ struct CpuShader {
 #include "../shaders/compose.glsl"
 #include "../shaders/temporal.glsl"
 #include "../shaders/post.glsl"
-#undef IN
-#undef OUT
-#undef INOUT
 };
 
 struct Buffer {
