@@ -295,14 +295,18 @@ vec3 atmosphere_scattering(Number alt, vec3 v, vec3 s, vec3 solar, Number t_max,
   vec3 ms = vec3(0.0);
   bool multiple = u_atmo.scattering_orders > 1.5;
   for (int i = 0; i < n; ++i) {
-    Number d = (Number(i) + 0.5) * dx;
+    // Samples at d = d_end x^2 (x: the midpoints of n equal intervals), weight 2 d_end x / n: dense
+    // near the camera, where the air is densest along most rays.
+    Number x = (Number(i) + 0.5) / Number(n);
+    Number d = d_end * x * x;
+    Number w = 2.0 * x;
     Number r_d = clamp(sqrt(d * d + 2.0 * r * mu * d + r * r), bottom, top);
     Number mu_s_d = clamp((r * mu_s + d * nu) / r_d, -1.0, 1.0);
     vec3 t_view = transmittance_along(r, mu, d, hits_ground);
-    vec3 t = t_view * transmittance_to_sun(r_d, mu_s_d);
+    vec3 t = t_view * transmittance_to_sun(r_d, mu_s_d) * w;
     rayleigh += t * rayleigh_density(r_d - bottom);
     mie += t * mie_density(r_d - bottom);
-    if (multiple) ms += t_view * atmosphere_scattering_coefficient(r_d - bottom) * multiple_scattering_at(r_d, mu_s_d);
+    if (multiple) ms += t_view * w * atmosphere_scattering_coefficient(r_d - bottom) * multiple_scattering_at(r_d, mu_s_d);
   }
   t_end = t0 + d_end;
   transmittance = transmittance_along(r, mu, d_end, hits_ground);
