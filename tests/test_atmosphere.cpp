@@ -762,3 +762,26 @@ TEST(Atmosphere, SingleScatteringMatchesABruteForceIntegration) {
   EXPECT_LT(worst, 0.01);
   EXPECT_LT(worst_ground, 0.01);
 }
+
+// The clouds' ambient from both halves of the sphere (sky_ambient): from the ground, every ray
+// downwards ends on the ground at once, so the light from below is the ground's radiance,
+// albedo / pi x (the sun's irradiance T_sun mu_s + the sky's, from the irradiance LUT), to 1%
+// (the two integrate differently: hemisphere quadrature against the LUT). At noon the sky above
+// is bluer than the grey ground below (B/R above > B/R below); at night both are ~0.
+TEST(Atmosphere, AmbientFromBelowIsTheLitGround) {
+  AtmosphereSettings a;
+  std::shared_ptr<const AtmosphereLuts> luts = shared_atmosphere_luts(a);
+  for (double el : {60.0, 10.0}) {
+    glm::dvec3 s = Sun{0, el}.direction();
+    SkyAmbient amb = sky_ambient(a, s, 1.0, 0.0);
+    double mu_s = s.y;
+    glm::dvec3 ground = a.ground_albedo / M_PI *
+                        (luts->to_top(a.bottom_radius, mu_s) * mu_s + luts->ground_irradiance(mu_s));
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(amb.below[c], ground[c], 0.01 * ground[c]) << "sun " << el << " ch " << c;
+    std::cout << "sun " << el << ": ambient above " << amb.above.x << " " << amb.above.y << " " << amb.above.z
+              << ", below " << amb.below.x << " " << amb.below.y << " " << amb.below.z << "\n";
+    EXPECT_GT(amb.above.z / amb.above.x, amb.below.z / amb.below.x);
+  }
+  SkyAmbient night = sky_ambient(a, Sun{0, -60}.direction(), 1.0, 0.0);
+  EXPECT_LT(night.above.y + night.below.y, 1e-9);
+}

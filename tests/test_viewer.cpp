@@ -680,6 +680,9 @@ TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
   CV_EXPECT_OFFSET(wind_dir_x);
   CV_EXPECT_OFFSET(flow_speed_hz);
   CV_EXPECT_OFFSET(motion_pad);
+  CV_EXPECT_OFFSET(ms_octaves);
+  CV_EXPECT_OFFSET(ambient_below_color);
+  CV_EXPECT_OFFSET(ambient_pad);
 #undef CV_EXPECT_OFFSET
   EXPECT_EQ(r.pass_names().front(), "atmosphere_transmittance");  // the LUT precomputes come first
   EXPECT_EQ(r.pass_names().at(1), "atmosphere_multiple_scattering");

@@ -101,4 +101,7 @@ struct CloudParams {
   Number ms_attenuation;    // a: octave weight factor
   Number ms_extinction;     // b: optical depth factor
   Number ms_eccentricity;   // c: phase eccentricity factor
+  // Ambient light from below (render.sky=precomputed: the ground and the air under the camera's
+  // horizon; the analytic sky: = ambient_color). lighting.glsl mixes it with ambient_color by height.
+  vec3 ambient_below_color; Number ambient_pad;
 };

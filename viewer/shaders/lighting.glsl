@@ -129,6 +129,15 @@ vec4 octave_phases(Number cos_theta) {
               phase_hg(cos_theta, g * c * c * c));
 }
 
+// The ambient sky light at p, isotropic (the phase function integrates to 1, so it scatters as it
+// is): the sky's radiance from above at the top of the clouds, the light from below (ground and air)
+// at their base, mixed by the height fraction in the box (layer mode: in the layer), a proxy for
+// which half of the sphere the cloud itself hides (Schneider's Nubis ambient gradient).
+vec3 ambient_radiance(vec3 p) {
+  Number h = clamp(height_fraction(p), 0.0, 1.0);
+  return mix(u_cloud.ambient_below_color, u_cloud.ambient_color, h) * u_cloud.ambient_scale;
+}
+
 // Radiance scattered toward the viewer at p per unit sigma_s: sun irradiance * (phase *
 // Beer(tau), summed over the octaves) * powder mix + ambient sky radiance.
 vec3 inscattered_radiance(vec3 p, vec4 phases) {
@@ -145,9 +154,7 @@ vec3 inscattered_radiance(vec3 p, vec4 phases) {
     if (octaves > 3) transfer += a * a * a * phases.w * beer_lambert(tau * b * b * b);
   }
   vec3 sun = sun_color_at(p) * (u_cloud.sun_radiance * transfer * powder);
-  // Isotropic ambient radiance: the phase function integrates to 1, so it scatters as it is.
-  vec3 ambient = u_cloud.ambient_color * u_cloud.ambient_scale;
-  return sun + ambient;
+  return sun + ambient_radiance(p);
 }
 
 // Transmittance of the clouds toward the sun from a ground point p (fixed-step march, for shadows).

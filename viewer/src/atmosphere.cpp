@@ -374,11 +374,12 @@ std::shared_ptr<const AtmosphereLuts> shared_atmosphere_luts(const AtmosphereSet
   return luts;
 }
 
-glm::dvec3 sky_ambient_color(const AtmosphereSettings& s, const glm::dvec3& sun_dir, double solar, double altitude) {
+SkyAmbient sky_ambient(const AtmosphereSettings& s, const glm::dvec3& sun_dir, double solar, double altitude) {
   // The window calls this every frame: keep the last answer (a deterministic function of these).
   static std::mutex mutex;
   static AtmosphereSettings last_s;
-  static glm::dvec3 last_sun(0.0), last_value(0.0);
+  static glm::dvec3 last_sun(0.0);
+  static SkyAmbient last_value;
   static double last_solar = -1, last_alt = -1;
   {
     std::lock_guard<std::mutex> lock(mutex);
@@ -386,22 +387,31 @@ glm::dvec3 sky_ambient_color(const AtmosphereSettings& s, const glm::dvec3& sun_
   }
   std::shared_ptr<const AtmosphereLuts> luts = shared_atmosphere_luts(s);
   AtmosphereShader sh{luts->params, &luts->transmittance, &luts->multiple_scattering, &luts->irradiance};
-  // Midpoint rule over the hemisphere in (cos theta, phi): E = int L cos theta d(cos theta) d phi.
+  // Midpoint rule over each hemisphere in (|cos theta|, phi): E = int L |cos theta| d(cos theta) d phi.
+  // Below: the air under the camera and the ground (lit by the sun and the sky) behind it.
   const int n_theta = 16, n_phi = 32;
-  glm::dvec3 e(0.0);
-  for (int i = 0; i < n_theta; ++i) {
-    double c = (i + 0.5) / n_theta, sn = std::sqrt(1 - c * c);
-    for (int j = 0; j < n_phi; ++j) {
-      double phi = 2 * M_PI * (j + 0.5) / n_phi;
-      glm::dvec3 v(sn * std::cos(phi), c, sn * std::sin(phi)), t, g;
-      double t_end = 0;
-      e += sh.atmosphere_scattering(altitude, v, sun_dir, glm::dvec3(solar), CV_NO_HIT, t, t_end, g) * c;
+  glm::dvec3 e[2] = {glm::dvec3(0.0), glm::dvec3(0.0)};
+  for (int half = 0; half < 2; ++half)
+    for (int i = 0; i < n_theta; ++i) {
+      double c = (i + 0.5) / n_theta, sn = std::sqrt(1 - c * c);
+      for (int j = 0; j < n_phi; ++j) {
+        double phi = 2 * M_PI * (j + 0.5) / n_phi;
+        glm::dvec3 v(sn * std::cos(phi), half == 0 ? c : -c, sn * std::sin(phi)), t, g;
+        double t_end = 0;
+        glm::dvec3 l = sh.atmosphere_scattering(altitude, v, sun_dir, glm::dvec3(solar), CV_NO_HIT, t, t_end, g);
+        e[half] += (l + t * g) * c;
+      }
     }
-  }
-  e *= (1.0 / n_theta) * (2 * M_PI / n_phi);
+  SkyAmbient out;
+  out.above = e[0] * ((1.0 / n_theta) * (2 * M_PI / n_phi)) / M_PI;
+  out.below = e[1] * ((1.0 / n_theta) * (2 * M_PI / n_phi)) / M_PI;
   std::lock_guard<std::mutex> lock(mutex);
-  last_s = s, last_sun = sun_dir, last_solar = solar, last_alt = altitude, last_value = e / M_PI;
-  return last_value;
+  last_s = s, last_sun = sun_dir, last_solar = solar, last_alt = altitude, last_value = out;
+  return out;
+}
+
+glm::dvec3 sky_ambient_color(const AtmosphereSettings& s, const glm::dvec3& sun_dir, double solar, double altitude) {
+  return sky_ambient(s, sun_dir, solar, altitude).above;
 }
 
 std::vector<glm::dvec3> transmittance_dump_cpu(const AtmosphereSettings& s) {

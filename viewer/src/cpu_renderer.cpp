@@ -355,8 +355,9 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
 // erosion, coverage and the cloud-type gradient only lower the density), next-event estimation
 // with ratio tracking adds the sun at every collision, the phase function is sampled (HG
 // analytically, the Mie table by its tabulated CDF) and a path that leaves the medium sees the
-// marcher's isotropic ambient sky (the marcher's own assumption, so the two differ only in how
-// they transport light through the cloud). A camera ray that crosses the medium without a
+// marcher's ambient light: the sky's (ambient_color) upwards, the ground and air's
+// (ambient_below_color) downwards (the marcher mixes the two by height, an approximation this
+// measures). A camera ray that crosses the medium without a
 // collision sees the marcher's background (sky, ground with its cloud shadows, air), and the
 // light of a collided path is faded by the same aerial perspective at its first collision.
 // References: Woodcock et al. 1965 (delta tracking), Novak et al., "Monte Carlo Methods for Volumetric
@@ -479,7 +480,7 @@ struct PathTracer {
     if (!collide(dvec3(0.0), rd, std::max(tb.x, 0.0), t1, rng, t_first))
       return sh.compose_over(dvec4(0.0, 0.0, 0.0, 1.0), rd, t_scene, scene_color);
     const dvec3 sun = P.sun_dir;
-    const dvec3 ambient = P.ambient_color * P.ambient_scale;
+    const dvec3 ambient_above = P.ambient_color * P.ambient_scale, ambient_below = P.ambient_below_color * P.ambient_scale;
     dvec3 L(0.0), throughput(1.0);
     dvec3 x = rd * t_first, d = rd;
     for (int n = 0; n < max_scatterings; ++n) {
@@ -498,7 +499,7 @@ struct PathTracer {
       dvec2 nb = interval(x, next);
       double s = 0;
       if (!collide(x, next, std::max(nb.x, 0.0), nb.y, rng, s)) {
-        L += throughput * ambient;
+        L += throughput * (next.y >= 0 ? ambient_above : ambient_below);
         break;
       }
       x += next * s;

@@ -119,6 +119,7 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   p.sun_color = glm::dvec3(1.0, 0.96, 0.9);
   p.ambient_scale = s.ambient;
   p.ambient_color = glm::dvec3(0.30, 0.38, 0.52);
+  p.ambient_below_color = p.ambient_color;  // the analytic sky: one constant ambient
   p.albedo = s.albedo;
   // Auto values follow the voxel size, not the box, so a VDB cropped to its active voxels renders
   // like the dense texture it came from.
@@ -191,9 +192,11 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   p.sky_altitude_m = cam.eye.y - gh;
   if (s.sky == SkyMode::Precomputed) {
     // The atmosphere colours the sunlight: white at the top of the atmosphere, and the ambient
-    // sky light from the atmosphere's sky irradiance at the camera (sky_ambient_color).
+    // sky light from the atmosphere's irradiance at the camera from above and from below (sky_ambient).
     p.sun_color = glm::dvec3(1.0);
-    p.ambient_color = sky_ambient_color(s.atmosphere, sun.direction(), s.sun_intensity, cam.eye.y - gh);
+    SkyAmbient a = sky_ambient(s.atmosphere, sun.direction(), s.sun_intensity, cam.eye.y - gh);
+    p.ambient_color = a.above;
+    p.ambient_below_color = a.below;
   }
   if (layer) {
     double period = size.x * s.coverage_tiles;

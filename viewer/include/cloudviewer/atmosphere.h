@@ -123,6 +123,13 @@ std::shared_ptr<const AtmosphereLuts> shared_atmosphere_luts(const AtmosphereSet
 /// the isotropic radiance with the same irradiance, the clouds' ambient colour with
 /// render.sky=precomputed. `sun_dir` unit, world +y up; `solar`: the sun's irradiance scale.
 glm::dvec3 sky_ambient_color(const AtmosphereSettings& s, const glm::dvec3& sun_dir, double solar, double altitude);
+/// The same from both halves of the sphere: `above` as sky_ambient_color, `below` the irradiance
+/// from the lower hemisphere (the air under the camera and the ground behind it, lit by the sun
+/// and the sky) divided by pi.
+struct SkyAmbient {
+  glm::dvec3 above{0.0}, below{0.0};
+};
+SkyAmbient sky_ambient(const AtmosphereSettings& s, const glm::dvec3& sun_dir, double solar, double altitude);
 
 /// The --dump-lut grid: kDumpAltitudes altitudes 0..top, kDumpMus values of mu -1..1.
 constexpr int kDumpAltitudes = 33;
