@@ -29,6 +29,7 @@ namespace {
 using testutil::kCli;
 using testutil::kPresets;
 using testutil::run_cli;
+using testutil::same_bytes;
 using testutil::TempDir;
 
 Preset preset(const std::string& name, std::vector<std::string> sets = {}) {
@@ -42,11 +43,6 @@ std::string error_of(const std::string& json, std::vector<std::string> sets = {}
     return e.what();
   }
   return "";
-}
-
-bool same_bytes(const std::vector<float>& a, const std::vector<float>& b) {
-  // memcmp on the null data() of empty vectors is undefined even for 0 bytes (UBSan)
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);
 }
 
 }  // namespace

@@ -20,17 +20,19 @@
 #include "cloudviewer/renderer.h"
 #include "cloudviewer/scene.h"
 #include "cloudviewer/settings.h"
+#include "test_util_viewer.h"
 
 namespace fs = std::filesystem;
 using namespace cloudviewer;
+using testutil::frame_for;
+using testutil::gl_context;
+using testutil::render_gl;
+using testutil::run;
+using testutil::with;
 
 namespace {
 
-fs::path output_dir() {
-  fs::path d = fs::path(CLOUD_BINARY_DIR) / "test_output" / "viewer";
-  fs::create_directories(d);
-  return d;
-}
+fs::path output_dir() { return testutil::test_output_dir("viewer"); }
 
 // On failure: both images and an amplified difference, so a human can look.
 void dump(const std::string& name, const Image& a, const Image& b, double gain = 10) {
@@ -41,45 +43,12 @@ void dump(const std::string& name, const Image& a, const Image& b, double gain =
   std::cerr << "wrote " << (d / (name + "_{a,b,diff}.png")).string() << "\n";
 }
 
-HeadlessContext& context() {
-  static std::unique_ptr<HeadlessContext> ctx = std::make_unique<HeadlessContext>();
-  ctx->make_current();
-  return *ctx;
-}
-
 const PreparedVolume& volume(const std::string& kind, int cell = 8) {
   static std::map<std::string, std::unique_ptr<PreparedVolume>> cache;
   std::string key = kind + "/" + std::to_string(cell);
   auto& v = cache[key];
   if (!v) v = std::make_unique<PreparedVolume>(prepare_volume(synthetic_volume(kind), cell));
   return *v;
-}
-
-FrameSetup frame_for(const PreparedVolume& vol, const RenderSettings& s, int w, int h) {
-  Camera cam = default_camera(vol, 60, double(w) / h);
-  return make_frame(vol, s, cam, default_sun(cam), w, h);
-}
-
-FrameImages render_gl(const PreparedVolume& vol, const FrameSetup& f) {
-  context();
-  GlRenderer r{ShaderSource()};
-  r.set_volume(vol);
-  r.render(f);
-  return r.read_back();
-}
-
-RenderSettings with(std::initializer_list<const char*> sets) {
-  RenderSettings s;
-  for (const char* a : sets) apply_setting(s, a);
-  return s;
-}
-
-int run(std::vector<std::string> args, std::string* err_text = nullptr) {
-  args.insert(args.begin(), "cloudviewer");
-  std::ostringstream out, err;
-  int code = run_cli(args, out, err);
-  if (err_text) *err_text = err.str();
-  return code;
 }
 
 }  // namespace
@@ -415,7 +384,7 @@ TEST(ViewerErrors, ShaderCompileErrorNamesFileLineAndLog) {
   std::string line, broken;
   for (int n = 1; std::getline(in, line); ++n) broken += (n == 40 ? "this is not glsl;" : line) + "\n";
   std::ofstream(dir / "medium.glsl") << broken;
-  context();
+  gl_context();
   try {
     GlRenderer r{ShaderSource(dir.string())};
     FAIL() << "a broken shader compiled";
@@ -644,7 +613,7 @@ TEST(ViewerCloudgen, NonCloudVdbAndTruncatedTextureAreClearErrors) {
 // of every group's first member and of members that follow a vec3 (where std140 padding would
 // bite first).
 TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
-  context();
+  gl_context();
   GlRenderer r{ShaderSource()};
   EXPECT_EQ(r.cloud_block_size(), int(sizeof(gpu::CloudParams)));
 #define CV_EXPECT_OFFSET(m) EXPECT_EQ(r.cloud_block_offset(#m), int(offsetof(gpu::CloudParams, m))) << #m
