@@ -15,6 +15,7 @@
 #include <sstream>
 #include <thread>
 
+#include "cloudgen/channel.h"
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
 #include "cloudgen/preset.h"

@@ -14,6 +14,7 @@
 #include <set>
 #include <sstream>
 
+#include "cloudgen/channel.h"
 #include "cloudgen/io.h"
 #include "cloudgen/json_checked.h"
 
@@ -547,25 +548,6 @@ std::string params_markdown() {
   return o.str();
 }
 
-noise3d::FractalParams channel_params(const Preset& p, int c) {
-  const Channel& ch = p.channels[c];
-  noise3d::FractalParams f;
-  f.kind = ch.kind;
-  auto derive = [&](int axis) -> uint32_t {
-    if (ch.period[axis]) return ch.period[axis];
-    double v = double(ch.period[0]) * p.resolution[axis] / p.resolution[0];
-    return std::max<uint32_t>(1, uint32_t(std::lround(v)));
-  };
-  f.period = {ch.period[0], derive(1), derive(2)};
-  f.seed = p.seed + ch.seed_offset * 0x9E3779B97F4A7C15ull;
-  f.octaves = ch.octaves;
-  f.gain = ch.gain;
-  f.lacunarity = ch.lacunarity;
-  f.worley_octaves = ch.worley_octaves;
-  f.blend = ch.blend;
-  return f;
-}
-
 Preset parse_preset(const std::string& text, const std::string& source, const std::vector<std::string>& overrides) {
   Reader r(source);
   json doc = parse_json_checked(text, source);
@@ -609,16 +591,6 @@ void rescale(Preset& p, uint32_t n) {
   const double f = double(n) / longest;
   for (auto& r : p.resolution) r = std::max<uint32_t>(1, uint32_t(std::lround(r * f)));
   p.voxel_size /= f;
-}
-
-uint64_t memory_estimate(const Preset& p, bool need_detail) {
-  const uint64_t voxels = uint64_t(p.resolution[0]) * p.resolution[1] * p.resolution[2];
-  int channels = 1;
-  if (need_detail)
-    for (int c = 1; c < 4; ++c) channels += p.channels[c].enabled;
-  // Dense float channels + one float scratch of the Perlin-Worley accumulator per brick (small),
-  // plus the OpenVDB tree when exporting (about the size of the active voxels again).
-  return voxels * 4 * (channels + 1);
 }
 
 }  // namespace cloudgen

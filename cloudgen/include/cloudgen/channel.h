@@ -1,0 +1,34 @@
+// A preset's noise channel as the generator evaluates it: the channel resolved into libnoise3d
+// parameters (periods derived from the aspect ratio), and the noise value mapped to what a voxel
+// stores. The preset reader validates the resolved parameters; generate.cpp evaluates them.
+#pragma once
+
+#include <algorithm>
+
+#include "cloudgen/preset.h"
+#include "noise3d/noise3d.h"
+
+namespace cloudgen {
+
+/// The noise parameters of a channel (0 = r .. 3 = a) as used by the generator: a period of 0 on y
+/// or z is derived from x and the resolution's aspect ratio, so every channel wraps with the volume.
+noise3d::FractalParams channel_params(const Preset& p, int channel);
+
+/// A noise value of kind `k` mapped to [0, 1] (Perlin fBm is in [-1, 1]).
+inline float noise_to_unit(noise3d::Kind k, float v) {
+  const float u = k == noise3d::Kind::Perlin ? 0.5f + 0.5f * v : v;
+  return std::clamp(u, 0.0f, 1.0f);
+}
+
+/// What a voxel of the channel stores for noise value v: to [0, 1], the contrast remap (identity
+/// for [0, 1] leaves bytes unchanged), then invert. Inline: the generator calls it per voxel.
+inline float channel_value(const Channel& ch, float v) {
+  float u = noise_to_unit(ch.kind, v);
+  if (ch.remap[0] != 0.0 || ch.remap[1] != 1.0) {
+    const float lo = float(ch.remap[0]), hi = float(ch.remap[1]);
+    u = std::clamp((u - lo) / (hi - lo), 0.0f, 1.0f);
+  }
+  return ch.invert ? 1.0f - u : u;
+}
+
+}  // namespace cloudgen

@@ -1,0 +1,27 @@
+// A preset's noise channel as the generator evaluates it (channel.h).
+#include "cloudgen/channel.h"
+
+#include <cmath>
+
+namespace cloudgen {
+
+noise3d::FractalParams channel_params(const Preset& p, int c) {
+  const Channel& ch = p.channels[c];
+  noise3d::FractalParams f;
+  f.kind = ch.kind;
+  auto derive = [&](int axis) -> uint32_t {
+    if (ch.period[axis]) return ch.period[axis];
+    double v = double(ch.period[0]) * p.resolution[axis] / p.resolution[0];
+    return std::max<uint32_t>(1, uint32_t(std::lround(v)));
+  };
+  f.period = {ch.period[0], derive(1), derive(2)};
+  f.seed = p.seed + ch.seed_offset * 0x9E3779B97F4A7C15ull;
+  f.octaves = ch.octaves;
+  f.gain = ch.gain;
+  f.lacunarity = ch.lacunarity;
+  f.worley_octaves = ch.worley_octaves;
+  f.blend = ch.blend;
+  return f;
+}
+
+}  // namespace cloudgen
