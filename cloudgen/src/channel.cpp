@@ -24,4 +24,14 @@ noise3d::FractalParams channel_params(const Preset& p, int c) {
   return f;
 }
 
+noise3d::FractalParams coverage_params(const Preset& p) {
+  noise3d::FractalParams cp;
+  cp.kind = p.coverage_kind;
+  cp.period = {p.coverage_period, 1,
+               std::max<uint32_t>(1, uint32_t(std::lround(double(p.coverage_period) * p.resolution[2] / p.resolution[0])))};
+  cp.octaves = p.coverage_octaves;
+  cp.seed = p.seed ^ 0xC0FEC0FEull;
+  return cp;
+}
+
 }  // namespace cloudgen

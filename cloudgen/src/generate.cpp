@@ -77,12 +77,7 @@ std::vector<float> coverage_map(const Preset& p, int threads) {
   std::vector<float> coverage;
   if (!p.coverage_enabled) return coverage;
   const std::array<uint32_t, 3> N = p.resolution;
-  noise3d::FractalParams cp;
-  cp.kind = p.coverage_kind;
-  cp.period = {p.coverage_period, 1,
-               std::max<uint32_t>(1, uint32_t(std::lround(double(p.coverage_period) * N[2] / N[0])))};
-  cp.octaves = p.coverage_octaves;
-  cp.seed = p.seed ^ 0xC0FEC0FEull;
+  const noise3d::FractalParams cp = coverage_params(p);
   noise3d::GridRegion g;
   g.size = {N[0], 1, N[2]};
   coverage.resize(g.count());

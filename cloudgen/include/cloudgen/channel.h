@@ -14,6 +14,10 @@ namespace cloudgen {
 /// or z is derived from x and the resolution's aspect ratio, so every channel wraps with the volume.
 noise3d::FractalParams channel_params(const Preset& p, int channel);
 
+/// The noise parameters of the coverage map (sampled over x and z, y = 0): its z period follows
+/// x's by the aspect ratio, like a channel's.
+noise3d::FractalParams coverage_params(const Preset& p);
+
 /// A noise value of kind `k` mapped to [0, 1] (Perlin fBm is in [-1, 1]).
 inline float noise_to_unit(noise3d::Kind k, float v) {
   const float u = k == noise3d::Kind::Perlin ? 0.5f + 0.5f * v : v;
