@@ -20,6 +20,7 @@
 #include "cloudviewer/renderer.h"
 #include "cloudviewer/scene.h"
 #include "cloudviewer/settings.h"
+#include "../viewer/src/internal.h"
 #include "test_util_viewer.h"
 
 namespace fs = std::filesystem;
@@ -763,6 +764,61 @@ TEST(ViewerErrors, NonFiniteAndOutOfRangeNumbersAreRefused) {
 
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
 // A 4096^3 preset would need terabytes: refused up front with the estimate, not bad_alloc.
+// Bench tracks are read through the preset reader's field checker (cloudgen/schema.h): each bad
+// field is named with the file, its JSON pointer, the value and what is allowed, every problem of
+// the file at once, and unknown keys with a did-you-mean. Every shipped track reads.
+TEST(ViewerErrors, BenchTrackErrorsNameFileFieldValueAndRange) {
+  const PreparedVolume& vol = volume("slab");
+  Options o;
+  o.width = 16, o.height = 9;
+  struct Case {
+    const char* body;
+    std::vector<const char*> named;
+  } cases[] = {
+      {R"({"fov": 0, "keys": [{"eye": [0.5, 0.5, -1], "target": [0.5, 0.5, 0.5]}]})",
+       {"t.json: /fov: 0 is out of range; allowed: number in [1, 170]"}},
+      {R"({"space": "wrld", "frame_per_segment": 2, "keys": [{"eye": [0.5, 0.5], "set": [3]}, 4]})",
+       {"t.json: /space: \"wrld\" is not allowed; expected one of: volume | world",
+        "t.json: /frame_per_segment: unknown key (did you mean \"frames_per_segment\"?)",
+        "t.json: /keys/0/eye: [0.5,0.5] has the wrong type; expected an array of 3 numbers",
+        "t.json: /keys/0/set/0: 3 has the wrong type; expected a string",
+        "t.json: /keys/1: expected an object {eye, name, set, target, view}, got 4"}},
+      {R"({"frames_per_segment": 2.5, "keys": [{"eye": [0.5, 0.5, -1], "target": [0.5, 0.5, 0.5]}]})",
+       {"t.json: /frames_per_segment: 2.5 has the wrong type; expected an integer in [1, 1000]"}},
+      {R"({"sun": [10, 95], "keys": [{"eye": [0.5, 0.5, -1], "target": [0.5, 0.5, 0.5]}]})",
+       {"t.json: /sun/1: 95 is out of range; allowed: number in [-90, 90]"}},
+      {R"({"keys": [{"eye": [2e5, 0.5, -1]}]})",
+       {"t.json: /keys/0/eye/0: 200000.0 is out of range; allowed: number in [-100000, 100000]",
+        "t.json: /keys/0/target: missing"}},
+      {R"({"space": "world", "keys": [{"eye": [1e308, 0, 0], "target": [0, 0, 0]}]})",
+       {"t.json: /keys/0/eye/0: 1e+308 is out of range; allowed: number in [-1e+08, 1e+08]"}},
+      {R"({"keys": []})", {"t.json: /keys: missing or empty"}},
+      {R"({"keys": [{"eye": [0.5, 0.5, -1], "target": [0.5, 0.5, 0.5], "set": ["render.nope=1"]}]})",
+       {"t.json: /keys/0/set/0: ", "render.nope"}},
+      {R"([1, 2])", {"t.json: /: expected an object, got [1,2]"}},
+  };
+  for (const Case& c : cases) {
+    std::string msg;
+    try {
+      parse_track(c.body, "t.json", o, vol);
+    } catch (const InputError& e) {
+      msg = e.what();
+    }
+    EXPECT_FALSE(msg.empty()) << c.body << ": accepted";
+    for (const char* n : c.named) EXPECT_NE(msg.find(n), std::string::npos) << c.body << "\n" << msg << "\nlacks: " << n;
+  }
+  int shipped = 0;
+  for (const char* folder : {"/viewer/tracks", "/bench/tracks"})
+    for (const auto& e : fs::directory_iterator(std::string(CLOUD_SOURCE_DIR) + folder)) {
+      if (e.path().extension() != ".json") continue;
+      ++shipped;
+      const BenchPlan plan = parse_track(testutil::read_text(e.path()), e.path().string(), o, vol);
+      EXPECT_FALSE(plan.frames.empty()) << e.path();
+      EXPECT_EQ(plan.configs.size(), plan.settings.size()) << e.path();
+    }
+  EXPECT_GE(shipped, 6);
+}
+
 TEST(ViewerErrors, HugeInputIsRefusedWithTheMemoryEstimate) {
   std::string text;
   {
