@@ -29,6 +29,7 @@ namespace {
 
 using testutil::kCli;
 using testutil::kPresets;
+using testutil::read_text;
 using testutil::run_cli;
 using testutil::same_bytes;
 using testutil::TempDir;
@@ -734,4 +735,38 @@ TEST(Cli, NoiseCubeIsOneTileAndReferenceModeMatchesPerlin) {
   EXPECT_EQ(out, "0.13691995878400012\n");
   EXPECT_EQ(run_cli("noise --kind perlin --lacunarity 2.5 --size 8 -o " + (dir / "c.raw"), &out), 1);
   EXPECT_NE(out.find("lacunarity"), std::string::npos) << out;
+}
+
+// `cloudgen noise` declares its flags in one table (cloudgen/schema.h) and checks them with the
+// preset reader's checker: each bad value is refused naming the flag, the value and the allowed
+// range, every bad flag at once, and --help shows the same ranges and defaults.
+TEST(Cli, NoiseFlagsAreCheckedAgainstTheirTable) {
+  TempDir dir;
+  const std::string out = dir / "n.raw";
+  std::string text;
+  struct Case {
+    std::string args;
+    std::vector<const char*> named;
+  } cases[] = {
+      {"--octaves 40", {"--octaves: 40 is out of range; allowed: integer in [1, 16]"}},
+      {"--octaves abc", {"--octaves: \"abc\" has the wrong type; expected an integer in [1, 16]"}},
+      {"--kind foo --gain 0 --size 0",
+       {"--kind: \"foo\" is not allowed; expected one of: perlin | worley | perlin-worley",
+        "--gain: 0 is out of range; allowed: number in [1e-06, 1]", "--size: 0 is out of range; allowed: integer in [1, 2048]"}},
+      {"--lacunarity 2.5", {"--lacunarity: 2.5 has the wrong type; expected an integer in [2, 16]"}},
+      {"--period 0", {"--period: 0 is out of range; allowed: integer in [1, 1073741824]"}},
+      {"--period 4,4,2.5", {"--period/2: 2.5 has the wrong type; expected an integer in [1, 1073741824]"}},
+  };
+  for (const Case& c : cases) {
+    EXPECT_EQ(run_cli("noise " + c.args + " -o " + out, &text), 1) << c.args << "\n" << text;
+    for (const char* n : c.named) EXPECT_NE(text.find(n), std::string::npos) << c.args << "\n" << text << "\nlacks: " << n;
+  }
+  EXPECT_FALSE(fs::exists(out));
+  ASSERT_EQ(run_cli("noise --help", &text), 0);
+  for (const char* n : {"fBm octaves: integer in [1, 16] (default 1)", "perlin | worley | perlin-worley (default perlin)",
+                        "integer in [1, 2048] (default 64)", "integer in [0, 2^64 - 1] (default 0)"})
+    EXPECT_NE(text.find(n), std::string::npos) << n << "\n" << text;
+  ASSERT_EQ(run_cli("noise --period 4,4,5 --size 8 -o " + out, &text), 0) << text;
+  EXPECT_NE(read_text(dir / "n.json").find("\"period\": [\n      4,\n      4,\n      5\n    ]"), std::string::npos)
+      << read_text(dir / "n.json");
 }
