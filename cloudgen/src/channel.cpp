@@ -1,6 +1,7 @@
 // A preset's noise channel as the generator evaluates it (channel.h).
 #include "cloudgen/channel.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace cloudgen {
@@ -32,6 +33,20 @@ noise3d::FractalParams coverage_params(const Preset& p) {
   cp.octaves = p.coverage_octaves;
   cp.seed = p.seed ^ 0xC0FEC0FEull;
   return cp;
+}
+
+float noise_to_unit(noise3d::Kind k, float v) {
+  const float u = k == noise3d::Kind::Perlin ? 0.5f + 0.5f * v : v;
+  return std::clamp(u, 0.0f, 1.0f);
+}
+
+float channel_value(const Channel& ch, float v) {
+  float u = noise_to_unit(ch.kind, v);
+  if (ch.remap[0] != 0.0 || ch.remap[1] != 1.0) {
+    const float lo = float(ch.remap[0]), hi = float(ch.remap[1]);
+    u = std::clamp((u - lo) / (hi - lo), 0.0f, 1.0f);
+  }
+  return ch.invert ? 1.0f - u : u;
 }
 
 }  // namespace cloudgen

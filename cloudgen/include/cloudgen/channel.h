@@ -3,8 +3,6 @@
 // stores. The preset reader validates the resolved parameters; generate.cpp evaluates them.
 #pragma once
 
-#include <algorithm>
-
 #include "cloudgen/preset.h"
 #include "noise3d/noise3d.h"
 
@@ -19,20 +17,11 @@ noise3d::FractalParams channel_params(const Preset& p, int channel);
 noise3d::FractalParams coverage_params(const Preset& p);
 
 /// A noise value of kind `k` mapped to [0, 1] (Perlin fBm is in [-1, 1]).
-inline float noise_to_unit(noise3d::Kind k, float v) {
-  const float u = k == noise3d::Kind::Perlin ? 0.5f + 0.5f * v : v;
-  return std::clamp(u, 0.0f, 1.0f);
-}
+float noise_to_unit(noise3d::Kind k, float v);
 
 /// What a voxel of the channel stores for noise value v: to [0, 1], the contrast remap (identity
-/// for [0, 1] leaves bytes unchanged), then invert. Inline: the generator calls it per voxel.
-inline float channel_value(const Channel& ch, float v) {
-  float u = noise_to_unit(ch.kind, v);
-  if (ch.remap[0] != 0.0 || ch.remap[1] != 1.0) {
-    const float lo = float(ch.remap[0]), hi = float(ch.remap[1]);
-    u = std::clamp((u - lo) / (hi - lo), 0.0f, 1.0f);
-  }
-  return ch.invert ? 1.0f - u : u;
-}
+/// for [0, 1] leaves bytes unchanged), then invert. Out of line on purpose: inlined into the
+/// generator's brick loop it made generation 8% slower (thesis 192^3, one thread, measured).
+float channel_value(const Channel& ch, float v);
 
 }  // namespace cloudgen
