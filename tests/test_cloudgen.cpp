@@ -15,6 +15,7 @@
 #include <sstream>
 #include <thread>
 
+#include "cloudgen/channel.h"
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
 #include "cloudgen/preset.h"
@@ -28,7 +29,9 @@ namespace {
 
 using testutil::kCli;
 using testutil::kPresets;
+using testutil::read_text;
 using testutil::run_cli;
+using testutil::same_bytes;
 using testutil::TempDir;
 
 Preset preset(const std::string& name, std::vector<std::string> sets = {}) {
@@ -42,11 +45,6 @@ std::string error_of(const std::string& json, std::vector<std::string> sets = {}
     return e.what();
   }
   return "";
-}
-
-bool same_bytes(const std::vector<float>& a, const std::vector<float>& b) {
-  // memcmp on the null data() of empty vectors is undefined even for 0 bytes (UBSan)
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);
 }
 
 }  // namespace
@@ -384,6 +382,113 @@ TEST(Pipeline, FinalVolumeTilesInXAndZ) {
   EXPECT_TRUE(v.tiles_xz);
 }
 
+// The exact form of the test above. A tiling volume is one tile of a periodic field, so at its
+// seams (the first and last voxel in x and in z) every factor of the density that varies in x or z
+// continues into the neighbouring tile bit for bit, and the baked seam voxels are that field's
+// values, bit for bit:
+//  - each channel's noise and the coverage noise, at the bake's lattice positions (voxel i of N at
+//    i * P / N; exact in double at this resolution), equals itself one period on from the first
+//    voxel (voxel N, the next tile's first) and one period back from the last (voxel -1);
+//  - no tower's copy in the neighbouring tile reaches a seam voxel, so the towers the bake adds
+//    once each are the periodic sum of their copies (a tower cut by the box would end in a step);
+//  - the baked density of every seam voxel is the bake's formula applied to the grid noise (the
+//    library's samples of one tile, which its Tiling tests tie to the point function), the height
+//    profile, the towers and the coverage map: nothing at the edges (a fade, a brick artefact) departs from
+//    the periodic field. The detail channels next to cloud across the seam are checked exactly by
+//    DetailIsExactWithinOneVoxelOfCloud.
+TEST(Pipeline, TilingVolumeContinuesExactlyAcrossItsSeams) {
+  Preset p = preset("cumulus");
+  rescale(p, 32);
+  ASSERT_TRUE(p.tiling && p.coverage_enabled && p.tower_count > 0);
+  const Volume v = generate(p);
+  ASSERT_TRUE(v.tiles_xz);
+  const auto N = v.dims;
+  auto on_seam = [&](uint32_t x, uint32_t z) { return x == 0 || x == N[0] - 1 || z == 0 || z == N[2] - 1; };
+
+  // The noise one period on / back across each seam the voxel lies on, against the noise here.
+  size_t continued = 0;
+  auto continues = [&](const noise3d::FractalParams& f, uint32_t x, uint32_t y, uint32_t z, const char* what) {
+    const double P[3] = {double(f.period.x), double(f.period.y), double(f.period.z)};
+    const uint32_t q[3] = {x, y, z};
+    double at[3];
+    for (int a = 0; a < 3; ++a) at[a] = double(q[a]) * P[a] / N[a];
+    const double here = noise3d::evaluate(f, at[0], at[1], at[2]);
+    for (int a : {0, 2}) {
+      if (q[a] != 0 && q[a] != N[a] - 1) continue;
+      double s[3] = {at[0], at[1], at[2]};
+      s[a] += q[a] == 0 ? P[a] : -P[a];
+      const double there = noise3d::evaluate(f, s[0], s[1], s[2]);
+      ASSERT_EQ(std::memcmp(&there, &here, sizeof here), 0)
+          << what << " at voxel (" << x << ", " << y << ", " << z << ") across the " << (a ? "z" : "x")
+          << " seam: " << there << " vs " << here;
+      ++continued;
+    }
+  };
+  for (uint32_t z = 0; z < N[2]; ++z)
+    for (uint32_t x = 0; x < N[0]; ++x) {
+      if (!on_seam(x, z)) continue;
+      continues(coverage_params(p), x, 0, z, "coverage");
+      for (uint32_t y = 0; y < N[1]; ++y)
+        for (int c = 0; c < 4; ++c)
+          if (c == 0 || p.channels[c].enabled) continues(channel_params(p, c), x, y, z, "channel");
+    }
+  EXPECT_EQ(continued, size_t(2 * (N[0] + N[2])) * (1 + 4 * N[1]));  // corners lie on both seams
+
+  // Towers are not periodic functions: the bake adds each one once. That is the periodic field
+  // only if no tower's copy in a neighbouring tile (centre one tile width away) reaches a voxel of
+  // this one: at the seam voxels, where it would come closest, its q must be >= 9 (the truncation).
+  const std::vector<Tower> towers = resolve_towers(p);
+  ASSERT_FALSE(towers.empty());
+  for (const Tower& w : towers)
+    for (int a : {0, 2})
+      for (uint32_t i : {0u, N[a] - 1}) {
+        const double u = (i + 0.5) / N[a], copy = w.center[a] + (i == 0 ? -1.0 : 1.0);
+        EXPECT_GE((u - copy) * (u - copy) / (w.sigma[a] * w.sigma[a]), 9.0)
+            << "the copy of a tower one tile away reaches voxel " << i << " of axis " << a;
+      }
+  // The bake's tower term at a voxel (generate.cpp's Shape: q summed over x, y, z, truncated at 9).
+  auto tower_term = [&](uint32_t x, uint32_t y, uint32_t z) {
+    const uint32_t q3[3] = {x, y, z};
+    const double g3 = std::exp(-4.5);
+    double add = 0;
+    for (const Tower& w : towers) {
+      double q = 0;
+      for (int a = 0; a < 3; ++a) {
+        const double u = (q3[a] + 0.5) / N[a];
+        q += (u - w.center[a]) * (u - w.center[a]) / (w.sigma[a] * w.sigma[a]);
+      }
+      if (q < 9) add += w.amplitude * (std::exp(-0.5 * q) - g3) / (1 - g3);
+    }
+    return add;
+  };
+
+  const std::vector<float> cov = coverage_map(p);
+  std::vector<float> r(v.voxel_count());
+  noise3d::GridRegion g;
+  g.size = N;
+  noise3d::evaluate_grid(channel_params(p, 0), g, r.data());
+  const float t = float(p.threshold), inv = float(1.0 / (1.0 - p.threshold)), scale = float(p.density_scale);
+  size_t cloudy = 0, seam_voxels = 0, towered = 0;
+  for (uint32_t z = 0; z < N[2]; ++z)
+    for (uint32_t y = 0; y < N[1]; ++y)
+      for (uint32_t x = 0; x < N[0]; ++x) {
+        if (!on_seam(x, z)) continue;
+        const size_t i = v.index(x, y, z);
+        float shape = float(height_profile(p, (y + 0.5) / N[1]));
+        shape += float(tower_term(x, y, z));
+        shape *= cov[size_t(z) * N[0] + x];
+        towered += tower_term(x, y, z) > 0;
+        const float d = channel_value(p.channels[0], r[i]) * shape;
+        const float want = std::clamp((d - t) * inv * scale, 0.0f, 1.0f);
+        ASSERT_EQ(v.density[i], want) << "seam voxel (" << x << ", " << y << ", " << z << ")";
+        cloudy += want > 0;
+        ++seam_voxels;
+      }
+  std::printf("  cumulus at %ux%ux%u: %zu noise continuations bit-equal; of %zu seam voxels %zu hold cloud, %zu a tower\n",
+              N[0], N[1], N[2], continued, seam_voxels, cloudy, towered);
+  EXPECT_GT(cloudy, 0u) << "the seams must hold cloud for the reconstruction to mean something";
+}
+
 TEST(Pipeline, TowersVanishAtTheTileEdges) {
   Preset p = parse_preset(R"({"resolution": [48, 48, 48], "towers": {"count": 6, "seed": 3}})", "t.json");
   for (const Tower& t : resolve_towers(p))
@@ -630,4 +735,38 @@ TEST(Cli, NoiseCubeIsOneTileAndReferenceModeMatchesPerlin) {
   EXPECT_EQ(out, "0.13691995878400012\n");
   EXPECT_EQ(run_cli("noise --kind perlin --lacunarity 2.5 --size 8 -o " + (dir / "c.raw"), &out), 1);
   EXPECT_NE(out.find("lacunarity"), std::string::npos) << out;
+}
+
+// `cloudgen noise` declares its flags in one table (cloudgen/schema.h) and checks them with the
+// preset reader's checker: each bad value is refused naming the flag, the value and the allowed
+// range, every bad flag at once, and --help shows the same ranges and defaults.
+TEST(Cli, NoiseFlagsAreCheckedAgainstTheirTable) {
+  TempDir dir;
+  const std::string out = dir / "n.raw";
+  std::string text;
+  struct Case {
+    std::string args;
+    std::vector<const char*> named;
+  } cases[] = {
+      {"--octaves 40", {"--octaves: 40 is out of range; allowed: integer in [1, 16]"}},
+      {"--octaves abc", {"--octaves: \"abc\" has the wrong type; expected an integer in [1, 16]"}},
+      {"--kind foo --gain 0 --size 0",
+       {"--kind: \"foo\" is not allowed; expected one of: perlin | worley | perlin-worley",
+        "--gain: 0 is out of range; allowed: number in [1e-06, 1]", "--size: 0 is out of range; allowed: integer in [1, 2048]"}},
+      {"--lacunarity 2.5", {"--lacunarity: 2.5 has the wrong type; expected an integer in [2, 16]"}},
+      {"--period 0", {"--period: 0 is out of range; allowed: integer in [1, 1073741824]"}},
+      {"--period 4,4,2.5", {"--period/2: 2.5 has the wrong type; expected an integer in [1, 1073741824]"}},
+  };
+  for (const Case& c : cases) {
+    EXPECT_EQ(run_cli("noise " + c.args + " -o " + out, &text), 1) << c.args << "\n" << text;
+    for (const char* n : c.named) EXPECT_NE(text.find(n), std::string::npos) << c.args << "\n" << text << "\nlacks: " << n;
+  }
+  EXPECT_FALSE(fs::exists(out));
+  ASSERT_EQ(run_cli("noise --help", &text), 0);
+  for (const char* n : {"fBm octaves: integer in [1, 16] (default 1)", "perlin | worley | perlin-worley (default perlin)",
+                        "integer in [1, 2048] (default 64)", "integer in [0, 2^64 - 1] (default 0)"})
+    EXPECT_NE(text.find(n), std::string::npos) << n << "\n" << text;
+  ASSERT_EQ(run_cli("noise --period 4,4,5 --size 8 -o " + out, &text), 0) << text;
+  EXPECT_NE(read_text(dir / "n.json").find("\"period\": [\n      4,\n      4,\n      5\n    ]"), std::string::npos)
+      << read_text(dir / "n.json");
 }

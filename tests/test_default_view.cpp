@@ -16,24 +16,14 @@
 #include "cloudviewer/errors.h"
 #include "cloudviewer/renderer.h"
 #include "cloudviewer/scene.h"
+#include "test_util.h"
 
 using namespace cloudviewer;
 namespace fs = std::filesystem;
 
 namespace {
-struct Dir {
-  fs::path path;
-  Dir() {
-    char tmpl[] = "/tmp/cloudviewer-view-XXXXXX";
-    path = ::mkdtemp(tmpl);
-  }
-  ~Dir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string operator/(const std::string& f) const { return (path / f).string(); }
-};
-const std::string kPresets = std::string(CLOUD_SOURCE_DIR) + "/presets/";
+using testutil::kPresets;
+using testutil::TempDir;
 }  // namespace
 
 TEST(DefaultView, LookDefaultsAndConstantsAreTheViewers) {
@@ -100,7 +90,7 @@ TEST(DefaultView, BareLayerFillsTheFrameFromThirtyDegreesAbove) {
 }
 
 TEST(DefaultView, UpZAndUpYFilesGiveTheSamePicture) {
-  Dir dir;
+  TempDir dir;
   cloudgen::Volume v = cloudgen::generate_from_file(kPresets + "tiny.json");
   for (char up : {'z', 'y'}) {
     cloudgen::ExportOptions o;
@@ -122,7 +112,7 @@ TEST(DefaultView, UpZAndUpYFilesGiveTheSamePicture) {
 }
 
 TEST(DefaultView, TheFilesViewWinsOverDefaultsAndLosesToFlags) {
-  Dir dir;
+  TempDir dir;
   const cloudgen::Preset p = cloudgen::load_preset(
       kPresets + "tiny.json", {"view.eye=[400,900,-1500]", "view.target=[400,300,400]", "view.fov=35",
                                "view.sun.elevation=50", "view.render.g=0.55", "view.render.exposure=2"});

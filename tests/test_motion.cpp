@@ -20,12 +20,16 @@
 #include "cloudviewer/renderer.h"
 #include "cloudviewer/scene.h"
 #include "cloudviewer/settings.h"
-#include "test_util.h"
+#include "test_util_viewer.h"
 
 namespace fs = std::filesystem;
 using namespace cloudviewer;
 using cloudgen::MotionParams;
 using cloudgen::motion_displacement;
+using testutil::gl_context;
+using testutil::read_text;
+using testutil::render_gl;
+using testutil::run;
 
 namespace {
 
@@ -35,37 +39,10 @@ MotionParams flow_only() {
   return m;
 }
 
-HeadlessContext& context() {
-  static std::unique_ptr<HeadlessContext> ctx = std::make_unique<HeadlessContext>();
-  ctx->make_current();
-  return *ctx;
-}
-
-FrameImages render_gl(const PreparedVolume& vol, const FrameSetup& f) {
-  context();
-  GlRenderer r{ShaderSource()};
-  r.set_volume(vol);
-  r.render(f);
-  return r.read_back();
-}
-
 FrameSetup frame_at(const PreparedVolume& vol, RenderSettings s, double t, int w = 160, int h = 90) {
   s.time = t;
   Camera cam = default_camera(vol, 60, double(w) / h);
   return make_frame(vol, s, cam, default_sun(cam), w, h);
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-int run(std::vector<std::string> args, std::string* err_text = nullptr) {
-  args.insert(args.begin(), "cloudviewer");
-  std::ostringstream out, err;
-  int code = run_cli(args, out, err);
-  if (err_text) *err_text = err.str();
-  return code;
 }
 
 }  // namespace
@@ -319,9 +296,9 @@ TEST(ViewerMotionCli, FramesWriteAPatternOrOnlyTheLastFrame) {
   ASSERT_EQ(run(with({"--out", (dir.path / "f_%03d.png").string()}), &err), 0) << err;
   for (const char* f : {"f_000.png", "f_001.png", "f_002.png"}) EXPECT_TRUE(fs::exists(dir.path / f)) << f;
   EXPECT_FALSE(fs::exists(dir.path / "f_003.png"));
-  EXPECT_NE(slurp(dir.path / "f_000.png"), slurp(dir.path / "f_002.png")) << "time must advance";
+  EXPECT_NE(read_text(dir.path / "f_000.png"), read_text(dir.path / "f_002.png")) << "time must advance";
   ASSERT_EQ(run(with({"--out", (dir.path / "last.png").string()}), &err), 0) << err;
-  EXPECT_EQ(slurp(dir.path / "last.png"), slurp(dir.path / "f_002.png")) << "a plain --out is the last frame";
+  EXPECT_EQ(read_text(dir.path / "last.png"), read_text(dir.path / "f_002.png")) << "a plain --out is the last frame";
   for (const char* bad : {"x_%s.png", "x_%d_%d.png", "x_%10d.png", "x_%"}) {
     EXPECT_EQ(run(with({"--out", (dir.path / bad).string()}), &err), 1) << bad;
     EXPECT_NE(err.find("frame pattern"), std::string::npos) << err;
@@ -382,7 +359,7 @@ TEST(TemporalUpsampling, CrossMatrixIsTheSeedsAndVisitsEveryPixelOnceIn16Frames)
 // frame each pixel was marched in is the only difference). Also after a resize-free settings
 // change the history is dropped (the first frame is the spatial upsample, visibly worse).
 TEST(TemporalUpsampling, StillViewConvergesToTheFullRenderIn16Frames) {
-  context();
+  gl_context();
   PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
   const int w = 160, h = 96;
   Camera cam = default_camera(vol, 60, double(w) / h);
@@ -416,7 +393,7 @@ TEST(TemporalUpsampling, StillViewConvergesToTheFullRenderIn16Frames) {
 // ghosts. Each frame is compared with the full render of the same camera, time and frame index;
 // a pixel off by more than 0.1 (display units, any channel) counts as a ghost.
 TEST(TemporalUpsampling, PanAndMovingCloudsLeaveNoGhosts) {
-  context();
+  gl_context();
   PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
   const int w = 160, h = 96;
   GlRenderer full{ShaderSource()}, temporal{ShaderSource()};

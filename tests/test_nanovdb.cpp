@@ -20,23 +20,17 @@
 #include "cloudviewer/renderer.h"
 #include "cloudviewer/scene.h"
 #include "cloudviewer/settings.h"
+#include "test_util_viewer.h"
 
 namespace fs = std::filesystem;
 using namespace cloudviewer;
+using testutil::frame_for;  // both paths framed by the same camera (the dense volume's; the boxes are equal)
+using testutil::render_gl;
+using testutil::with;
 
 namespace {
 
-fs::path dir() {
-  fs::path d = fs::path(CLOUD_BINARY_DIR) / "test_output" / "nanovdb";
-  fs::create_directories(d);
-  return d;
-}
-
-std::string bytes_of(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-void put(const fs::path& p, const std::string& b) { std::ofstream(p, std::ios::binary).write(b.data(), std::streamsize(b.size())); }
+fs::path dir() { return testutil::test_output_dir("nanovdb"); }
 
 // The blob (96 x 48 x 96, detail channels), written once as .vdb and .nvdb with the same options.
 const cloudgen::Volume& blob() {
@@ -49,28 +43,6 @@ fs::path written(const std::string& name, cloudgen::Format f, const cloudgen::Ex
   return p;
 }
 
-HeadlessContext& context() {
-  static std::unique_ptr<HeadlessContext> ctx = std::make_unique<HeadlessContext>();
-  ctx->make_current();
-  return *ctx;
-}
-FrameImages render_gl(const PreparedVolume& vol, const FrameSetup& f) {
-  context();
-  GlRenderer r{ShaderSource()};
-  r.set_volume(vol);
-  r.render(f);
-  return r.read_back();
-}
-RenderSettings with(std::initializer_list<const char*> sets) {
-  RenderSettings s;
-  for (const char* a : sets) apply_setting(s, a);
-  return s;
-}
-// Both paths framed by the same camera (the dense volume's; the boxes are equal).
-FrameSetup frame_for(const PreparedVolume& vol, const RenderSettings& s, int w = 160, int h = 90) {
-  Camera cam = default_camera(vol, 60, double(w) / h);
-  return make_frame(vol, s, cam, default_sun(cam), w, h);
-}
 void dump(const std::string& name, const Image& a, const Image& b) {
   write_png((dir() / (name + "_dense.png")).string(), a);
   write_png((dir() / (name + "_nanovdb.png")).string(), b);
@@ -150,13 +122,13 @@ TEST(NanoVdb, BytesAreTheSameAtAnyThreadCount) {
   std::string one, many, again;
   {
     tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
-    one = bytes_of(written("t1.nvdb", cloudgen::Format::Nvdb));
+    one = testutil::read_text(written("t1.nvdb", cloudgen::Format::Nvdb));
   }
   {
     tbb::global_control c(tbb::global_control::max_allowed_parallelism, 8);
-    many = bytes_of(written("t8.nvdb", cloudgen::Format::Nvdb));
+    many = testutil::read_text(written("t8.nvdb", cloudgen::Format::Nvdb));
   }
-  again = bytes_of(written("t8b.nvdb", cloudgen::Format::Nvdb));
+  again = testutil::read_text(written("t8b.nvdb", cloudgen::Format::Nvdb));
   ASSERT_GT(one.size(), 1000u);
   EXPECT_TRUE(one == many);
   EXPECT_TRUE(many == again);
@@ -262,10 +234,10 @@ TEST(NanoVdb, VolumeBeyondTheDenseBudgetRendersThroughNanoVdb) {
 // a wrong magic, an empty file, a compressed file and one without a density grid are refused with
 // InputError naming the file, never a crash or another exception.
 TEST(NanoVdb, DamagedFilesGiveClearErrors) {
-  const std::string good = bytes_of(written("good.nvdb", cloudgen::Format::Nvdb));
+  const std::string good = testutil::read_text(written("good.nvdb", cloudgen::Format::Nvdb));
   const fs::path bad = dir() / "bad.nvdb";
   auto refused = [&](const std::string& b, const std::string& what, const char* needle = nullptr) {
-    put(bad, b);
+    testutil::write_text(bad, b);
     try {
       cloudgen::read_nvdb(bad.string());
       ADD_FAILURE() << what << ": accepted";
@@ -294,7 +266,7 @@ TEST(NanoVdb, DamagedFilesGiveClearErrors) {
   for (size_t at = 300; at < good.size(); at += good.size() / 37) {
     b = good;
     b[at] = char(b[at] ^ 0x5a);
-    put(bad, b);
+    testutil::write_text(bad, b);
     try {
       cloudgen::read_nvdb(bad.string());
       // A flip in padding the checksum does not cover is harmless: the file must still read.
@@ -307,6 +279,6 @@ TEST(NanoVdb, DamagedFilesGiveClearErrors) {
   b.replace(b.find("density"), 7, "densitz");
   refused(b, "no density grid", "no float grid named \"density\"");
   // The viewer passes the reader's message on.
-  put(bad, good.substr(0, good.size() / 3));
+  testutil::write_text(bad, good.substr(0, good.size() / 3));
   EXPECT_THROW(open_input(bad.string(), RenderSettings{}), cloudgen::InputError);
 }

@@ -14,23 +14,11 @@
 #include "cloudviewer/renderer.h"
 #include "cloudviewer/scene.h"
 #include "cloudviewer/settings.h"
+#include "test_util_viewer.h"
 
 using namespace cloudviewer;
-
-namespace {
-
-RenderSettings with(std::initializer_list<const char*> sets) {
-  RenderSettings s;
-  for (const char* a : sets) apply_setting(s, a);
-  return s;
-}
-
-FrameSetup frame_for(const PreparedVolume& vol, const RenderSettings& s, int w, int h) {
-  Camera cam = default_camera(vol, 60, double(w) / h);
-  return make_frame(vol, s, cam, default_sun(cam), w, h);
-}
-
-}  // namespace
+using testutil::frame_for;
+using testutil::with;
 
 TEST(PathTrace, FurnaceUniformSlabGivesTheAmbientSkyWeightedByTheTransmittance) {
   PreparedVolume vol = prepare_volume(synthetic_volume("slab"), 8);

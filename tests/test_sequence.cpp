@@ -20,6 +20,7 @@
 using namespace cloudgen;
 using testutil::kPresets;
 using testutil::run_cli;
+using testutil::same_bytes;
 using testutil::TempDir;
 
 namespace {
@@ -82,10 +83,6 @@ Compare compare_frame(const Volume& stat, const MotionParams& m, const MotionFra
         else if (!stat.tiles_xz) c.outside = std::max(c.outside, want);  // a tile repeats beyond its box
       }
   return c;
-}
-
-bool same_bytes(const std::vector<float>& a, const std::vector<float>& b) {
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);
 }
 
 double rms_change(const Volume& a, const Volume& b) {

@@ -1,5 +1,6 @@
 // Helpers shared by the test files: temporary folders, running the cloudgen binary with
-// controlled environment, limits and signals, reading files.
+// controlled environment, limits and signals, reading and comparing files, the test output folder.
+// The viewer tests add test_util_viewer.h (GL context, renders, settings, cloudviewer runs).
 #pragma once
 
 #include <fcntl.h>
@@ -12,6 +13,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -130,6 +132,19 @@ inline std::vector<std::string> list_dir(const fs::path& d) {
   for (auto& e : fs::directory_iterator(d)) v.push_back(e.path().filename().string());
   std::sort(v.begin(), v.end());
   return v;
+}
+
+/// CLOUD_BINARY_DIR/test_output/NAME, created: where a test leaves pictures for a human to look at.
+inline fs::path test_output_dir(const std::string& name) {
+  fs::path d = fs::path(CLOUD_BINARY_DIR) / "test_output" / name;
+  fs::create_directories(d);
+  return d;
+}
+
+/// Bit-for-bit equality of two float arrays (memcmp: NaN payloads and signed zeros count).
+inline bool same_bytes(const std::vector<float>& a, const std::vector<float>& b) {
+  // memcmp on the null data() of empty vectors is undefined even for 0 bytes (UBSan)
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);
 }
 
 }  // namespace testutil

@@ -14,30 +14,16 @@
 #include "cloudgen/io.h"
 #include "cloudgen/preset.h"
 #include "cloudgen/view.h"
+#include "test_util.h"
 
 using namespace cloudgen;
 namespace fs = std::filesystem;
 
 namespace {
 
-const std::string kPresets = std::string(CLOUD_SOURCE_DIR) + "/presets/";
-
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    char tmpl[] = "/tmp/cloudgen-view-XXXXXX";
-    path = ::mkdtemp(tmpl);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string operator/(const std::string& f) const { return (path / f).string(); }
-};
-
-bool same_bytes(const std::vector<float>& a, const std::vector<float>& b) {
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);
-}
+using testutil::kPresets;
+using testutil::same_bytes;
+using testutil::TempDir;
 
 [[maybe_unused]] std::string meta(const Volume& v, const std::string& key) {
   for (auto& [k, val] : v.metadata)

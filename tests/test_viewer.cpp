@@ -20,17 +20,20 @@
 #include "cloudviewer/renderer.h"
 #include "cloudviewer/scene.h"
 #include "cloudviewer/settings.h"
+#include "../viewer/src/internal.h"
+#include "test_util_viewer.h"
 
 namespace fs = std::filesystem;
 using namespace cloudviewer;
+using testutil::frame_for;
+using testutil::gl_context;
+using testutil::render_gl;
+using testutil::run;
+using testutil::with;
 
 namespace {
 
-fs::path output_dir() {
-  fs::path d = fs::path(CLOUD_BINARY_DIR) / "test_output" / "viewer";
-  fs::create_directories(d);
-  return d;
-}
+fs::path output_dir() { return testutil::test_output_dir("viewer"); }
 
 // On failure: both images and an amplified difference, so a human can look.
 void dump(const std::string& name, const Image& a, const Image& b, double gain = 10) {
@@ -41,45 +44,12 @@ void dump(const std::string& name, const Image& a, const Image& b, double gain =
   std::cerr << "wrote " << (d / (name + "_{a,b,diff}.png")).string() << "\n";
 }
 
-HeadlessContext& context() {
-  static std::unique_ptr<HeadlessContext> ctx = std::make_unique<HeadlessContext>();
-  ctx->make_current();
-  return *ctx;
-}
-
 const PreparedVolume& volume(const std::string& kind, int cell = 8) {
   static std::map<std::string, std::unique_ptr<PreparedVolume>> cache;
   std::string key = kind + "/" + std::to_string(cell);
   auto& v = cache[key];
   if (!v) v = std::make_unique<PreparedVolume>(prepare_volume(synthetic_volume(kind), cell));
   return *v;
-}
-
-FrameSetup frame_for(const PreparedVolume& vol, const RenderSettings& s, int w, int h) {
-  Camera cam = default_camera(vol, 60, double(w) / h);
-  return make_frame(vol, s, cam, default_sun(cam), w, h);
-}
-
-FrameImages render_gl(const PreparedVolume& vol, const FrameSetup& f) {
-  context();
-  GlRenderer r{ShaderSource()};
-  r.set_volume(vol);
-  r.render(f);
-  return r.read_back();
-}
-
-RenderSettings with(std::initializer_list<const char*> sets) {
-  RenderSettings s;
-  for (const char* a : sets) apply_setting(s, a);
-  return s;
-}
-
-int run(std::vector<std::string> args, std::string* err_text = nullptr) {
-  args.insert(args.begin(), "cloudviewer");
-  std::ostringstream out, err;
-  int code = run_cli(args, out, err);
-  if (err_text) *err_text = err.str();
-  return code;
 }
 
 }  // namespace
@@ -415,7 +385,7 @@ TEST(ViewerErrors, ShaderCompileErrorNamesFileLineAndLog) {
   std::string line, broken;
   for (int n = 1; std::getline(in, line); ++n) broken += (n == 40 ? "this is not glsl;" : line) + "\n";
   std::ofstream(dir / "medium.glsl") << broken;
-  context();
+  gl_context();
   try {
     GlRenderer r{ShaderSource(dir.string())};
     FAIL() << "a broken shader compiled";
@@ -644,7 +614,7 @@ TEST(ViewerCloudgen, NonCloudVdbAndTruncatedTextureAreClearErrors) {
 // of every group's first member and of members that follow a vec3 (where std140 padding would
 // bite first).
 TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
-  context();
+  gl_context();
   GlRenderer r{ShaderSource()};
   EXPECT_EQ(r.cloud_block_size(), int(sizeof(gpu::CloudParams)));
 #define CV_EXPECT_OFFSET(m) EXPECT_EQ(r.cloud_block_offset(#m), int(offsetof(gpu::CloudParams, m))) << #m
@@ -799,6 +769,61 @@ TEST(ViewerErrors, NonFiniteAndOutOfRangeNumbersAreRefused) {
 
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
 // A 4096^3 preset would need terabytes: refused up front with the estimate, not bad_alloc.
+// Bench tracks are read through the preset reader's field checker (cloudgen/schema.h): each bad
+// field is named with the file, its JSON pointer, the value and what is allowed, every problem of
+// the file at once, and unknown keys with a did-you-mean. Every shipped track reads.
+TEST(ViewerErrors, BenchTrackErrorsNameFileFieldValueAndRange) {
+  const PreparedVolume& vol = volume("slab");
+  Options o;
+  o.width = 16, o.height = 9;
+  struct Case {
+    const char* body;
+    std::vector<const char*> named;
+  } cases[] = {
+      {R"({"fov": 0, "keys": [{"eye": [0.5, 0.5, -1], "target": [0.5, 0.5, 0.5]}]})",
+       {"t.json: /fov: 0 is out of range; allowed: number in [1, 170]"}},
+      {R"({"space": "wrld", "frame_per_segment": 2, "keys": [{"eye": [0.5, 0.5], "set": [3]}, 4]})",
+       {"t.json: /space: \"wrld\" is not allowed; expected one of: volume | world",
+        "t.json: /frame_per_segment: unknown key (did you mean \"frames_per_segment\"?)",
+        "t.json: /keys/0/eye: [0.5,0.5] has the wrong type; expected an array of 3 numbers",
+        "t.json: /keys/0/set/0: 3 has the wrong type; expected a string",
+        "t.json: /keys/1: expected an object {eye, name, set, target, view}, got 4"}},
+      {R"({"frames_per_segment": 2.5, "keys": [{"eye": [0.5, 0.5, -1], "target": [0.5, 0.5, 0.5]}]})",
+       {"t.json: /frames_per_segment: 2.5 has the wrong type; expected an integer in [1, 1000]"}},
+      {R"({"sun": [10, 95], "keys": [{"eye": [0.5, 0.5, -1], "target": [0.5, 0.5, 0.5]}]})",
+       {"t.json: /sun/1: 95 is out of range; allowed: number in [-90, 90]"}},
+      {R"({"keys": [{"eye": [2e5, 0.5, -1]}]})",
+       {"t.json: /keys/0/eye/0: 200000.0 is out of range; allowed: number in [-100000, 100000]",
+        "t.json: /keys/0/target: missing"}},
+      {R"({"space": "world", "keys": [{"eye": [1e308, 0, 0], "target": [0, 0, 0]}]})",
+       {"t.json: /keys/0/eye/0: 1e+308 is out of range; allowed: number in [-1e+08, 1e+08]"}},
+      {R"({"keys": []})", {"t.json: /keys: missing or empty"}},
+      {R"({"keys": [{"eye": [0.5, 0.5, -1], "target": [0.5, 0.5, 0.5], "set": ["render.nope=1"]}]})",
+       {"t.json: /keys/0/set/0: ", "render.nope"}},
+      {R"([1, 2])", {"t.json: /: expected an object, got [1,2]"}},
+  };
+  for (const Case& c : cases) {
+    std::string msg;
+    try {
+      parse_track(c.body, "t.json", o, vol);
+    } catch (const InputError& e) {
+      msg = e.what();
+    }
+    EXPECT_FALSE(msg.empty()) << c.body << ": accepted";
+    for (const char* n : c.named) EXPECT_NE(msg.find(n), std::string::npos) << c.body << "\n" << msg << "\nlacks: " << n;
+  }
+  int shipped = 0;
+  for (const char* folder : {"/viewer/tracks", "/bench/tracks"})
+    for (const auto& e : fs::directory_iterator(std::string(CLOUD_SOURCE_DIR) + folder)) {
+      if (e.path().extension() != ".json") continue;
+      ++shipped;
+      const BenchPlan plan = parse_track(testutil::read_text(e.path()), e.path().string(), o, vol);
+      EXPECT_FALSE(plan.frames.empty()) << e.path();
+      EXPECT_EQ(plan.configs.size(), plan.settings.size()) << e.path();
+    }
+  EXPECT_GE(shipped, 6);
+}
+
 TEST(ViewerErrors, HugeInputIsRefusedWithTheMemoryEstimate) {
   std::string text;
   {

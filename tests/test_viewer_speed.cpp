@@ -20,33 +20,17 @@
 #include "cloudviewer/renderer.h"
 #include "cloudviewer/scene.h"
 #include "cloudviewer/settings.h"
+#include "test_util_viewer.h"
 
 using namespace cloudviewer;
+using testutil::gl_context;
+using testutil::render_gl;
+using testutil::with;
 
 namespace {
 
-HeadlessContext& gl() {
-  static std::unique_ptr<HeadlessContext> ctx = std::make_unique<HeadlessContext>();
-  ctx->make_current();
-  return *ctx;
-}
-
-FrameImages render_gl(const PreparedVolume& vol, const FrameSetup& f) {
-  gl();
-  GlRenderer r{ShaderSource()};
-  r.set_volume(vol);
-  r.render(f);
-  return r.read_back();
-}
-
 FrameImages render(bool on_gl, const PreparedVolume& vol, const FrameSetup& f) {
   return on_gl ? render_gl(vol, f) : render_cpu(vol, f);
-}
-
-RenderSettings with(std::initializer_list<const char*> sets) {
-  RenderSettings s;
-  for (const char* a : sets) apply_setting(s, a);
-  return s;
 }
 
 double loop_trips(bool on_gl, const PreparedVolume& vol, RenderSettings s, const Camera& cam, int w, int h) {
@@ -267,7 +251,7 @@ TEST(ViewerSpeed, LightVolumeFollowsTheLightMarch) {
 // the camera moves (a counter, not a timing); the GL image with it matches the CPU reference's.
 TEST(ViewerSpeed, LightVolumeRebuildsOnSunChangeNotOnCameraMove) {
   PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8, 2);
-  gl();
+  gl_context();
   GlRenderer r{ShaderSource()};
   r.set_volume(vol);
   RenderSettings s = with({"render.light_volume=true", "render.exact_filter=true", "render.steps=96"});

@@ -110,21 +110,6 @@ const char* format_name(Format f) {
 
 bool needs_detail(Format f, const ExportOptions& o) { return (f != Format::Vdb && f != Format::Nvdb) || o.vdb_detail; }
 
-std::string printable(const std::string& s, bool keep_newlines) {
-  std::string out;
-  out.reserve(s.size());
-  for (unsigned char c : s) {
-    if ((c < 0x20 && !(keep_newlines && (c == '\n' || c == '\t'))) || c == 0x7f) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\x%02x", c);
-      out += buf;
-    } else {
-      out += char(c);
-    }
-  }
-  return out;
-}
-
 // ---------------------------------------------------------------------------------------------
 
 std::vector<OutputFile> output_files(const std::string& path, Format f, bool with_occupancy) {

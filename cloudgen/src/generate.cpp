@@ -6,6 +6,7 @@
 // evaluated. Skipped and unskipped runs therefore give the same bytes (tested).
 #include "cloudgen/generate.h"
 
+#include "cloudgen/channel.h"
 #include "cloudgen/cloud_type.h"
 #include "cloudgen/view.h"
 
@@ -26,21 +27,6 @@ namespace {
 double smoothstep(double a, double b, double x) {
   double t = std::clamp((x - a) / (b - a), 0.0, 1.0);
   return t * t * (3 - 2 * t);
-}
-
-/// Noise value mapped to [0, 1] (Perlin fBm is in [-1, 1]).
-float to_unit(noise3d::Kind k, float v) {
-  const float u = k == noise3d::Kind::Perlin ? 0.5f + 0.5f * v : v;
-  return std::clamp(u, 0.0f, 1.0f);
-}
-/// A channel's value: to [0, 1], contrast remap (identity for [0, 1] leaves bytes unchanged), invert.
-float channel_value(const Channel& ch, float v) {
-  float u = to_unit(ch.kind, v);
-  if (ch.remap[0] != 0.0 || ch.remap[1] != 1.0) {
-    const float lo = float(ch.remap[0]), hi = float(ch.remap[1]);
-    u = std::clamp((u - lo) / (hi - lo), 0.0f, 1.0f);
-  }
-  return ch.invert ? 1.0f - u : u;
 }
 
 // Portable uniform doubles for tower placement (std distributions differ between libraries).
@@ -91,17 +77,12 @@ std::vector<float> coverage_map(const Preset& p, int threads) {
   std::vector<float> coverage;
   if (!p.coverage_enabled) return coverage;
   const std::array<uint32_t, 3> N = p.resolution;
-  noise3d::FractalParams cp;
-  cp.kind = p.coverage_kind;
-  cp.period = {p.coverage_period, 1,
-               std::max<uint32_t>(1, uint32_t(std::lround(double(p.coverage_period) * N[2] / N[0])))};
-  cp.octaves = p.coverage_octaves;
-  cp.seed = p.seed ^ 0xC0FEC0FEull;
+  const noise3d::FractalParams cp = coverage_params(p);
   noise3d::GridRegion g;
   g.size = {N[0], 1, N[2]};
   coverage.resize(g.count());
   noise3d::evaluate_grid(cp, g, coverage.data(), {threads});
-  for (float& c : coverage) c = float(smoothstep(p.coverage_low, p.coverage_high, to_unit(cp.kind, c)));
+  for (float& c : coverage) c = float(smoothstep(p.coverage_low, p.coverage_high, noise_to_unit(cp.kind, c)));
   return coverage;
 }
 
@@ -549,6 +530,16 @@ Volume generate(const Preset& p, const GenerateOptions& opt, GenerateStats* stat
     stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   }
   return v;
+}
+
+uint64_t memory_estimate(const Preset& p, bool need_detail) {
+  const uint64_t voxels = uint64_t(p.resolution[0]) * p.resolution[1] * p.resolution[2];
+  int channels = 1;
+  if (need_detail)
+    for (int c = 1; c < 4; ++c) channels += p.channels[c].enabled;
+  // Dense float channels + one float scratch of the Perlin-Worley accumulator per brick (small),
+  // plus the OpenVDB tree when exporting (about the size of the active voxels again).
+  return voxels * 4 * (channels + 1);
 }
 
 std::string preset_hash(const Preset& p) {

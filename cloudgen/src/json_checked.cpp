@@ -5,7 +5,7 @@
 #include <set>
 #include <vector>
 
-#include "cloudgen/io.h"
+#include "cloudgen/printable.h"
 #include "cloudgen/volume.h"
 
 namespace cloudgen {

@@ -14,8 +14,10 @@
 #include <set>
 #include <sstream>
 
+#include "cloudgen/channel.h"
 #include "cloudgen/io.h"
 #include "cloudgen/json_checked.h"
+#include "cloudgen/schema.h"
 
 namespace cloudgen {
 namespace {
@@ -23,22 +25,13 @@ namespace {
 using json = nlohmann::json;
 using Index = std::vector<size_t>;
 
+/// One key of the table: its declaration (schema.h) and what it sets in a Preset.
 struct Spec {
-  ParamInfo info;
-  double lo = -1e300, hi = 1e300;
-  std::vector<std::string> choices;
+  FieldSpec field;
   std::function<void(Preset&, const json&, const Index&)> set;
 };
 
-/// The shortest text that reads back as v (0.999, not 0.99899999999999999; 9007199254740992, not 9.0072e+15).
-std::string fmt(double v) {
-  char buf[40];
-  for (int prec = 6; prec <= 17; ++prec) {
-    std::snprintf(buf, sizeof buf, "%.*g", prec, v);
-    if (std::strtod(buf, nullptr) == v) break;
-  }
-  return buf;
-}
+std::string fmt(double v) { return shortest_text(v); }
 
 const char* kChannelNames[4] = {"r", "g", "b", "a"};
 constexpr HeightProfile kHeightProfiles[] = {HeightProfile::Exponential, HeightProfile::Stratus, HeightProfile::Cumulus,
@@ -59,22 +52,12 @@ std::vector<Spec> build_table() {
   auto add = [&](std::string ptr, std::string type, std::string def, double lo, double hi, std::string doc,
                  std::function<void(Preset&, const json&, const Index&)> set, std::vector<std::string> choices = {}) {
     Spec s;
-    s.info.pointer = std::move(ptr);
-    s.info.type = type;
-    s.info.default_value = std::move(def);
-    s.info.doc = std::move(doc);
-    s.lo = lo, s.hi = hi;
-    s.choices = std::move(choices);
-    if (!s.choices.empty()) {
-      std::string r;
-      for (auto& c : s.choices) r += (r.empty() ? "" : " | ") + c;
-      s.info.range = r;
-    } else if (type == "bool" || type == "string" || type == "array" || type == "object") {
-      s.info.range = type == "bool" ? "true | false" : type == "array" ? "list" : type == "object" ? "KEY: value" : "any text";
-    } else {
-      s.info.range = std::string(type == "integer" || type == "ivec3" || type == "period" ? "integer" : "number") +
-                     " in [" + fmt(lo) + ", " + fmt(hi) + "]";
-    }
+    s.field.name = std::move(ptr);
+    s.field.type = std::move(type);
+    s.field.default_value = std::move(def);
+    s.field.doc = std::move(doc);
+    s.field.lo = lo, s.field.hi = hi;
+    s.field.choices = std::move(choices);
     s.set = std::move(set);
     t.push_back(std::move(s));
   };
@@ -267,152 +250,35 @@ const std::vector<Spec>& table() {
   return t;
 }
 
-size_t edit_distance(const std::string& a, const std::string& b) {
-  std::vector<size_t> d(b.size() + 1);
-  for (size_t j = 0; j <= b.size(); ++j) d[j] = j;
-  for (size_t i = 1; i <= a.size(); ++i) {
-    size_t prev = d[0];
-    d[0] = i;
-    for (size_t j = 1; j <= b.size(); ++j) {
-      size_t cur = d[j];
-      d[j] = std::min({d[j] + 1, d[j - 1] + 1, prev + (a[i - 1] != b[j - 1])});
-      prev = cur;
-    }
-  }
-  return d[b.size()];
+const Schema& schema() {
+  static const Schema sc = [] {
+    std::vector<FieldSpec> f;
+    for (const Spec& s : table()) f.push_back(s.field);
+    return Schema(std::move(f));
+  }();
+  return sc;
 }
 
-std::string dump(const json& j) { return json_excerpt(j); }
-
+/// Walks a preset document through the table's schema, collecting every problem as
+/// "<file>: <pointer>: <what>" and setting each valid key.
 class Reader {
  public:
-  Reader(std::string source) : source_(std::move(source)) {
-    for (const Spec& s : table()) {
-      specs_[s.info.pointer] = &s;
-      // Every proper prefix of a parameter pointer is a container object (or list element).
-      std::string ptr = s.info.pointer;
-      for (size_t k = ptr.find('/', 1); k != std::string::npos; k = ptr.find('/', k + 1))
-        containers_.insert(ptr.substr(0, k));
-    }
-  }
+  explicit Reader(std::string source) : source_(std::move(source)) {}
 
-  void walk(Preset& p, const json& j, const std::string& ptr, const std::string& pattern, const Index& idx) {
-    auto it = specs_.find(pattern);
-    if (it != specs_.end()) {
-      apply(p, *it->second, j, ptr, idx);
-      return;
-    }
-    if (!j.is_object()) {
-      problem(ptr.empty() ? "/" : ptr, "expected an object, got " + dump(j));
-      return;
-    }
-    for (auto& [key, value] : j.items()) {
-      const std::string cptr = ptr + "/" + key, cpat = pattern + "/" + key;
-      if (specs_.count(cpat) || containers_.count(cpat)) {
-        walk(p, value, cptr, cpat, idx);
-      } else {
-        problem(cptr, "unknown key" + suggest(pattern, key));
-      }
-    }
+  void walk(Preset& p, const json& doc) {
+    const Schema& sc = schema();
+    sc.walk(
+        doc, [&](const std::string& ptr, const std::string& what) { problem(ptr, what); },
+        [&](const FieldSpec& f, const json& v, const std::string&, const Index& idx) {
+          table()[size_t(&f - sc.fields().data())].set(p, v, idx);
+        });
   }
 
   void problem(const std::string& ptr, const std::string& what) { problems_.push_back(source_ + ": " + ptr + ": " + what); }
   const std::vector<std::string>& problems() const { return problems_; }
 
  private:
-  std::string suggest(const std::string& parent, const std::string& key) const {
-    std::string best;
-    size_t bd = 3;
-    std::set<std::string> siblings;
-    for (const auto& [ptr, s] : specs_)
-      if (ptr.rfind(parent + "/", 0) == 0) {
-        std::string rest = ptr.substr(parent.size() + 1);
-        siblings.insert(rest.substr(0, rest.find('/')));
-      }
-    for (const auto& s : siblings) {
-      size_t d = edit_distance(key, s);
-      if (d < bd) bd = d, best = s;
-    }
-    std::string allowed;
-    for (const auto& s : siblings) allowed += (allowed.empty() ? "" : ", ") + s;
-    return (best.empty() ? "" : " (did you mean \"" + best + "\"?)") + std::string("; allowed here: ") + allowed;
-  }
-
-  bool number_ok(const Spec& s, const json& v, bool integer, const std::string& ptr) {
-    if (!v.is_number() || (integer && !(v.is_number_integer() || std::floor(v.get<double>()) == v.get<double>()))) {
-      problem(ptr, dump(v) + " has the wrong type; expected " + (integer ? "an integer" : "a number") + " in [" +
-                       fmt(s.lo) + ", " + fmt(s.hi) + "]");
-      return false;
-    }
-    double d = v.get<double>();
-    if (!(d >= s.lo && d <= s.hi)) {
-      problem(ptr, dump(v) + " is out of range; allowed: " + s.info.range);
-      return false;
-    }
-    return true;
-  }
-
-  void apply(Preset& p, const Spec& s, const json& v, const std::string& ptr, const Index& idx) {
-    const std::string& t = s.info.type;
-    bool ok = true;
-    if (t == "number" || t == "integer") {
-      ok = number_ok(s, v, t == "integer", ptr);
-    } else if (t == "bool") {
-      if (!v.is_boolean()) ok = false, problem(ptr, dump(v) + " has the wrong type; expected true or false");
-    } else if (t == "string") {
-      if (!v.is_string()) {
-        ok = false, problem(ptr, dump(v) + " has the wrong type; expected a string" +
-                                     (s.choices.empty() ? "" : ": " + s.info.range));
-      } else if (!s.choices.empty() &&
-                 std::find(s.choices.begin(), s.choices.end(), v.get<std::string>()) == s.choices.end()) {
-        ok = false, problem(ptr, dump(v) + " is not allowed; expected one of: " + s.info.range);
-      }
-    } else if (t == "vec2" || t == "vec3" || t == "ivec3" || (t == "period" && v.is_array())) {
-      const size_t n = t == "vec2" ? 2 : 3;
-      const bool ints = t == "ivec3" || t == "period";
-      if (!v.is_array() || v.size() != n) {
-        ok = false, problem(ptr, dump(v) + " has the wrong type; expected an array of " + std::to_string(n) + " " +
-                                     (ints ? "integers" : "numbers") + ", each " + s.info.range);
-      } else {
-        for (size_t a = 0; a < n && ok; ++a) ok = number_ok(s, v[a], ints, ptr + "/" + std::to_string(a));
-      }
-    } else if (t == "period") {
-      ok = number_ok(s, v, true, ptr);
-    } else if (t == "array") {
-      if (!v.is_array()) ok = false, problem(ptr, dump(v) + " has the wrong type; expected a list");
-    } else if (t == "object") {
-      if (!v.is_object()) {
-        ok = false, problem(ptr, dump(v) + " has the wrong type; expected an object of KEY: value");
-      } else {
-        for (auto& [k, val] : v.items()) {
-          const bool name_ok = !k.empty() && k.size() <= 64 &&
-                               std::all_of(k.begin(), k.end(), [](char c) { return std::islower((unsigned char)c) || std::isdigit((unsigned char)c) || c == '_'; });
-          if (!name_ok) ok = false, problem(ptr + "/" + k, "not a setting name (lower-case letters, digits, _)");
-          else if (!(val.is_number() || val.is_boolean() || val.is_string()))
-            ok = false, problem(ptr + "/" + k, dump(val) + " has the wrong type; expected a number, true/false or a string");
-        }
-      }
-    }
-    if (!ok) return;
-    s.set(p, v, idx);
-    if (t == "array")
-      for (size_t i = 0; i < v.size(); ++i) {
-        Index sub = idx;
-        sub.push_back(i);
-        if (!v[i].is_object()) {
-          problem(ptr + "/" + std::to_string(i), "expected an object");
-          continue;
-        }
-        // List elements start from the element defaults of the table.
-        for (const Spec& es : table())
-          if (es.info.pointer.rfind(s.info.pointer + "/*/", 0) == 0) es.set(p, json::parse(es.info.default_value), sub);
-        walk(p, v[i], ptr + "/" + std::to_string(i), s.info.pointer + "/*", sub);
-      }
-  }
-
   std::string source_;
-  std::map<std::string, const Spec*> specs_;
-  std::set<std::string> containers_;
   std::vector<std::string> problems_;
 };
 
@@ -520,13 +386,14 @@ const char* height_profile_name(HeightProfile h) {
 
 Preset::Preset() {
   for (const Spec& s : table())
-    if (s.info.pointer.find('*') == std::string::npos) s.set(*this, json::parse(s.info.default_value), {});
+    if (s.field.name.find('*') == std::string::npos) s.set(*this, json::parse(s.field.default_value), {});
 }
 
 const std::vector<ParamInfo>& params() {
   static const std::vector<ParamInfo> infos = [] {
     std::vector<ParamInfo> v;
-    for (const Spec& s : table()) v.push_back(s.info);
+    for (const Spec& s : table())
+      v.push_back({s.field.name, s.field.type, s.field.default_value, s.field.range(), s.field.doc});
     return v;
   }();
   return infos;
@@ -547,25 +414,6 @@ std::string params_markdown() {
   return o.str();
 }
 
-noise3d::FractalParams channel_params(const Preset& p, int c) {
-  const Channel& ch = p.channels[c];
-  noise3d::FractalParams f;
-  f.kind = ch.kind;
-  auto derive = [&](int axis) -> uint32_t {
-    if (ch.period[axis]) return ch.period[axis];
-    double v = double(ch.period[0]) * p.resolution[axis] / p.resolution[0];
-    return std::max<uint32_t>(1, uint32_t(std::lround(v)));
-  };
-  f.period = {ch.period[0], derive(1), derive(2)};
-  f.seed = p.seed + ch.seed_offset * 0x9E3779B97F4A7C15ull;
-  f.octaves = ch.octaves;
-  f.gain = ch.gain;
-  f.lacunarity = ch.lacunarity;
-  f.worley_octaves = ch.worley_octaves;
-  f.blend = ch.blend;
-  return f;
-}
-
 Preset parse_preset(const std::string& text, const std::string& source, const std::vector<std::string>& overrides) {
   Reader r(source);
   json doc = parse_json_checked(text, source);
@@ -573,7 +421,7 @@ Preset parse_preset(const std::string& text, const std::string& source, const st
   for (const std::string& ov : overrides) apply_override(doc, ov, r);
   Preset p;  // the table's defaults
   p.source_path = source;
-  r.walk(p, doc, "", "", {});
+  r.walk(p, doc);
   if (r.problems().empty()) cross_checks(p, r);
   if (!r.problems().empty()) {
     std::string all;
@@ -609,16 +457,6 @@ void rescale(Preset& p, uint32_t n) {
   const double f = double(n) / longest;
   for (auto& r : p.resolution) r = std::max<uint32_t>(1, uint32_t(std::lround(r * f)));
   p.voxel_size /= f;
-}
-
-uint64_t memory_estimate(const Preset& p, bool need_detail) {
-  const uint64_t voxels = uint64_t(p.resolution[0]) * p.resolution[1] * p.resolution[2];
-  int channels = 1;
-  if (need_detail)
-    for (int c = 1; c < 4; ++c) channels += p.channels[c].enabled;
-  // Dense float channels + one float scratch of the Perlin-Worley accumulator per brick (small),
-  // plus the OpenVDB tree when exporting (about the size of the active voxels again).
-  return voxels * 4 * (channels + 1);
 }
 
 }  // namespace cloudgen

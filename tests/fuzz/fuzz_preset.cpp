@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <string>
 
+#include "cloudgen/channel.h"
+#include "cloudgen/generate.h"
 #include "cloudgen/preset.h"
 #include "fuzz_common.h"
 

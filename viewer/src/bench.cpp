@@ -11,50 +11,59 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cloudgen/json_checked.h"
+#include "cloudgen/schema.h"
 #include "cloudviewer/errors.h"
 #include "internal.h"
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
-#include "cloudgen/json_checked.h"
 #include "cloudgen/output.h"
 #endif
 
 namespace cloudviewer {
 namespace {
 
-// The value as short text for messages (the depth was bounded when the track was parsed).
-std::string shown(const nlohmann::json& j) {
-#ifdef CLOUDVIEWER_HAS_CLOUDGEN
-  return cloudgen::json_excerpt(j);
-#else
-  std::string t = j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
-  return t.size() > 60 ? t.substr(0, 57) + "..." : t;
-#endif
-}
+using cloudgen::check_value;
+using cloudgen::FieldSpec;
+using cloudgen::Schema;
 
-// A number from the track: present, a number, finite and in [lo, hi]; else InputError naming the
-// JSON pointer, the value and the range.
-double number_from(const nlohmann::json& j, const std::string& where, double lo, double hi) {
-  if (!j.is_number()) throw InputError(where + ": expected a number, got " + shown(j));
-  double d = j.get<double>();
-  if (!std::isfinite(d) || d < lo || d > hi) {
-    std::ostringstream os;
-    os << where << ": " << shown(j) << " is out of range [" << lo << ", " << hi << "]";
-    throw InputError(os.str());
-  }
-  return d;
-}
+using nlohmann::json;
 
-glm::dvec3 vec_from(const nlohmann::json& j, const std::string& where, double limit) {
-  if (!j.is_array() || j.size() != 3) throw InputError(where + ": expected [x, y, z] numbers");
-  return glm::dvec3(number_from(j[0], where + "/0", -limit, limit), number_from(j[1], where + "/1", -limit, limit),
-                    number_from(j[2], where + "/2", -limit, limit));
+// The fields of a track file (cloudgen/schema.h): types, ranges and defaults in one table, checked
+// by the checker that reads presets. Positions allow +-1e8 (world metres) here; volume-space
+// tracks are held to kVolumePosition after the walk.
+FieldSpec field(std::string name, std::string type, std::string def, std::string doc, double lo = -1e300,
+                double hi = 1e300, std::vector<std::string> choices = {}, std::string allowed = {}) {
+  FieldSpec f;
+  f.name = std::move(name), f.type = std::move(type), f.default_value = std::move(def), f.doc = std::move(doc);
+  f.lo = lo, f.hi = hi, f.choices = std::move(choices), f.allowed = std::move(allowed);
+  return f;
 }
+const std::string kSets = "list of \"render.KEY=VALUE\" strings";
+const Schema& track_schema() {
+  static const Schema s({
+      field("/description", "string", "\"\"", "What the track is for (not read)."),
+      field("/space", "string", "\"volume\"",
+            "volume: positions in the volume's unit box (tiles in layer mode); world: metres.", 0, 0, {"volume", "world"}),
+      field("/fov", "number", "null", "Vertical field of view, degrees (unset: --fov).", 1, 170),
+      field("/frames_per_segment", "integer", "1", "Frames from one key to the next, the key included.", 1, 1000),
+      field("/sun", "vec2", "null", "[azimuth, elevation] in degrees for every frame (unset: --sun or behind the camera).",
+            -360, 360),
+      field("/keys", "array", "[]", "Key frames, at least one: {name, view, eye, target, set}."),
+      field("/keys/*/name", "string", "null", "Frame name in the CSV (unset: keyN)."),
+      field("/keys/*/view", "string", "null", "View class the summary groups by (unset: the name)."),
+      field("/keys/*/eye", "vec3", "null", "Camera position (required).", -1e8, 1e8),
+      field("/keys/*/target", "vec3", "null", "Point looked at (required).", -1e8, 1e8),
+      field("/keys/*/set", "strings", "[]", "Settings of this key's frames.", 0, 0, {}, kSets),
+      field("/configs", "array", "null", "Configurations, each over the whole track (unset: the built-in list)."),
+      field("/configs/*/name", "string", "\"config\"", "Configuration name in the table."),
+      field("/configs/*/set", "strings", "[]", "Settings of this configuration.", 0, 0, {}, kSets),
+  });
+  return s;
+}
+const FieldSpec kSunElevation = field("/sun/1", "number", "null", "Sun elevation, degrees.", -90, 90);
+const FieldSpec kVolumePosition = field("", "vec3", "null", "A position in volume space (unit boxes).", -1e5, 1e5);
 
-std::string string_from(const nlohmann::json& obj, const char* key, const std::string& fallback, const std::string& where) {
-  if (!obj.contains(key)) return fallback;
-  if (!obj[key].is_string()) throw InputError(where + "/" + key + ": expected a string, got " + shown(obj[key]));
-  return obj[key].get<std::string>();
-}
+glm::dvec3 vec3_of(const json& j) { return glm::dvec3(j[0].get<double>(), j[1].get<double>(), j[2].get<double>()); }
 
 std::vector<Config> default_configs() {
   std::vector<Config> c = {{"baseline", {}},
@@ -70,47 +79,48 @@ std::vector<Config> default_configs() {
 }  // namespace
 
 BenchPlan parse_track(const std::string& text, const std::string& where, const Options& o, const PreparedVolume& vol) {
-#ifdef CLOUDVIEWER_HAS_CLOUDGEN
-  const nlohmann::json track = cloudgen::parse_json_checked(text, where);  // bounded depth, no duplicate keys
-#else
-  nlohmann::json track;
-  try {
-    track = nlohmann::json::parse(text);
-  } catch (const std::exception& e) {
-    throw InputError(where + ": invalid JSON: " + e.what());
-  }
-#endif
-  if (!track.is_object()) throw InputError(where + ": expected a JSON object");
-  std::string space = string_from(track, "space", "volume", where);
-  if (space != "volume" && space != "world")
-    throw InputError(where + ": /space must be \"volume\" (positions in the volume's unit box) or \"world\" (metres)");
-  double fov = track.contains("fov") ? number_from(track["fov"], where + ": /fov", 1, 170) : o.fov;
-  double per_segment_d = track.contains("frames_per_segment")
-                             ? number_from(track["frames_per_segment"], where + ": /frames_per_segment", 1, 1000) : 1;
-  if (per_segment_d != std::floor(per_segment_d)) throw InputError(where + ": /frames_per_segment must be an integer 1..1000");
-  int per_segment = int(per_segment_d);
-  // Volume space counts unit boxes (tiles in layer mode); world space is metres.
-  const double limit = space == "volume" ? 1e5 : 1e8;
+  const json track = cloudgen::parse_json_checked(text, where);  // bounded depth, no duplicate keys
+  // Every field against the table, every problem of the file at once ("<file>: <pointer>: <what>").
+  std::vector<std::string> problems;
+  auto problem = [&](const std::string& ptr, const std::string& what) { problems.push_back(where + ": " + ptr + ": " + what); };
+  auto refuse_if_any = [&] {
+    if (problems.empty()) return;
+    std::string all;
+    for (const std::string& m : problems) all += (all.empty() ? "" : "\n") + m;
+    throw InputError(all);
+  };
+  track_schema().walk(track, problem);
+  refuse_if_any();
+  if (!track.contains("keys") || track["keys"].empty())
+    problem("/keys", "missing or empty; expected a list of at least one {name, view, eye, target, set}");
+  const std::string space = track.value("space", "volume");
+  for (size_t i = 0; track.contains("keys") && i < track["keys"].size(); ++i)
+    for (const char* f : {"eye", "target"}) {
+      const std::string ptr = "/keys/" + std::to_string(i) + "/" + f;
+      if (!track["keys"][i].contains(f))
+        problem(ptr, "missing; expected an array of 3 numbers, each " + track_schema().find("/keys/*/eye")->range());
+      else if (space == "volume") check_value(kVolumePosition, track["keys"][i][f], ptr, problem);
+    }
+  if (track.contains("sun")) check_value(kSunElevation, track["sun"][1], "/sun/1", problem);
+  refuse_if_any();
+
+  const double fov = track.contains("fov") ? track["fov"].get<double>() : o.fov;
+  const int per_segment = int(track.value("frames_per_segment", 1.0));
   auto to_world = [&](const glm::dvec3& p) { return space == "volume" ? volume_space_to_world(vol, o.settings, p) : p; };
-  if (!track.contains("keys") || !track["keys"].is_array() || track["keys"].empty())
-    throw InputError(where + ": /keys must be a non-empty array of {name, view, eye, target}");
   std::vector<TrackFrame> keys;
   for (size_t i = 0; i < track["keys"].size(); ++i) {
-    const auto& k = track["keys"][i];
-    std::string p = where + ": /keys/" + std::to_string(i);
+    const json& k = track["keys"][i];
+    const std::string p = where + ": /keys/" + std::to_string(i);
     TrackFrame f;
-    if (!k.is_object()) throw InputError(p + ": expected {name, view, eye, target}");
-    f.name = string_from(k, "name", "key" + std::to_string(i), p);
-    f.view = string_from(k, "view", f.name, p);
-    f.camera.eye = to_world(vec_from(k.value("eye", nlohmann::json()), p + "/eye", limit));
-    f.camera.target = to_world(vec_from(k.value("target", nlohmann::json()), p + "/target", limit));
+    f.name = k.contains("name") ? k["name"].get<std::string>() : "key" + std::to_string(i);
+    f.view = k.contains("view") ? k["view"].get<std::string>() : f.name;
+    f.camera.eye = to_world(vec3_of(k["eye"]));
+    f.camera.target = to_world(vec3_of(k["target"]));
     if (glm::length(f.camera.target - f.camera.eye) < 1e-6) throw InputError(p + ": eye and target coincide");
     f.camera.fov_y_deg = fov;
     // A view may need its own settings (the issue's view from below marches at most 2133 m).
-    nlohmann::json sets = k.value("set", nlohmann::json::array());
-    if (!sets.is_array()) throw InputError(p + "/set: expected an array of \"render.KEY=VALUE\" strings");
+    const json sets = k.value("set", json::array());
     for (size_t si = 0; si < sets.size(); ++si) {
-      if (!sets[si].is_string()) throw InputError(p + "/set/" + std::to_string(si) + ": expected a string");
       RenderSettings check = o.settings;
       try {
         apply_setting(check, sets[si].get<std::string>());  // a bad key fails here, before OpenGL
@@ -139,18 +149,9 @@ BenchPlan parse_track(const std::string& text, const std::string& where, const O
   }
   std::vector<Config> configs;
   if (track.contains("configs")) {
-    if (!track["configs"].is_array()) throw InputError(where + ": /configs must be an array of {name, set}");
-    for (size_t ci = 0; ci < track["configs"].size(); ++ci) {
-      const auto& c = track["configs"][ci];
-      std::string p = where + ": /configs/" + std::to_string(ci);
-      if (!c.is_object()) throw InputError(p + ": expected {name, set}");
-      Config cfg{string_from(c, "name", "config", p), {}};
-      nlohmann::json sets = c.value("set", nlohmann::json::array());
-      if (!sets.is_array()) throw InputError(p + "/set: expected an array of \"render.KEY=VALUE\" strings");
-      for (size_t si = 0; si < sets.size(); ++si) {
-        if (!sets[si].is_string()) throw InputError(p + "/set/" + std::to_string(si) + ": expected a string");
-        cfg.sets.push_back(sets[si].get<std::string>());
-      }
+    for (const json& c : track["configs"]) {
+      Config cfg{c.value("name", "config"), {}};
+      for (const json& a : c.value("set", json::array())) cfg.sets.push_back(a.get<std::string>());
       configs.push_back(cfg);
     }
   } else {
@@ -158,13 +159,7 @@ BenchPlan parse_track(const std::string& text, const std::string& where, const O
   }
   Sun fixed_sun;
   bool has_sun = track.contains("sun");
-  (void)fixed_sun;
-  if (has_sun) {
-    glm::dvec3 s(0.0);
-    const auto& j = track["sun"];
-    if (!j.is_array() || j.size() != 2) throw InputError(where + ": /sun must be [azimuth, elevation]");
-    fixed_sun = Sun{number_from(j[0], where + ": /sun/0", -360, 360), number_from(j[1], where + ": /sun/1", -90, 90)};
-  }
+  if (has_sun) fixed_sun = Sun{track["sun"][0].get<double>(), track["sun"][1].get<double>()};
   if (o.sun) fixed_sun = *o.sun, has_sun = true;
 
   std::vector<RenderSettings> settings;

@@ -127,6 +127,10 @@ std::vector<Tower> resolve_towers(const Preset& p);
 
 Volume generate(const Preset& p, const GenerateOptions& opt = {}, GenerateStats* stats = nullptr);
 
+/// Peak memory estimate of generate(p) in bytes, with the detail channels when `need_detail`
+/// (what --max-memory and the viewer's budget compare against).
+uint64_t memory_estimate(const Preset& p, bool need_detail);
+
 /// Loads, validates and generates a preset file (what the viewer calls for .json inputs).
 Volume generate_from_file(const std::string& preset_path, const std::vector<std::string>& set_overrides = {},
                           int threads = 0);

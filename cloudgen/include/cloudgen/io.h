@@ -11,6 +11,7 @@
 
 #include "cloudgen/export_options.h"
 #include "cloudgen/output.h"
+#include "cloudgen/printable.h"
 #include "cloudgen/volume.h"
 
 namespace cloudgen {
@@ -76,9 +77,5 @@ std::string describe_vdb(const std::string& path);
 
 /// Packs the four channels into texels (x fastest). Detail channels absent in v are 0.
 std::vector<uint8_t> pack_texels(const Volume& v, Texel t);
-
-/// `s` with control characters (and, unless keep_newlines, newlines) written as \xNN, so text
-/// from a file or preset cannot forge terminal lines or escape sequences.
-std::string printable(const std::string& s, bool keep_newlines = false);
 
 }  // namespace cloudgen

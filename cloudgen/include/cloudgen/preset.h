@@ -118,10 +118,4 @@ std::vector<std::string> check_preset(const std::string& path, const std::vector
 /// Rescales so the longest axis has n voxels, keeping proportions and world size.
 void rescale(Preset& p, uint32_t n);
 
-/// Peak memory estimate of generating p (bytes).
-uint64_t memory_estimate(const Preset& p, bool need_detail);
-
-/// The noise parameters of a channel as used by the generator (periods resolved).
-noise3d::FractalParams channel_params(const Preset& p, int channel);
-
 }  // namespace cloudgen

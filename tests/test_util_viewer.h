@@ -1,0 +1,62 @@
+// Helpers shared by the viewer's test files (beside test_util.h, which the cloudgen-only build
+// uses without the viewer): the one headless GL context, a GL render of a frame, render settings
+// from key=value strings, the default framing, and `cloudviewer ARGS` run in process.
+#pragma once
+
+#include <initializer_list>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cloudviewer/app.h"
+#include "cloudviewer/renderer.h"
+#include "cloudviewer/scene.h"
+#include "cloudviewer/settings.h"
+#include "test_util.h"
+
+namespace testutil {
+
+/// The test binary's one headless context (EGL), made current. A failure to create it throws
+/// (GlError): a failure, not a skip, since CI runs on this kind of machine.
+inline cloudviewer::HeadlessContext& gl_context() {
+  static std::unique_ptr<cloudviewer::HeadlessContext> ctx = std::make_unique<cloudviewer::HeadlessContext>();
+  ctx->make_current();
+  return *ctx;
+}
+
+/// One frame of `vol` through a fresh GL renderer, read back.
+inline cloudviewer::FrameImages render_gl(const cloudviewer::PreparedVolume& vol, const cloudviewer::FrameSetup& f) {
+  gl_context();
+  cloudviewer::GlRenderer r{cloudviewer::ShaderSource()};
+  r.set_volume(vol);
+  r.render(f);
+  return r.read_back();
+}
+
+/// Default render settings with each "render.key=value" applied in order.
+inline cloudviewer::RenderSettings with(std::initializer_list<const char*> sets) {
+  cloudviewer::RenderSettings s;
+  for (const char* a : sets) cloudviewer::apply_setting(s, a);
+  return s;
+}
+
+/// A w x h frame from the default camera (60 degrees) and the default sun.
+inline cloudviewer::FrameSetup frame_for(const cloudviewer::PreparedVolume& vol, const cloudviewer::RenderSettings& s,
+                                         int w = 160, int h = 90) {
+  cloudviewer::Camera cam = cloudviewer::default_camera(vol, 60, double(w) / h);
+  return cloudviewer::make_frame(vol, s, cam, cloudviewer::default_sun(cam), w, h);
+}
+
+/// `cloudviewer ARGS` in process (cloudviewer::run_cli); returns the exit code, and what it wrote
+/// to stderr and stdout when asked.
+inline int run(std::vector<std::string> args, std::string* err_text = nullptr, std::string* out_text = nullptr) {
+  args.insert(args.begin(), "cloudviewer");
+  std::ostringstream out, err;
+  const int code = cloudviewer::run_cli(args, out, err);
+  if (err_text) *err_text = err.str();
+  if (out_text) *out_text = out.str();
+  return code;
+}
+
+}  // namespace testutil
