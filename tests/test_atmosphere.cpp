@@ -18,17 +18,15 @@
 #include "cloudviewer/renderer.h"
 #include "cloudviewer/scene.h"
 #include "cloudviewer/settings.h"
+#include "test_util_viewer.h"
 
 namespace fs = std::filesystem;
 using namespace cloudviewer;
 
 namespace {
 
-HeadlessContext& gl_context() {
-  static std::unique_ptr<HeadlessContext> ctx = std::make_unique<HeadlessContext>();
-  ctx->make_current();
-  return *ctx;
-}
+using testutil::gl_context;
+using testutil::run;
 
 AtmosphereSettings with(std::initializer_list<const char*> sets) {
   RenderSettings s;
@@ -36,14 +34,6 @@ AtmosphereSettings with(std::initializer_list<const char*> sets) {
   return s.atmosphere;
 }
 
-int run(std::vector<std::string> args, std::string* out_text = nullptr, std::string* err_text = nullptr) {
-  args.insert(args.begin(), "cloudviewer");
-  std::ostringstream out, err;
-  int code = run_cli(args, out, err);
-  if (out_text) *out_text = out.str();
-  if (err_text) *err_text = err.str();
-  return code;
-}
 
 // Independent of atmosphere.glsl: the ray in Cartesian coordinates, its exit through the top
 // sphere from the quadratic, the altitude as |p| - bottom, and composite Simpson with n intervals.
@@ -228,10 +218,10 @@ TEST(Atmosphere, ParametersAreSettableAndCheckedWithClearErrors) {
   EXPECT_THROW(validate_atmosphere(with({"atmosphere.ozone_peak=50000"})), InputError);
   EXPECT_THROW(validate_atmosphere(with({"atmosphere.mie_scattering=5e-6"})), InputError);
   std::string out;
-  ASSERT_EQ(run({"--help-params"}, &out), 0);
+  ASSERT_EQ(run({"--help-params"}, nullptr, &out), 0);
   EXPECT_NE(out.find("mie_g (float, [-0.999, 0.999], default 0.8)"), std::string::npos);
   std::string err;
-  EXPECT_EQ(run({"--dump-lut", "transmittance", "--out", "x.csv", "--set", "atmosphere.top_radius=6000e3"}, &out, &err), 1);
+  EXPECT_EQ(run({"--dump-lut", "transmittance", "--out", "x.csv", "--set", "atmosphere.top_radius=6000e3"}, &err, &out), 1);
   EXPECT_NE(err.find("atmosphere.top_radius"), std::string::npos) << err;
 }
 

@@ -9,7 +9,9 @@
 
 #include <algorithm>
 
+#include "cloudgen/motion.h"
 #include "cloudgen/scale.h"
+#include "cloudgen/view.h"
 #include "vdb_internal.h"
 
 namespace cloudgen {
@@ -20,6 +22,11 @@ struct VdbAssembler::Impl {
   openvdb::GridPtrVec grids;                        // as write_vdb orders them
   std::array<openvdb::FloatGrid::Ptr, 4> channel;   // density, detail g/b/a (null when not written)
   bool pruned = false;
+  // export.vdb.bake_erosion: bricks arrive with their detail channels and leave eroded density,
+  // as export_grids bakes the dense volume (the same eroded_density, the same height box).
+  bool bake = false;
+  double erosion = 0;           // the look's erosion (recorded as erosion_baked)
+  double box_y0 = 0, box_ny = 1;  // the height box in the header's voxels
 };
 
 VdbAssembler::VdbAssembler(const Volume& header, const std::array<bool, 3>& detail, const ExportOptions& o)
@@ -34,9 +41,20 @@ VdbAssembler::VdbAssembler(const Volume& header, const std::array<bool, 3>& deta
   impl_->grids = vdb::make_empty_grids(marks, o);
   impl_->channel[0] = openvdb::gridPtrCast<openvdb::FloatGrid>(impl_->grids[0]);
   size_t g = 1;
-  if (o.vdb_detail)
+  if (o.vdb_detail && !o.vdb_bake_erosion)
     for (int c = 0; c < 3; ++c)
       if (detail[c]) impl_->channel[c + 1] = openvdb::gridPtrCast<openvdb::FloatGrid>(impl_->grids[g++]);
+  const bool all_detail = detail[0] && detail[1] && detail[2];
+  const Look look = look_of_view(view_of_metadata(header.metadata, "the assembled VDB"), "the assembled VDB");
+  impl_->erosion = all_detail ? look.erosion : 0.0;
+  if (o.vdb_bake_erosion && all_detail && look.erosion > 0) {
+    double min_y = 0, height = 0;
+    if (!motion_height_box(header.metadata, min_y, height))
+      throw std::logic_error("VdbAssembler: the volume header records no height box (motion.box_min_y)");
+    impl_->bake = true;
+    impl_->box_y0 = (min_y - header.origin[1]) / header.voxel_size;
+    impl_->box_ny = height / header.voxel_size;
+  }
 }
 
 VdbAssembler::~VdbAssembler() = default;
@@ -44,6 +62,19 @@ VdbAssembler::~VdbAssembler() = default;
 void VdbAssembler::add(const std::array<uint32_t, 3>& lo, const std::array<uint32_t, 3>& hi, const float* density,
                        const std::array<const float*, 3>& detail) {
   const float* src[4] = {density, detail[0], detail[1], detail[2]};
+  std::vector<float> baked;
+  if (impl_->bake && density) {
+    if (!detail[0] || !detail[1] || !detail[2])
+      throw std::logic_error("VdbAssembler::add: baking the erosion needs the brick's three detail channels");
+    baked.resize(size_t(hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]));
+    size_t k = 0;
+    for (uint32_t z = lo[2]; z < hi[2]; ++z)
+      for (uint32_t y = lo[1]; y < hi[1]; ++y)
+        for (uint32_t x = lo[0]; x < hi[0]; ++x, ++k)
+          baked[k] = float(eroded_density(density[k], detail[0][k], detail[1][k], detail[2][k],
+                                          (double(y) - impl_->box_y0 + 0.5) / impl_->box_ny, impl_->erosion));
+    src[0] = baked.data();
+  }
   // The channels are separate grids, so they are filled in parallel.
   tbb::parallel_for(0, 4, [&](int c) {
     if (!impl_->channel[c] || !src[c]) return;
@@ -108,7 +139,9 @@ void VdbAssembler::write(const std::string& path) {
     for (auto& g : impl_->channel)
       if (g) openvdb::tools::prune(g->tree());
   impl_->pruned = true;
-  vdb::write_grids(impl_->header, impl_->grids, path, impl_->options);
+  OutputBatch batch;
+  vdb::write_grids(impl_->header, impl_->grids, path, impl_->options, batch, impl_->erosion);
+  batch.commit();
 }
 
 uint64_t VdbAssembler::active_voxels() const { return impl_->channel[0]->activeVoxelCount(); }
