@@ -561,6 +561,7 @@ TEST(Export, VdbRoundTripFloatAndHalf) {
   for (bool half : {false, true}) {
     ExportOptions o;
     o.vdb_half = half;
+    o.vdb_bake_erosion = false;  // the detail grid too
     const std::string path = dir / (half ? "h.vdb" : "f.vdb");
     write_vdb(v, path, o);
     Volume r = read_vdb(path);

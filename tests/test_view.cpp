@@ -92,7 +92,9 @@ TEST(BlenderExport, OneVoxelLandsAtItsCentreInBothFrames) {
 TEST(BlenderExport, DetailGridsCoverTheDensityDilatedByOneVoxelExactly) {
   TempDir dir;
   Volume v = generate(load_preset(kPresets + "tiny.json"));
-  write_vdb(v, dir / "t.vdb", {});
+  ExportOptions keep;
+  keep.vdb_bake_erosion = false;  // the detail grids (the default bakes the erosion instead)
+  write_vdb(v, dir / "t.vdb", keep);
   // Read back without cropping: a volume whose density is 1 in the corner voxels keeps the box.
   const Volume r = read_vdb(dir / "t.vdb");
   const int oy = int(std::lround((r.origin[1] - v.origin[1]) / v.voxel_size));
@@ -264,4 +266,10 @@ TEST(BlenderExport, BakedErosionReplacesTheDetailGrids) {
         ++checked;
       }
   EXPECT_GT(lowered, checked / 10) << "erosion lowers density";
+  // The default export bakes (Blender, which reads density only, is the main target).
+  write_vdb(v, dir / "default.vdb", ExportOptions{});
+  const std::string dinfo = describe_vdb(dir / "default.vdb");
+  EXPECT_EQ(dinfo.find("detail_g"), std::string::npos) << dinfo;
+  EXPECT_NE(dinfo.find("erosion_baked: 0.35"), std::string::npos) << dinfo;
+  EXPECT_EQ(read_vdb(dir / "default.vdb").density, r.density);
 }

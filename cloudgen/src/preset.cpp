@@ -198,10 +198,12 @@ std::vector<Spec> build_table() {
       "grid holds extinction per metre (Principled Volume Density 1).",
       [](Preset& p, const json& j, const Index&) { p.export_options.vdb_physical = j.get<std::string>() == "physical"; },
       {"normalized", "physical"});
-  add("/export/vdb/bake_erosion", "bool", "false", 0, 0,
+  add("/export/vdb/bake_erosion", "bool", "true", 0, 0,
       "Apply the viewer's erosion (view.render.erosion, 0.35 by default) to density in the VDB and write no "
-      "detail grids: a file about the size of its density grid, for tools that read density only (Blender's "
-      "Principled Volume); the erosion can no longer be changed at render time.",
+      "detail grids: a file about the size of its density grid that renders eroded in tools that read density "
+      "only (Blender's Principled Volume: the default, Blender being the main target). The erosion can then no "
+      "longer be changed at render time; false keeps the detail grids (on the density's topology dilated by one "
+      "voxel) for the viewer's live erosion and for Houdini.",
       [](Preset& p, const json& j, const Index&) { p.export_options.vdb_bake_erosion = j.get<bool>(); });
   add("/export/raw/format", "string", "\"rgba8\"", 0, 0, "Texel format of raw/KTX2 textures.",
       [](Preset& p, const json& j, const Index&) { p.export_options.texel = parse_texel(j.get<std::string>()); },

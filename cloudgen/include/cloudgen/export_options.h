@@ -37,7 +37,7 @@ struct ExportOptions {
   bool vdb_detail = true;                                  ///< detail channels as extra grids
   char vdb_up = 'z';              ///< 'z': height on +z (Blender), 'y': as in memory (Houdini, Maya)
   bool vdb_physical = false;      ///< density grid holds extinction per metre, not [0, 1]
-  bool vdb_bake_erosion = false;  ///< density = the viewer's eroded density, no detail grids
+  bool vdb_bake_erosion = true;   ///< density = the viewer's eroded density, no detail grids
   Texel texel = Texel::Rgba8;                              ///< raw / KTX2 texel format
 };
 
