@@ -134,6 +134,16 @@ PY
   if $cg merge "$t/plan.json" -o "$tmp/m6.vdb" --resume 2> "$tmp/log" | true; grep -q "tile 0 .*inconsistent: preset_hash" "$tmp/log"; then
     ok "a tile of another seed is found inconsistent (and regenerated with --resume)"
   else fail "seed mismatch not reported: $(cat "$tmp/log")"; fi
+  # Baked tiles (cumulus: the default export bakes its erosion into each tile's density) merge to
+  # the one-process VDB too.
+  i=2; t="$tmp/baked"
+  # shellcheck disable=SC2086
+  $cg plan ${presets[$i]} --tiles 2,2,1 -o "$t/plan.json" 2> "$tmp/log" || fail "plan: $(cat "$tmp/log")"
+  mapfile -t cmds < <(/usr/bin/python3 -c 'import json,sys; [print(t["command"]) for t in json.load(open(sys.argv[1]))["tiles"]]' "$t/plan.json")
+  for c in "${cmds[@]}"; do (PATH="$bin:$PATH"; eval "$c") || fail "tile command failed: $c"; done
+  if $cg merge "$t/plan.json" -o "$tmp/baked.vdb" -q && $eq "$tmp/ref$i.vdb" "$tmp/baked.vdb"; then
+    ok "plan + 4 baked tiles + merge equals the one-process VDB"
+  else fail "baked tiles + merge differ from the one-process VDB"; fi
 fi
 
 echo "$fails failure(s)"
