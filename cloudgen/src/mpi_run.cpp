@@ -286,7 +286,7 @@ Result generate_vdb(const Preset& p, const GenerateOptions& go, const ExportOpti
       }
       res.per_rank.push_back(s);
     }
-    res.active_voxels = out->active_voxels();
+    res.active_voxels = out->generated_voxels();
     res.insert_seconds = g_insert_seconds;
     for (const std::string& o : outputs) out->write(o);
     res.write_seconds = since(t0);

@@ -27,6 +27,7 @@ struct VdbAssembler::Impl {
   bool bake = false;
   double erosion = 0;           // the look's erosion (recorded as erosion_baked)
   double box_y0 = 0, box_ny = 1;  // the height box in the header's voxels
+  uint64_t generated = 0;         // voxels of density > 0 added by add(), before any baking
 };
 
 VdbAssembler::VdbAssembler(const Volume& header, const std::array<bool, 3>& detail, const ExportOptions& o)
@@ -62,6 +63,10 @@ VdbAssembler::~VdbAssembler() = default;
 void VdbAssembler::add(const std::array<uint32_t, 3>& lo, const std::array<uint32_t, 3>& hi, const float* density,
                        const std::array<const float*, 3>& detail) {
   const float* src[4] = {density, detail[0], detail[1], detail[2]};
+  if (density) {
+    const size_t count = size_t(hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+    impl_->generated += uint64_t(std::count_if(density, density + count, [](float d) { return d > 0; }));
+  }
   std::vector<float> baked;
   if (impl_->bake && density) {
     if (!detail[0] || !detail[1] || !detail[2])
@@ -145,6 +150,7 @@ void VdbAssembler::write(const std::string& path) {
 }
 
 uint64_t VdbAssembler::active_voxels() const { return impl_->channel[0]->activeVoxelCount(); }
+uint64_t VdbAssembler::generated_voxels() const { return impl_->generated; }
 
 std::string VdbHeader::meta(const std::string& key) const {
   for (const auto& [k, v] : metadata)

@@ -36,8 +36,11 @@ class VdbAssembler {
   void add_vdb(const std::string& path, const std::array<uint32_t, 3>& offset);
   /// Prunes and writes the VDB atomically (may be called for several paths).
   void write(const std::string& path);
-  /// Active voxels of the density grid so far.
+  /// Active voxels of the density grid so far (after baking the erosion, when it is baked).
   uint64_t active_voxels() const;
+  /// Voxels of density > 0 that add() received, before any baking: the count the one-process
+  /// run's --stats reports as active.
+  uint64_t generated_voxels() const;
 
  private:
   struct Impl;
