@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include "cloudgen/phase.h"
 #include "cloudviewer/app.h"
 #include "cloudviewer/errors.h"
 #include "cloudviewer/image.h"
@@ -108,6 +109,36 @@ TEST(ViewerMath, MieTableFromAFileIsResampledAndNormalised) {
     EXPECT_NE(std::string(e.what()).find("bad_mie.txt:2"), std::string::npos) << e.what();
   }
   load_mie_table("");
+}
+
+// The Mie table is cloudgen's Lorenz-Mie result (550 nm, default droplets) and render.phase=mie
+// reads it in log space: at a table entry the phase is the entry, halfway between two it is their
+// geometric mean (linear interpolation would give the arithmetic mean, far above it next to the
+// forward peak), the whole integrates to 1 over the sphere, and the forward peak stands ~1e4 above
+// the side (MieTableHasForwardPeakFogbowAndGlory checks the rest of its shape).
+TEST(ViewerMath, MieTableIsCloudgensSolutionInterpolatedInLogSpace) {
+  load_mie_table("");
+  const std::vector<float>& t = mie_phase_table();
+  ASSERT_EQ(t.size(), size_t(CV_MIE_TABLE_SIZE));
+  std::vector<double> angles(t.size());
+  for (size_t j = 0; j < t.size(); ++j) angles[j] = 180.0 * double(j) / double(t.size() - 1);
+  const cloudgen::phase::BulkPhase ref = cloudgen::phase::mie_population({}, 550.0, angles);
+  for (size_t j : {size_t(0), size_t(10), size_t(548), size_t(1400), size_t(1800)})  // one solver: the same shape
+    EXPECT_NEAR(t[j] / t[900], ref.value[j] / ref.value[900], 1e-5 * ref.value[j] / ref.value[900]) << j;
+  auto phase_at = [](double deg) { return reference_phase(PhaseMode::Mie, 0, std::cos(deg * M_PI / 180)); };
+  for (int j : {0, 3, 40, 1399}) {
+    const double a = t[size_t(j)], b = t[size_t(j) + 1];
+    EXPECT_NEAR(phase_at(j * 0.1), a, 1e-5 * a) << j;
+    EXPECT_NEAR(phase_at((j + 0.5) * 0.1), std::sqrt(a * b), 1e-5 * std::sqrt(a * b)) << j;
+  }
+  double integral = 0;  // midpoint rule in theta, 20 points per table step
+  for (int k = 0; k < 36000; ++k) {
+    const double th = (k + 0.5) * M_PI / 36000;
+    integral += phase_at(th * 180 / M_PI) * std::sin(th) * (M_PI / 36000);
+  }
+  EXPECT_NEAR(2 * M_PI * integral, 1.0, 2e-3);
+  EXPECT_GT(t[0] / t[900], 1e4);
+  std::cout << "Mie table: forward " << t[0] << "/sr, side (90) " << t[900] << ", back " << t[1800] << "\n";
 }
 
 TEST(ViewerSettings, SetParsesAndRejectsWithTheAllowedValues) {

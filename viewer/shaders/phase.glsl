@@ -13,15 +13,18 @@ Number phase_hg(Number cos_theta, Number g) {
 
 Number phase_isotropic() { return 1.0 / (4.0 * CV_PI); }
 
-// Table over theta = 0..pi in `mie_table_size` equal steps, linear interpolation, already
-// normalised to integrate to 1 over the sphere. Interpolated by hand on both sides so the GPU and
-// the CPU agree to float precision.
+// Table over theta = 0..pi in `mie_table_size` equal steps, interpolated in log space (the
+// forward peak is ~3e5 times the side value: linear interpolation would overshoot between the
+// steep entries next to it), already normalised to integrate to 1 over the sphere under this
+// interpolant (src/mie.cpp). By hand on both sides so the GPU and the CPU agree to float precision.
 Number phase_mie(Number cos_theta) {
   int n = int(u_cloud.mie_table_size);
   Number x = acos(clamp(cos_theta, -1.0, 1.0)) / CV_PI * Number(n - 1);
   int i = min(int(floor(x)), n - 2);
   Number f = x - Number(i);
-  return mix(mie_table_value(i), mie_table_value(i + 1), f);
+  Number a = log(max(mie_table_value(i), 1e-30));
+  Number b = log(max(mie_table_value(i + 1), 1e-30));
+  return exp(mix(a, b, f));
 }
 
 Number phase_function(Number cos_theta) {
