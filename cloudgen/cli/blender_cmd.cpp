@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <array>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -32,7 +33,7 @@ struct BlenderArgs {
   std::string input, output, render, size = "640x360";
   std::vector<std::string> sets;
   int samples = 64;
-  int volume_bounces = 0;  ///< single scattering, like the viewer's march (docs/blender.md)
+  int volume_bounces = 4;  ///< multiple scattering, as the viewer's octaves approximate it (docs/blender.md)
   bool quiet = false;
   std::string frames;  ///< a VDB sequence (input with a # run): its frames A:B
   int64_t render_frame = -1;  ///< the frame --render renders (default: the first)
@@ -164,7 +165,47 @@ void run_blender(const BlenderArgs& a) {
   const double extinction = look.extinction(info.voxel_size);
   if (physical) grid_scale = extinction;
 
+  char tmpl[] = "/tmp/cloudgen-blender-XXXXXX";
+  if (!::mkdtemp(tmpl)) throw IoError("cannot create a temporary folder in /tmp");
+  const fs::path work(tmpl);
+  struct Cleanup {
+    fs::path p;
+    ~Cleanup() {
+      std::error_code ec;
+      fs::remove_all(p, ec);
+    }
+  } cleanup{work};
+
   using nlohmann::json;
+  // The viewer's lighting of its default view (its precomputed sky colours the sun and the ambient
+  // light), asked of the cloudviewer built beside this cloudgen; without one, the analytic sky's
+  // constants below (what the viewer shows with render.sky=analytic).
+  std::array<double, 3> sun_color{kSunColor[0], kSunColor[1], kSunColor[2]};
+  std::array<double, 3> ambient{kAmbientColor[0] * look.ambient, kAmbientColor[1] * look.ambient,
+                                kAmbientColor[2] * look.ambient};
+  std::string lighting = "the analytic sky's constants (no cloudviewer beside cloudgen)";
+  {
+    std::error_code ec;
+    const fs::path viewer = fs::read_symlink("/proc/self/exe", ec).parent_path() / "cloudviewer";
+    if (!ec && ::access(viewer.c_str(), X_OK) == 0) {
+      const std::string lj = (work / "lighting.json").string(), llog = (work / "lighting.log").string();
+      std::vector<std::string> args{viewer.string(), vdb, "--lighting-json", lj, "--size",
+                                    std::to_string(width) + "x" + std::to_string(height)};
+      if (run_logged(args, llog) != 0)
+        throw IoError(viewer.string() + " --lighting-json failed on " + vdb + "; its last lines:\n" + tail_of(llog, 8));
+      std::ifstream in(lj);
+      const json l = json::parse(in, nullptr, false);
+      if (l.is_discarded() || !l.contains("sun_color") || !l.contains("ambient_above"))
+        throw IoError(viewer.string() + " --lighting-json wrote no usable " + lj);
+      const double scale = l.value("ambient_scale", look.ambient);
+      for (int i = 0; i < 3; ++i) {
+        sun_color[size_t(i)] = l["sun_color"][size_t(i)].get<double>();
+        ambient[size_t(i)] = l["ambient_above"][size_t(i)].get<double>() * scale;
+      }
+      lighting = "cloudviewer's " + l.value("sky", std::string("?")) + " sky";
+    }
+  }
+  if (!a.quiet) std::fprintf(stderr, "lighting: %s\n", lighting.c_str());
   json s;
   const fs::path blend_abs = fs::absolute(a.output);
   s["vdb"] = fs::absolute(vdb).string();
@@ -182,10 +223,10 @@ void run_blender(const BlenderArgs& a) {
   s["camera"] = {{"eye", zup(cam.eye)}, {"target", zup(cam.target)}, {"fov_y_deg", fov}};
   s["sun"] = {{"direction", zup(sun_direction(az, el))},
               {"strength", look.sun_intensity},
-              {"color", {kSunColor[0], kSunColor[1], kSunColor[2]}}};
+              {"color", {sun_color[0], sun_color[1], sun_color[2]}}};
   json horizon = json::array();
   for (int i = 0; i < 3; ++i) horizon.push_back(kSkyZenith[size_t(i)] + 0.55 * (1.0 - kSkyZenith[size_t(i)]));
-  s["world"] = {{"ambient", {kAmbientColor[0] * look.ambient, kAmbientColor[1] * look.ambient, kAmbientColor[2] * look.ambient}},
+  s["world"] = {{"ambient", {ambient[0], ambient[1], ambient[2]}},
                 {"zenith", {kSkyZenith[0], kSkyZenith[1], kSkyZenith[2]}},
                 {"horizon", horizon}};
   s["ground"] = {{"enabled", look.ground},
@@ -216,16 +257,6 @@ void run_blender(const BlenderArgs& a) {
                  {"volume_step_rate", 1.0},
                  {"volume_max_steps", 1024}};
 
-  char tmpl[] = "/tmp/cloudgen-blender-XXXXXX";
-  if (!::mkdtemp(tmpl)) throw IoError("cannot create a temporary folder in /tmp");
-  const fs::path work(tmpl);
-  struct Cleanup {
-    fs::path p;
-    ~Cleanup() {
-      std::error_code ec;
-      fs::remove_all(p, ec);
-    }
-  } cleanup{work};
   const std::string scene_json = (work / "scene.json").string(), log = (work / "blender.log").string();
 
   auto run = [&](const std::string& tmp_blend, const std::string& tmp_png) {
@@ -271,7 +302,7 @@ void add_blender_command(CLI::App& app, std::function<void()>& run) {
   c->add_option("--render", a->render, "Also render the scene with Cycles into this .png");
   c->add_option("--size", a->size, "Render size WIDTHxHEIGHT (also the camera's aspect; default 640x360)");
   c->add_option("--samples", a->samples, "Cycles samples per pixel (default 64)");
-  c->add_option("--volume-bounces", a->volume_bounces, "Cycles volume bounces (default 0: single scattering like the viewer; 4-16 for brighter, multiply scattered clouds)");
+  c->add_option("--volume-bounces", a->volume_bounces, "Cycles volume bounces (default 4: the viewer's multiple-scattering octaves match 4 bounces' brightness to 2%; 0 = single scattering, 16 = all orders to 1%)");
   c->add_option("--set", a->sets, "Override a preset key, as for generate (preset inputs only)");
   c->add_flag("-q,--quiet", a->quiet, "No progress or summary");
   c->add_option("--frames", a->frames,

@@ -8,7 +8,10 @@
 #include <sstream>
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
+#include "cloudgen/output.h"
+#include "cloudviewer/atmosphere.h"
 #include "cloudviewer/errors.h"
 #include "default_view.h"
 #include "internal.h"
@@ -144,6 +147,41 @@ std::string params_help() {
   return s + atmosphere_params_help() + cloudgen::motion_help();
 }
 
+// --lighting-json: the light the default view of INPUT puts on its cloud, for renderers that must
+// match the preview (cloudgen blender): the sun's direction (world, y up), its colour at the
+// volume's centre (the atmosphere's transmittance with render.sky=precomputed, the constant sun
+// colour with the analytic sky) and intensity, the isotropic ambient from above and below (the
+// marcher mixes them by height) with its scale.
+int write_lighting_json(const Options& o, const std::string& path, std::ostream& out) {
+  const PreparedVolume vol = open_input(o.input, o.settings);
+  const int w = o.width > 0 ? o.width : 320, h = o.height > 0 ? o.height : 180;
+  const Camera cam = resolve_camera(o, vol, w, h);
+  const Sun sun = resolve_sun(o, cam);
+  const FrameSetup f = make_frame(vol, o.settings, cam, sun, w, h);
+  const ref::CloudParams& p = f.params;
+  glm::dvec3 sun_color = p.sun_color;
+  const bool precomputed = o.settings.sky == SkyMode::Precomputed;
+  if (precomputed) {
+    const std::shared_ptr<const AtmosphereLuts> luts = shared_atmosphere_luts(o.settings.atmosphere);
+    const double ground_y = cam.eye.y - p.sky_altitude_m;
+    const double r = o.settings.atmosphere.bottom_radius + std::max(vol.center().y - ground_y, 0.0);
+    sun_color *= luts->sun_transmittance(r, glm::normalize(sun.direction()).y);
+  }
+  auto arr = [](const glm::dvec3& v) { return nlohmann::json::array({v.x, v.y, v.z}); };
+  nlohmann::json j = {{"sky", precomputed ? "precomputed" : "analytic"},
+                      {"sun_direction", arr(glm::normalize(sun.direction()))},
+                      {"sun_color", arr(sun_color)},
+                      {"sun_intensity", p.sun_radiance},
+                      {"ambient_above", arr(p.ambient_color)},
+                      {"ambient_below", arr(p.ambient_below_color)},
+                      {"ambient_scale", p.ambient_scale}};
+  cloudgen::atomic_write(path, [&](const std::string& tmp) {
+    cloudgen::write_file_stream(tmp, [&](std::ostream& os) { os << j.dump(2) << "\n"; });
+  });
+  out << "wrote " << path << "\n";
+  return 0;
+}
+
 // --dump-lut transmittance: the LUT through the shaders' lookup, from the GPU textures (gl) or the
 // double-precision reference (cpu), as `h_m,mu,r,g,b` rows.
 int dump_atmosphere_lut(const Options& o, std::ostream& out) {
@@ -172,6 +210,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   std::string size_text, camera_text, sun_text, time_text;
   bool help_params = false, params_md = false, keys_md = false, atmo_md = false, motion_md = false;
   std::string dump_lut;
+  std::string lighting_json;
   CLI::App app{"cloudviewer: real-time volumetric cloud ray marcher (OpenGL 4.5) with a CPU reference"};
   app.add_option("input", o.input,
                  "volume to view: .vdb, .nvdb, .raw/.json, .ktx2 (cloudgen), a preset .json, or synthetic:sphere|slab|blob|noise");
@@ -184,6 +223,9 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   app.add_option("--set", o.sets, "render.KEY=VALUE, atmosphere.KEY=VALUE or motion.KEY=VALUE (see --help-params)")->take_all();
   app.add_option("--dump-lut", dump_lut, "write an atmosphere LUT read through the shaders' lookup to --out as CSV (no INPUT needed)")
       ->check(CLI::IsMember({"transmittance"}));
+  app.add_option("--lighting-json", lighting_json,
+                 "write the default view's lighting of INPUT as JSON (sun direction and colour at the volume's "
+                 "centre, ambient from above and below; what `cloudgen blender` matches) and exit");
   app.add_option("--out", o.out, "headless output image (.png tone-mapped sRGB, .exr linear HDR); with --frames, a "
                  "printf pattern such as frame_%04d.png writes every frame, a plain name only the last");
   app.add_option("--time", time_text, "the clouds' time in seconds: wind and flow map move them (motion.*, see "
@@ -249,6 +291,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   }
   if (o.bench.empty()) apply_input_view(o, app.count("--fov") > 0);  // the input's preset/metadata view
   if (!time_text.empty()) o.settings.time = parse_numbers("--time", time_text, 1, -1e7, 1e7)[0];
+  if (!lighting_json.empty()) return write_lighting_json(o, lighting_json, out);
   if (!o.headless) return run_window(o, out, err);
   if (o.out.empty() && o.bench.empty()) throw InputError("--headless needs --out FILE or --bench TRACK.json");
   if (!o.out.empty()) {  // fail on a bad extension or pattern before rendering

@@ -345,6 +345,11 @@ glm::dvec3 AtmosphereLuts::to_top(double r, double mu) const {
   return sh.transmittance_to_top(r, mu);
 }
 
+glm::dvec3 AtmosphereLuts::sun_transmittance(double r, double mu_s) const {
+  AtmosphereShader sh{params, &transmittance, &multiple_scattering, &irradiance};
+  return sh.transmittance_to_sun(r, mu_s);
+}
+
 glm::dvec3 AtmosphereLuts::psi_ms(double r, double mu_s) const {
   AtmosphereShader sh{params, &transmittance, &multiple_scattering, &irradiance};
   return sh.multiple_scattering_at(r, mu_s);

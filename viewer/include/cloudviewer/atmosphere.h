@@ -97,6 +97,9 @@ struct AtmosphereLuts {
   glm::dvec3 ground_irradiance(double mu_s) const;
   /// transmittance_to_top(r, mu) of atmosphere.glsl (bilinear by hand); rays that hit the ground: 0.
   glm::dvec3 to_top(double r, double mu) const;
+  /// transmittance_to_sun(r, mu_s) of atmosphere.glsl: the sunlight's transmittance to radius r
+  /// (0 in the Earth's shadow, a smooth set at the horizon).
+  glm::dvec3 sun_transmittance(double r, double mu_s) const;
   /// multiple_scattering_at(r, mu_s) of atmosphere.glsl: Psi_ms for unit solar irradiance.
   glm::dvec3 psi_ms(double r, double mu_s) const;
   /// atmosphere_scattering() of atmosphere.glsl: the sky's radiance from altitude `alt` along unit
