@@ -775,3 +775,43 @@ TEST(Atmosphere, AmbientFromBelowIsTheLitGround) {
   SkyAmbient night = sky_ambient(a, Sun{0, -60}.direction(), 1.0, 0.0);
   EXPECT_LT(night.above.y + night.below.y, 1e-9);
 }
+
+// --lighting-json (what cloudgen blender matches): the default view's sun colour at the volume's
+// centre is the atmosphere's transmittance there (reddened: R > G > B, below 1), the ambient from
+// above is bluer than from below's neutral-ish ground, and with the analytic sky both are the
+// constants.
+TEST(Atmosphere, LightingJsonGivesTheDefaultViewsSunAndAmbient) {
+  const fs::path dir = testutil::test_output_dir("lighting");
+  auto read = [&](const std::vector<std::string>& extra) {
+    std::vector<std::string> args{"synthetic:blob", "--lighting-json", (dir / "l.json").string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    std::string err;
+    EXPECT_EQ(run(args, &err), 0) << err;
+    std::ifstream in(dir / "l.json");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  };
+  auto numbers = [](const std::string& text, const std::string& key) {
+    std::vector<double> v;
+    size_t at = text.find("\"" + key + "\"");
+    EXPECT_NE(at, std::string::npos) << key;
+    at = text.find('[', at);
+    std::stringstream ss(text.substr(at + 1, text.find(']', at) - at - 1));
+    for (std::string x; std::getline(ss, x, ',');) v.push_back(std::stod(x));
+    return v;
+  };
+  const std::string pre = read({});
+  EXPECT_NE(pre.find("\"precomputed\""), std::string::npos) << pre;
+  const std::vector<double> sun = numbers(pre, "sun_color"), above = numbers(pre, "ambient_above"),
+                            below = numbers(pre, "ambient_below");
+  ASSERT_EQ(sun.size(), 3u);
+  EXPECT_LT(sun[0], 1.0);
+  EXPECT_GT(sun[0], sun[1]);
+  EXPECT_GT(sun[1], sun[2]);
+  EXPECT_GT(sun[2], 0.2);
+  EXPECT_GT(above[2] / above[0], below[2] / below[0]);
+  const std::string ana = read({"--set", "render.sky=analytic"});
+  EXPECT_EQ(numbers(ana, "sun_color"), (std::vector<double>{1.0, 0.9599999785423279, 0.8999999761581421}));
+  EXPECT_EQ(numbers(ana, "ambient_above"), numbers(ana, "ambient_below"));
+}
