@@ -815,3 +815,17 @@ TEST(Atmosphere, LightingJsonGivesTheDefaultViewsSunAndAmbient) {
   EXPECT_EQ(numbers(ana, "sun_color"), (std::vector<double>{1.0, 0.9599999785423279, 0.8999999761581421}));
   EXPECT_EQ(numbers(ana, "ambient_above"), numbers(ana, "ambient_below"));
 }
+
+// --stats reports each atmosphere LUT's precompute time, on the GPU (its pass, on the first frame)
+// and on the CPU (the reference's double LUTs), and every pass's GPU time.
+TEST(Atmosphere, StatsReportThePrecomputeTimeOfEachLut) {
+  const fs::path dir = testutil::test_output_dir("lut_stats");
+  std::string out, err;
+  ASSERT_EQ(run({"synthetic:blob", "--headless", "--size", "48x27", "--stats", "--out", (dir / "s.png").string()}, &err,
+                &out),
+            0)
+      << err;
+  for (const char* want : {"gpu: atmosphere LUTs: transmittance ", " multiple_scattering ", " irradiance ",
+                           "cpu: atmosphere LUTs: transmittance ", "gpu passes: atmosphere_transmittance "})
+    EXPECT_NE(out.find(want), std::string::npos) << want << "\n" << out;
+}

@@ -223,6 +223,9 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   app.add_option("--set", o.sets, "render.KEY=VALUE, atmosphere.KEY=VALUE or motion.KEY=VALUE (see --help-params)")->take_all();
   app.add_option("--dump-lut", dump_lut, "write an atmosphere LUT read through the shaders' lookup to --out as CSV (no INPUT needed)")
       ->check(CLI::IsMember({"transmittance"}));
+  app.add_flag("--stats", o.stats,
+               "headless: also print every pass's GPU time and each atmosphere LUT's precompute time (GPU "
+               "pass and CPU reference)");
   app.add_option("--lighting-json", lighting_json,
                  "write the default view's lighting of INPUT as JSON (sun direction and colour at the volume's "
                  "centre, ambient from above and below; what `cloudgen blender` matches) and exit");
@@ -362,6 +365,17 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
           if (p.first.rfind("atmosphere_", 0) == 0) out << " " << p.first.substr(11) << " " << p.second << " ms";
         out << "\n";
       }
+      if (o.stats) {
+        out << label << "gpu passes:";
+        for (const auto& p : t.passes) out << " " << p.first << " " << p.second << " ms;";
+        out << "\n";
+      }
+    }
+    if (o.stats && i == 0 && s.sky == SkyMode::Precomputed) {
+      const std::shared_ptr<const AtmosphereLuts> luts = shared_atmosphere_luts(s.atmosphere);
+      out << "cpu: atmosphere LUTs: transmittance " << luts->seconds[0] * 1e3 << " ms, multiple_scattering "
+          << luts->seconds[1] * 1e3 << " ms, irradiance " << luts->seconds[2] * 1e3
+          << " ms (double; once per atmosphere, for the ambient light and the CPU reference)\n";
     }
     if (!pattern && i + 1 < o.frames) continue;  // a plain --out keeps only the last frame
     ImageStats st = image_stats(img.linear);

@@ -3,6 +3,7 @@
 // headers; Bruneton's reference/functions.cc pattern).
 #include "cloudviewer/atmosphere.h"
 
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <iomanip>
@@ -317,12 +318,19 @@ std::vector<glm::dvec3> multiple_scattering_lookups_at_size(const ref::Atmospher
 AtmosphereLuts compute_atmosphere_luts(const ref::AtmosphereParams& p) {
   AtmosphereLuts luts;
   luts.params = p;
+  auto t0 = std::chrono::steady_clock::now();
+  auto lap = [&](int i) {
+    const auto t1 = std::chrono::steady_clock::now();
+    luts.seconds[size_t(i)] = std::chrono::duration<double>(t1 - t0).count();
+    t0 = t1;
+  };
   luts.transmittance.resize(size_t(CV_TRANSMITTANCE_W) * CV_TRANSMITTANCE_H);
   tbb::parallel_for(0, CV_TRANSMITTANCE_H, [&](int y) {
     AtmosphereShader sh{luts.params};
     for (int x = 0; x < CV_TRANSMITTANCE_W; ++x)
       luts.transmittance[size_t(y) * CV_TRANSMITTANCE_W + size_t(x)] = sh.compute_transmittance_texel(glm::ivec2(x, y));
   });
+  lap(0);
   luts.multiple_scattering.assign(size_t(CV_MS_LUT_SIZE) * CV_MS_LUT_SIZE, glm::dvec3(0.0));
   if (p.scattering_orders > 1.5)
     tbb::parallel_for(0, CV_MS_LUT_SIZE, [&](int y) {
@@ -331,11 +339,13 @@ AtmosphereLuts compute_atmosphere_luts(const ref::AtmosphereParams& p) {
         luts.multiple_scattering[size_t(y) * CV_MS_LUT_SIZE + size_t(x)] =
             sh.compute_multiple_scattering_texel(glm::ivec2(x, y));
     });
+  lap(1);
   luts.irradiance.assign(CV_IRRADIANCE_W, glm::dvec3(0.0));
   tbb::parallel_for(0, CV_IRRADIANCE_W, [&](int x) {
     AtmosphereShader sh{luts.params, &luts.transmittance, &luts.multiple_scattering, &luts.irradiance};
     luts.irradiance[size_t(x)] = sh.compute_irradiance_texel(x);
   });
+  lap(2);
   return luts;
 }
 

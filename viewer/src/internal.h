@@ -27,6 +27,7 @@ struct Options {
   std::string mie_table;
   std::string bench;
   std::string csv;
+  bool stats = false;  ///< --stats: per-pass GPU times and per-LUT precompute times
   int bench_reference = 0;  ///< CPU reference step count for RMSE columns (0 = none)
   int bench_repeat = 3;
   int frames = 1;           ///< headless: frames to render (--frames)

@@ -3,6 +3,7 @@
 // docs/viewer.md, the std140 block the GL passes read (shaders/atmosphere_params.glsl), and the
 // CPU reference of the LUTs (the shared header shaders/atmosphere.glsl compiled as C++ in double).
 #pragma once
+#include <array>
 #include <functional>
 #include <memory>
 #include <string>
@@ -92,6 +93,9 @@ struct AtmosphereLuts {
   std::vector<glm::dvec3> transmittance;
   std::vector<glm::dvec3> multiple_scattering;
   std::vector<glm::dvec3> irradiance;
+  /// Wall time of each LUT's computation on the CPU (transmittance, multiple scattering, ground
+  /// irradiance), seconds (cloudviewer --stats).
+  std::array<double, 3> seconds{{0, 0, 0}};
   /// ground_sky_irradiance(mu_s) of atmosphere.glsl: the sky's irradiance on the ground for unit
   /// solar irradiance.
   glm::dvec3 ground_irradiance(double mu_s) const;
