@@ -72,6 +72,42 @@ TEST(ViewerMath, PhaseFunctionsIntegrateToOneOverTheSphere) {
   }
 }
 
+// The analytic lobes (render.phase=two-lobe-hg, draine-hg) are cloudgen's (one header,
+// cloudgen/phase_lobes.glsl, compiled by both), integrate to 1, and the GL image equals the CPU
+// reference's with each.
+TEST(ViewerMath, AnalyticLobesAreCloudgensAndIntegrateToOne) {
+  for (const char* d : {"5", "20", "50"}) {
+    RenderSettings s = with({"render.phase=draine-hg", (std::string("render.droplet_diameter=") + d).c_str()});
+    const cloudgen::phase::DraineHgFit fit = cloudgen::phase::draine_hg_fit(std::stod(d));
+    double sum = 0;
+    const int n = 200000;
+    for (int i = 0; i < n; ++i) {
+      const double th = M_PI * (i + 0.5) / n, c = std::cos(th);
+      const double got = reference_phase(s, c);
+      if (i % 997 == 0) EXPECT_DOUBLE_EQ(got, cloudgen::phase::draine_hg(fit, c)) << d;
+      sum += got * std::sin(th) * (M_PI / n);
+    }
+    EXPECT_NEAR(2 * M_PI * sum, 1.0, 2e-3) << "draine-hg d " << d;
+  }
+  RenderSettings t = with({"render.phase=two-lobe-hg", "render.g=0.9", "render.g2=-0.3", "render.lobe_weight=0.97"});
+  double sum = 0, mean_cos = 0;
+  const int n = 200000;
+  for (int i = 0; i < n; ++i) {
+    const double th = M_PI * (i + 0.5) / n, c = std::cos(th), v = reference_phase(t, c);
+    if (i % 997 == 0) EXPECT_DOUBLE_EQ(v, cloudgen::phase::two_lobe_hg(0.9, -0.3, 0.97, c));
+    sum += v * std::sin(th) * (M_PI / n);
+    mean_cos += v * c * std::sin(th) * (M_PI / n);
+  }
+  EXPECT_NEAR(2 * M_PI * sum, 1.0, 2e-3);
+  EXPECT_NEAR(2 * M_PI * mean_cos, 0.97 * 0.9 - 0.03 * 0.3, 2e-3);  // g of a mixture: the weighted mean
+  const PreparedVolume& vol = volume("blob");
+  for (const char* phase : {"render.phase=two-lobe-hg", "render.phase=draine-hg"}) {
+    const FrameSetup f = frame_for(vol, with({phase, "render.exact_filter=true", "render.steps=48"}), 64, 36);
+    const double db = psnr(render_gl(vol, f).display, render_cpu(vol, f).display);
+    EXPECT_GT(db, 45.0) << phase;
+  }
+}
+
 TEST(ViewerMath, MieTableHasForwardPeakFogbowAndGlory) {
   const std::vector<float>& t = mie_phase_table();
   const int n = int(t.size());

@@ -149,26 +149,24 @@ BulkPhase mie_population(const DropletSizes& sz, double wavelength_nm, const std
   return out;
 }
 
-double henyey_greenstein(double g, double c) {
-  return (1 - g * g) / (4 * kPi * std::pow(1 + g * g - 2 * g * c, 1.5));
-}
+namespace lobes {
+using Number = double;
+using std::exp;
+using std::sqrt;
+#include "cloudgen/phase_lobes.glsl"
+}  // namespace lobes
 
-double two_lobe_hg(double g1, double g2, double w, double c) {
-  return w * henyey_greenstein(g1, c) + (1 - w) * henyey_greenstein(g2, c);
-}
+double henyey_greenstein(double g, double c) { return lobes::lobe_hg(g, c); }
 
-double draine(double g, double alpha, double c) {
-  return henyey_greenstein(g, c) * (1 + alpha * c * c) / (1 + alpha * (1 + 2 * g * g) / 3);
-}
+double two_lobe_hg(double g1, double g2, double w, double c) { return lobes::lobe_two_hg(g1, g2, w, c); }
+
+double draine(double g, double alpha, double c) { return lobes::lobe_draine(g, alpha, c); }
 
 DraineHgFit draine_hg_fit(double d) {
   if (!(d >= 5 && d <= 50)) throw InputError("HG+Draine fit: droplet diameter " + std::to_string(d) + " um is outside [5, 50]");
-  return {std::exp(-0.0990567 / (d - 1.67154)), std::exp(-2.20679 / (d + 3.91029) - 0.428934),
-          std::exp(3.62489 - 8.29288 / (d + 5.52825)), std::exp(-0.599085 / (d - 0.641583) - 0.665888)};
+  return {lobes::draine_fit_g_hg(d), lobes::draine_fit_g_d(d), lobes::draine_fit_alpha(d), lobes::draine_fit_w_d(d)};
 }
 
-double draine_hg(const DraineHgFit& f, double c) {
-  return (1 - f.w_d) * henyey_greenstein(f.g_hg, c) + f.w_d * draine(f.g_d, f.alpha, c);
-}
+double draine_hg(const DraineHgFit& f, double c) { return lobes::lobe_draine_hg(f.g_hg, f.g_d, f.alpha, f.w_d, c); }
 
 }  // namespace cloudgen::phase

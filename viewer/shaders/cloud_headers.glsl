@@ -9,6 +9,7 @@
 #include "atmosphere_bindings.glsl"
 #include "common.glsl"
 #include "volume_nanovdb.glsl"
+#include "phase_lobes.glsl"
 #include "phase.glsl"
 #include "cloud_type.glsl"
 #include "motion.glsl"

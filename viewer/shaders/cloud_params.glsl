@@ -104,4 +104,14 @@ struct CloudParams {
   // Ambient light from below (render.sky=precomputed: the ground and the air under the camera's
   // horizon; the analytic sky: = ambient_color). lighting.glsl mixes it with ambient_color by height.
   vec3 ambient_below_color; Number ambient_pad;
+  // Analytic phase lobes (cloudgen/phase_lobes.glsl): two-lobe HG and the HG + Draine fit's
+  // parameters (computed on the host from render.droplet_diameter).
+  Number hg_g2;             // two-lobe-hg: backward lobe asymmetry
+  Number lobe_weight;       // two-lobe-hg: forward lobe weight
+  Number draine_g_hg;       // draine-hg: the HG lobe's asymmetry
+  Number draine_g_d;        // draine-hg: the Draine lobe's asymmetry
+  Number draine_alpha;      // draine-hg: Draine's alpha
+  Number draine_w_d;        // draine-hg: the Draine lobe's weight
+  Number phase_pad0;
+  Number phase_pad1;
 };

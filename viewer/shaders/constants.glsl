@@ -11,6 +11,8 @@
 #define CV_PHASE_NONE 0
 #define CV_PHASE_HG 1
 #define CV_PHASE_MIE 2
+#define CV_PHASE_TWO_LOBE_HG 3   // w HG(g) + (1 - w) HG(g2)
+#define CV_PHASE_DRAINE_HG 4     // Jendersie & d'Eon 2023's HG + Draine fit of droplet diameter d
 // Tone map operator (FrameBlock u_post.y; render.tonemap).
 #define CV_TONEMAP_REINHARD 0
 #define CV_TONEMAP_ACES 1

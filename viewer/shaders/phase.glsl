@@ -2,7 +2,8 @@
 // baseline), Henyey-Greenstein, and a tabulated Mie phase function (R. Hogfeldt, "Convincing Cloud
 // Rendering", 2016). cos_theta is the cosine of the scattering angle between the light's direction
 // of travel and the direction toward the viewer, so cos_theta = 1 is forward scattering: the viewer
-// looking into the sun. Needs constants.glsl, `u_cloud` and mie_table_value(i).
+// looking into the sun. Needs constants.glsl, cloudgen/phase_lobes.glsl (the analytic lobes shared
+// with cloudgen), `u_cloud` and mie_table_value(i).
 
 // Henyey-Greenstein; integrates to 1 over the sphere for |g| < 1.
 Number phase_hg(Number cos_theta, Number g) {
@@ -31,5 +32,8 @@ Number phase_function(Number cos_theta) {
   int mode = int(u_cloud.phase_mode);
   if (mode == CV_PHASE_HG) return phase_hg(cos_theta, u_cloud.hg_g);
   if (mode == CV_PHASE_MIE) return phase_mie(cos_theta);
+  if (mode == CV_PHASE_TWO_LOBE_HG) return lobe_two_hg(u_cloud.hg_g, u_cloud.hg_g2, u_cloud.lobe_weight, cos_theta);
+  if (mode == CV_PHASE_DRAINE_HG)
+    return lobe_draine_hg(u_cloud.draine_g_hg, u_cloud.draine_g_d, u_cloud.draine_alpha, u_cloud.draine_w_d, cos_theta);
   return phase_isotropic();
 }

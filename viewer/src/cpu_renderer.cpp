@@ -140,6 +140,7 @@ struct CpuShader {
 // The list and order of shaders/cloud_headers.glsl (after its GLSL-only bindings), plus post.glsl.
 #include "../shaders/common.glsl"
 #include "../shaders/volume_nanovdb.glsl"
+#include "cloudgen/phase_lobes.glsl"
 #include "../shaders/phase.glsl"
 #include "cloudgen/cloud_type.glsl"
 #include "cloudgen/motion.glsl"
@@ -213,6 +214,15 @@ double reference_light_optical_depth(const PreparedVolume& vol, const ref::Cloud
   CpuShader sh(params, vol, mie_phase_table(), no_lut());
   sh.light_volume = light_volume;
   return light_volume ? sh.light_volume_tau(p) : sh.light_optical_depth(p);
+}
+
+double reference_phase(const RenderSettings& s, double cos_theta) {
+  ref::CloudParams p{};
+  set_phase_params(p, s);
+  p.mie_table_size = double(mie_phase_table().size());
+  PreparedVolume empty;
+  CpuShader sh(p, empty, mie_phase_table(), no_lut());
+  return sh.phase_function(cos_theta);
 }
 
 double reference_phase(PhaseMode mode, double g, double cos_theta) {
@@ -378,14 +388,18 @@ struct Pcg32 {
 };
 
 // Sampling the phase function: HG analytically; the Mie table by the piecewise-constant CDF of
-// p(theta) sin(theta) over its bins, weighted by phase / pdf so the estimate stays unbiased.
+// p(theta) sin(theta) over its bins; the two-lobe HG and the HG + Draine fit by their two HG lobes
+// (Draine's lobe by its HG), each weighted by phase / pdf so the estimate stays unbiased.
 struct PhaseSampler {
   int mode = CV_PHASE_HG;
   double g = 0;
+  double lobe_g[2] = {0, 0}, lobe_w = 1;  // two-lobe proposals: w HG(g0) + (1 - w) HG(g1)
   std::vector<double> cdf;   // Mie: per bin, cumulative probability
   std::vector<double> mass;  // Mie: probability of each bin
   int bins = 0;
   PhaseSampler(const ref::CloudParams& p, const std::vector<float>& mie) : mode(int(p.phase_mode)), g(p.hg_g) {
+    if (mode == CV_PHASE_TWO_LOBE_HG) lobe_g[0] = p.hg_g, lobe_g[1] = p.hg_g2, lobe_w = p.lobe_weight;
+    if (mode == CV_PHASE_DRAINE_HG) lobe_g[0] = p.draine_g_hg, lobe_g[1] = p.draine_g_d, lobe_w = 1 - p.draine_w_d;
     if (mode != CV_PHASE_MIE) return;
     bins = int(mie.size()) - 1;
     double total = 0;
@@ -407,9 +421,17 @@ struct PhaseSampler {
     double u1 = rng.uniform(), u2 = rng.uniform();
     double cos_t;
     weight = 1.0;
+    auto hg_sample = [](double gg, double u) {
+      if (std::abs(gg) <= 1e-4) return 1 - 2 * u;
+      const double q = (1 - gg * gg) / (1 - gg + 2 * gg * u);
+      return std::clamp((1 + gg * gg - q * q) / (2 * gg), -1.0, 1.0);
+    };
     if (mode == CV_PHASE_HG && std::abs(g) > 1e-4) {
-      double q = (1 - g * g) / (1 - g + 2 * g * u1);
-      cos_t = std::clamp((1 + g * g - q * q) / (2 * g), -1.0, 1.0);
+      cos_t = hg_sample(g, u1);
+    } else if (mode == CV_PHASE_TWO_LOBE_HG || mode == CV_PHASE_DRAINE_HG) {
+      cos_t = hg_sample(u1 < lobe_w ? lobe_g[0] : lobe_g[1], rng.uniform());
+      const double pdf = lobe_w * sh.lobe_hg(lobe_g[0], cos_t) + (1 - lobe_w) * sh.lobe_hg(lobe_g[1], cos_t);
+      weight = sh.phase_function(cos_t) / pdf;
     } else if (mode == CV_PHASE_MIE) {
       int i = int(std::lower_bound(cdf.begin(), cdf.end(), u1) - cdf.begin());
       i = std::min(i, bins - 1);

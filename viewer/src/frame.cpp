@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "cloudgen/motion.h"
+#include "cloudgen/phase.h"
 #include "cloudgen/view.h"
 #include "cloudviewer/constants.h"
 #include "cloudviewer/errors.h"
@@ -73,6 +74,17 @@ std::vector<glm::dvec3> motion_table_row(const RenderSettings& s, double t) {
   for (int i = 0; i < CV_MOTION_LUT_SIZE; ++i)
     row[size_t(i)] = cloudgen::motion_displacement(s.motion, t, double(i) / (CV_MOTION_LUT_SIZE - 1));
   return row;
+}
+
+
+void set_phase_params(ref::CloudParams& p, const RenderSettings& s) {
+  p.phase_mode = double(int(s.phase));
+  p.hg_g = s.g;
+  p.hg_g2 = s.g2;
+  p.lobe_weight = s.lobe_weight;
+  // The HG + Draine fit's parameters (cloudgen/phase_lobes.glsl, through cloudgen::phase).
+  const cloudgen::phase::DraineHgFit fit = cloudgen::phase::draine_hg_fit(s.droplet_diameter);
+  p.draine_g_hg = fit.g_hg, p.draine_g_d = fit.g_d, p.draine_alpha = fit.alpha, p.draine_w_d = fit.w_d;
 }
 
 FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const Camera& cam,
@@ -165,8 +177,7 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   p.light_samples = s.light_samples;
   p.light_step_m = s.light_step > 0 ? s.light_step : 2.5 * min_voxel;
   p.light_growth = s.light_growth;
-  p.phase_mode = double(int(s.phase));
-  p.hg_g = s.g;
+  set_phase_params(p, s);
   p.mie_table_size = double(mie_phase_table().size());
   p.powder_strength = s.powder;
   p.ms_octaves = s.ms_octaves;

@@ -92,8 +92,14 @@ std::vector<ParamDef> build() {
   t.push_back(real("light_growth", &RenderSettings::light_growth, 1, 4, "each light step is this many times the previous"));
   t.push_back(boolean("light_volume", &RenderSettings::light_volume, "box mode: look the sun's optical depth up in a precomputed 3D texture (rebuilt when the sun, the volume or a lighting key changes) instead of marching toward the sun per sample"));
   t.push_back(integer("light_volume_scale", &RenderSettings::light_volume_scale, 1, 16, "light volume texels: the volume's voxels divided by this on each axis (doubled until at most 4 M texels)"));
-  t.push_back(enumeration("phase", &RenderSettings::phase, {"none", "hg", "mie"}, "phase function: none (isotropic), Henyey-Greenstein, Mie table"));
-  t.push_back(real("g", &RenderSettings::g, -0.99, 0.99, "Henyey-Greenstein asymmetry"));
+  t.push_back(enumeration("phase", &RenderSettings::phase, {"none", "hg", "mie", "two-lobe-hg", "draine-hg"},
+                          "phase function: none (isotropic), Henyey-Greenstein (render.g), Mie table (cloudgen's "
+                          "Lorenz-Mie solution), two-lobe HG (render.g, g2, lobe_weight), Jendersie & d'Eon's "
+                          "HG + Draine fit (render.droplet_diameter); docs/phase.md compares them"));
+  t.push_back(real("g", &RenderSettings::g, -0.99, 0.99, "Henyey-Greenstein asymmetry (two-lobe-hg: the forward lobe's)"));
+  t.push_back(real("g2", &RenderSettings::g2, -0.99, 0.99, "two-lobe-hg: the backward lobe's asymmetry"));
+  t.push_back(real("lobe_weight", &RenderSettings::lobe_weight, 0, 1, "two-lobe-hg: weight of the forward lobe (0.97 with g 0.9 and g2 -0.3 gives Mie's g 0.864 for 10 um droplets)"));
+  t.push_back(real("droplet_diameter", &RenderSettings::droplet_diameter, 5, 50, "draine-hg: droplet diameter in um (the fit's range)"));
   t.push_back(real("powder", &RenderSettings::powder, 0, 1, "strength of the powder term 1 - exp(-c d)"));
   t.push_back(real("powder_c", &RenderSettings::powder_c, 0, 100, "c of the powder term"));
   t.push_back(integer("ms_octaves", &RenderSettings::ms_octaves, 1, 4, "multiple scattering by octaves (Wrenninge 2013, Hillaire 2016): 1 = single scattering; octave i adds weight a^i, optical depth b^i, phase eccentricity c^i (docs/accuracy.md: against the path tracer)"));

@@ -174,6 +174,10 @@ struct FrameSetup {
 /// [0, 1] at time t: one row of FrameSetup::motion_table.
 std::vector<glm::dvec3> motion_table_row(const RenderSettings& s, double t);
 
+/// The phase function's slots of the parameter block (render.phase and its parameters; the HG +
+/// Draine fit evaluated at render.droplet_diameter).
+void set_phase_params(ref::CloudParams& p, const RenderSettings& s);
+
 /// Fills the parameter block from the volume, settings, camera and sun.
 FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const Camera& cam,
                       const Sun& sun, int width, int height);

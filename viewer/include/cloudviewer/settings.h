@@ -12,7 +12,13 @@
 namespace cloudviewer {
 
 // Codes stored in the shader parameters come from shaders/constants.glsl, which GLSL reads too.
-enum class PhaseMode { None = CV_PHASE_NONE, HenyeyGreenstein = CV_PHASE_HG, Mie = CV_PHASE_MIE };
+enum class PhaseMode {
+  None = CV_PHASE_NONE,
+  HenyeyGreenstein = CV_PHASE_HG,
+  Mie = CV_PHASE_MIE,
+  TwoLobeHg = CV_PHASE_TWO_LOBE_HG,
+  DraineHg = CV_PHASE_DRAINE_HG
+};
 enum class ToneMap { Reinhard = CV_TONEMAP_REINHARD, Aces = CV_TONEMAP_ACES, Clamp = CV_TONEMAP_CLAMP };
 enum class OutputMode {
   Radiance = CV_OUTPUT_RADIANCE,
@@ -65,7 +71,10 @@ struct RenderSettings {
   bool light_volume = true;        ///< look the sun's optical depth up in a precomputed volume (docs/viewer-speed.md)
   int light_volume_scale = 2;      ///< its texels: the volume's voxels divided by this per axis
   PhaseMode phase = PhaseMode::HenyeyGreenstein;
-  double g = 0.3;                  ///< HG asymmetry
+  double g = 0.3;                  ///< HG asymmetry (two-lobe-hg: the forward lobe's)
+  double g2 = -0.3;                ///< two-lobe-hg: the backward lobe's asymmetry
+  double lobe_weight = 0.97;       ///< two-lobe-hg: weight of the forward lobe
+  double droplet_diameter = 20;    ///< draine-hg: droplet diameter, um
   double powder = 0.3;             ///< powder term strength [0,1]
   double powder_c = 2;             ///< c in 1 - exp(-c d)
   int ms_octaves = 4;              ///< multiple-scattering octaves (1 = single scattering; 4: docs/accuracy.md)
