@@ -37,19 +37,26 @@ AtmosphereSettings with(std::initializer_list<const char*> sets) {
 
 // Independent of atmosphere.glsl: the ray in Cartesian coordinates, its exit through the top
 // sphere from the quadratic, the altitude as |p| - bottom, and composite Simpson with n intervals.
+// The atmosphere's coefficients at altitude h from AtmosphereSettings directly (not atmosphere.glsl):
+// extinction (Rayleigh + Mie extinction + the ozone tent) and scattering (Rayleigh + Mie), per metre.
+glm::dvec3 brute_extinction(const AtmosphereSettings& a, double h) {
+  double ozone = h < a.ozone_peak ? (h - a.ozone_bottom) / (a.ozone_peak - a.ozone_bottom)
+                                  : (a.ozone_top - h) / (a.ozone_top - a.ozone_peak);
+  ozone = std::min(std::max(ozone, 0.0), 1.0);
+  return (a.rayleigh ? a.rayleigh_scattering * std::exp(-h / a.rayleigh_height) : glm::dvec3(0.0)) +
+         (a.mie ? glm::dvec3(a.mie_extinction * std::exp(-h / a.mie_height)) : glm::dvec3(0.0)) +
+         (a.ozone ? a.ozone_absorption * ozone : glm::dvec3(0.0));
+}
+glm::dvec3 brute_scattering(const AtmosphereSettings& a, double h) {
+  return (a.rayleigh ? a.rayleigh_scattering * std::exp(-h / a.rayleigh_height) : glm::dvec3(0.0)) +
+         (a.mie ? glm::dvec3(a.mie_scattering * std::exp(-h / a.mie_height)) : glm::dvec3(0.0));
+}
+
 glm::dvec3 brute_force_transmittance(const AtmosphereSettings& a, double r, double mu, int n = 20000) {
   glm::dvec3 o(0, r, 0), d(std::sqrt(std::max(0.0, 1 - mu * mu)), mu, 0);
   double b = glm::dot(o, d), c = glm::dot(o, o) - a.top_radius * a.top_radius;
   double t_exit = -b + std::sqrt(std::max(0.0, b * b - c));
-  auto sigma = [&](double t) {
-    double h = glm::length(o + t * d) - a.bottom_radius;
-    double ozone = h < a.ozone_peak ? (h - a.ozone_bottom) / (a.ozone_peak - a.ozone_bottom)
-                                    : (a.ozone_top - h) / (a.ozone_top - a.ozone_peak);
-    ozone = std::min(std::max(ozone, 0.0), 1.0);
-    return (a.rayleigh ? a.rayleigh_scattering * std::exp(-h / a.rayleigh_height) : glm::dvec3(0.0)) +
-           (a.mie ? glm::dvec3(a.mie_extinction * std::exp(-h / a.mie_height)) : glm::dvec3(0.0)) +
-           (a.ozone ? a.ozone_absorption * ozone : glm::dvec3(0.0));
-  };
+  auto sigma = [&](double t) { return brute_extinction(a, glm::length(o + t * d) - a.bottom_radius); };
   glm::dvec3 sum(0.0);
   double dt = t_exit / n;
   for (int i = 0; i <= n; ++i) sum += sigma(i * dt) * ((i == 0 || i == n) ? 1.0 : (i % 2 ? 4.0 : 2.0));
@@ -497,18 +504,8 @@ namespace {
 glm::dvec3 brute_force_second_order(const AtmosphereSettings& a, double r, double mu_s, int n_sky = 48,
                                     int n_ground = 16, int n_phi = 24, int steps = 100, int sun_intervals = 24) {
   const double bottom = a.bottom_radius, top = a.top_radius;
-  auto sigma_s = [&](double h) {
-    return (a.rayleigh ? a.rayleigh_scattering * std::exp(-h / a.rayleigh_height) : glm::dvec3(0.0)) +
-           (a.mie ? glm::dvec3(a.mie_scattering * std::exp(-h / a.mie_height)) : glm::dvec3(0.0));
-  };
-  auto sigma_t = [&](double h) {
-    double ozone = h < a.ozone_peak ? (h - a.ozone_bottom) / (a.ozone_peak - a.ozone_bottom)
-                                    : (a.ozone_top - h) / (a.ozone_top - a.ozone_peak);
-    ozone = std::min(std::max(ozone, 0.0), 1.0);
-    return (a.rayleigh ? a.rayleigh_scattering * std::exp(-h / a.rayleigh_height) : glm::dvec3(0.0)) +
-           (a.mie ? glm::dvec3(a.mie_extinction * std::exp(-h / a.mie_height)) : glm::dvec3(0.0)) +
-           (a.ozone ? a.ozone_absorption * ozone : glm::dvec3(0.0));
-  };
+  auto sigma_s = [&](double h) { return brute_scattering(a, h); };
+  auto sigma_t = [&](double h) { return brute_extinction(a, h); };
   auto sunlight = [&](const glm::dvec3& p, const glm::dvec3& s) {
     double rp = glm::length(p), mu = glm::dot(p, s) / rp;
     if (mu < 0 && rp * rp * (mu * mu - 1) + bottom * bottom >= 0) return glm::dvec3(0.0);  // the Earth's shadow
@@ -718,11 +715,9 @@ TEST(Atmosphere, SingleScatteringMatchesABruteForceIntegration) {
     for (int k = 0; k < n; ++k) {
       glm::dvec3 p = o + (k + 0.5) * dt * v;
       double rp = glm::length(p), h = rp - bottom, mu_s = glm::dot(p, s) / rp;
-      double ozone = std::min(std::max(h < a.ozone_peak ? (h - a.ozone_bottom) / (a.ozone_peak - a.ozone_bottom)
-                                                        : (a.ozone_top - h) / (a.ozone_top - a.ozone_peak), 0.0), 1.0);
       glm::dvec3 sr = a.rayleigh_scattering * std::exp(-h / a.rayleigh_height);
       double sm = a.mie_scattering * std::exp(-h / a.mie_height);
-      glm::dvec3 ext = sr + glm::dvec3(a.mie_extinction * std::exp(-h / a.mie_height)) + a.ozone_absorption * ozone;
+      glm::dvec3 ext = brute_extinction(a, h);
       bool shadow = mu_s < 0 && rp * rp * (mu_s * mu_s - 1) + bottom * bottom >= 0;
       glm::dvec3 sun = shadow ? glm::dvec3(0.0) : brute_force_transmittance(a, rp, mu_s, 200);
       sum += glm::exp(-(tau + ext * (0.5 * dt))) * (sr * p_r + glm::dvec3(sm * p_m)) * sun * dt;
