@@ -240,7 +240,8 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   app.add_option("--backend", o.backend, "gl (OpenGL), cpu (the double-precision reference of the same shader math) or "
                  "pathtrace (the ground truth for the lighting: every order of scattering, Monte Carlo)")
       ->check(CLI::IsMember({"gl", "cpu", "pathtrace"}));
-  app.add_option("--spp", o.spp, "--backend pathtrace: paths per pixel (noise falls as 1/sqrt(spp); default 64)")
+  app.add_option("--spp", o.spp, "--backend pathtrace: paths per pixel (noise falls as 1/sqrt(spp); default 64). Beside --out it writes "
+                 "NAME.stderr.exr, the per-pixel standard error of the linear radiance")
       ->check(CLI::Range(1, 1 << 20));
   app.add_option("--shader-dir", o.shader_dir, "read shaders from this directory instead of the embedded copies (hot reload)");
   app.add_option("--mie-table", o.mie_table, "Mie phase table to use for render.phase=mie (text: one value per line over 0..180 degrees, or 'theta value' columns)");
@@ -327,6 +328,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
     out << ctx->description() << "\n";
   }
   RenderSettings s = o.settings;
+  Image standard_error;  // --backend pathtrace: written beside each image
   for (int i = 0; i < o.frames; ++i) {
     // Frame i: the clouds' time advances 1/fps per frame, the jitter (and temporal) pattern by one.
     s.time = o.settings.time + (o.fps > 0 ? double(i) / o.fps : 0.0);
@@ -339,6 +341,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
       PathTraceOptions po;
       po.spp = o.spp;
       po.seed = uint32_t(s.frame + 1);
+      po.standard_error = &standard_error;
       ProgressBar bar(err, "path tracing " + std::to_string(o.width) + "x" + std::to_string(o.height) + " at " +
                                std::to_string(o.spp) + " spp");
       po.progress = [&bar](int done, int rows) { bar.update(done, rows); };
@@ -383,6 +386,11 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
     std::string path = frame_file_name(o.out, i);
     write_image(path, img.display, img.linear);
     out << "wrote " << path << "\n";
+    if (o.backend == "pathtrace") {  // beside it: the per-pixel standard error of the mean, linear
+      const std::string se_path = path.substr(0, path.size() - 4) + ".stderr.exr";
+      write_exr(se_path, standard_error);
+      out << "wrote " << se_path << " (per-pixel standard error of the linear radiance before bloom)\n";
+    }
   }
   return 0;
 }

@@ -108,6 +108,10 @@ struct PathTraceOptions {
   int max_scatterings = 4096;   ///< per path (albedo-1 clouds scatter hundreds of times)
   uint32_t seed = 1;
   std::function<void(int rows_done, int rows)> progress;  ///< called from worker threads
+  /// When set: per pixel, the standard error of the mean (RGB; sample standard deviation of the
+  /// paths / sqrt(spp)) of the scene-linear radiance before bloom, so a comparison can tell the
+  /// path tracer's noise from a bias. Alpha 1.
+  Image* standard_error = nullptr;
 };
 FrameImages render_pathtrace(const PreparedVolume& vol, const FrameSetup& frame, const PathTraceOptions& o);
 /// Mean radiance (linear HDR) of `spp` paths along one camera-relative unit ray (for tests).
