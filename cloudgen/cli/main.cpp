@@ -15,6 +15,7 @@
 #include "cloudgen/cli_parse.h"
 #include "cloudgen/exit_codes.h"
 #include "cloudgen/generate.h"
+#include "cloudgen/view.h"
 #include "cloudgen/io.h"
 #include "cloudgen/motion.h"
 #include "cloudgen/preset.h"
@@ -117,6 +118,17 @@ void run_generate(const GenerateArgs& a) {
   GenerateOptions go;
   go.threads = a.threads;
   go.detail = detail;
+  // Only baked VDB / NanoVDB outputs: the detail channels matter only where the erosion is baked
+  // (all three channels and a non-zero erosion: the viewer's rule), and there only where density
+  // is non-zero. The files' bytes are the same either way.
+  bool baked_only = eo.vdb_detail && eo.vdb_bake_erosion;
+  for (Format f : formats) baked_only = baked_only && (f == Format::Vdb || f == Format::Nvdb);
+  if (baked_only) {
+    const bool erodes = p.channels[1].enabled && p.channels[2].enabled && p.channels[3].enabled &&
+                        look_of_view(p.view, path).erosion > 0;
+    if (erodes) go.detail_only_in_cloud = true;
+    else go.detail = false;
+  }
   go.skip_empty = !a.no_skip;
   go.cancel = &g_cancel;
   auto bar = progress_bar("generate", a.quiet);

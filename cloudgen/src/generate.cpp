@@ -283,7 +283,7 @@ BrickPlan plan_bricks(const Preset& p, const GenerateOptions& opt, size_t first,
     const std::array<int64_t, 3> ilo{lo[0], lo[1], lo[2]}, ihi{int64_t(hi[0]) - 1, int64_t(hi[1]) - 1, int64_t(hi[2]) - 1};
     pb.density = shape.any_in(ilo, ihi, false);
     bool near = pb.density;
-    if (!near && plan.detail)
+    if (!near && plan.detail && !opt.detail_only_in_cloud)
       near = shape.any_in({ilo[0] - 1, ilo[1] - 1, ilo[2] - 1}, {ihi[0] + 1, ihi[1] + 1, ihi[2] + 1}, wrap);
     pb.detail = plan.detail && near;
     for (int a = 0; a < 3; ++a) {
@@ -410,16 +410,18 @@ void execute_plan(const Preset& p, const BrickPlan& plan, const std::vector<size
               const bool inside = x >= 0 && y >= 0 && z >= 0 && x < W[0] && y < W[1] && z < W[2];
               uint8_t m;
               if (inside) m = !dens.empty() && dens[(size_t(z) * W[1] + y) * W[0] + x] > 0;
+              else if (opt.detail_only_in_cloud) m = 0;  // read only where density > 0: no shell
               else m = shape.bound_at(int64_t(wb.lo[0]) + x, int64_t(wb.lo[1]) + y, int64_t(wb.lo[2]) + z, wrap);
               maybe[size_t(((z + 1) * M[1] + (y + 1)) * M[0] + (x + 1))] = m;
             }
         for (uint32_t kz = 0; kz < nbk[2]; ++kz)
           for (uint32_t ky = 0; ky < nbk[1]; ++ky)
             for (uint32_t kx = 0; kx < nbk[0]; ++kx) {
-              bool any = false;  // the block dilated by one voxel, in maybe's coordinates
-              for (uint32_t z = kz * S[2]; z <= std::min(W[2], (kz + 1) * S[2]) + 1 && !any; ++z)
-                for (uint32_t y = ky * S[1]; y <= std::min(W[1], (ky + 1) * S[1]) + 1 && !any; ++y)
-                  for (uint32_t x = kx * S[0]; x <= std::min(W[0], (kx + 1) * S[0]) + 1 && !any; ++x)
+              bool any = false;  // the block dilated by one voxel (or not), in maybe's coordinates
+              const uint32_t d0 = opt.detail_only_in_cloud ? 1 : 0, d1 = opt.detail_only_in_cloud ? 0 : 1;
+              for (uint32_t z = kz * S[2] + d0; z <= std::min(W[2], (kz + 1) * S[2]) + d1 && !any; ++z)
+                for (uint32_t y = ky * S[1] + d0; y <= std::min(W[1], (ky + 1) * S[1]) + d1 && !any; ++y)
+                  for (uint32_t x = kx * S[0] + d0; x <= std::min(W[0], (kx + 1) * S[0]) + d1 && !any; ++x)
                     any = maybe[size_t((z * M[1] + y) * M[0] + x)];
               keep[(size_t(kz) * nbk[1] + ky) * nbk[0] + kx] = any;
             }

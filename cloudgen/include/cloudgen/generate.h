@@ -29,6 +29,11 @@ struct GenerateOptions {
   int threads = 0;         ///< 0 = all cores; output bytes are identical for any value
   bool skip_empty = true;  ///< skip noise where density provably stays 0 (never changes a value)
   bool detail = true;      ///< compute the enabled G/B/A channels (false when no output uses them)
+  /// Every output bakes the erosion into density at voxel centres (export.vdb.bake_erosion): the
+  /// detail channels are read only where density > 0, so they are kept only in detail blocks that
+  /// hold cloud (no one-voxel reach for trilinear reads, no look at the neighbours' bound). The
+  /// outputs' bytes are those of the default rule; the in-memory detail is zero in more places.
+  bool detail_only_in_cloud = false;
   bool occupancy = true;   ///< build the occupancy grid
   /// Sub-box in voxels (origin, extent; extent 0 = to the end). Values equal those of the same
   /// voxels in the full run.
