@@ -20,6 +20,22 @@ Number jitter_offset(ivec2 pixel, int frame) {
 int wrap_index(int i, int n) { return i >= 0 ? i % n : (n - 1) - ((-i - 1) % n); }
 int clamp_index(int i, int n) { return min(max(i, 0), n - 1); }
 
+// Corner k (0..7, x fastest) of a trilinear lookup whose lower corner is i0, over n texels: wrapped
+// in x and z when `tiles` (GL_REPEAT), clamped otherwise and always in y (GL_CLAMP_TO_EDGE); and
+// its weight for the fraction f. The volume, light-volume and NanoVDB filters share these, so their
+// corners, weights and order of sums are the same.
+ivec3 trilinear_corner(ivec3 i0, int k, ivec3 n, bool tiles) {
+  ivec3 i = i0 + ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
+  i.x = tiles ? wrap_index(i.x, n.x) : clamp_index(i.x, n.x);
+  i.y = clamp_index(i.y, n.y);
+  i.z = tiles ? wrap_index(i.z, n.z) : clamp_index(i.z, n.z);
+  return i;
+}
+Number trilinear_weight(vec3 f, int k) {
+  vec3 w = mix(vec3(1.0) - f, f, vec3(ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1)));
+  return w.x * w.y * w.z;
+}
+
 // Entry and exit distances of a ray from the origin along unit `rd` through the box [bmin, bmax];
 // entry clamped to 0 (camera inside). No hit when x >= y.
 vec2 ray_box(vec3 rd, vec3 bmin, vec3 bmax) {

@@ -99,15 +99,7 @@ Number light_volume_trilinear(vec3 uvw) {
   vec3 f = x - fl;
   ivec3 i0 = ivec3(fl);
   Number acc = 0.0;
-  for (int k = 0; k < 8; ++k) {
-    ivec3 o = ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
-    ivec3 i = i0 + o;
-    i.x = tiles ? wrap_index(i.x, n.x) : clamp_index(i.x, n.x);
-    i.y = clamp_index(i.y, n.y);
-    i.z = tiles ? wrap_index(i.z, n.z) : clamp_index(i.z, n.z);
-    vec3 w = mix(vec3(1.0) - f, f, vec3(o));
-    acc += (w.x * w.y * w.z) * light_volume_texel(i);
-  }
+  for (int k = 0; k < 8; ++k) acc += trilinear_weight(f, k) * light_volume_texel(trilinear_corner(i0, k, n, tiles));
   return acc;
 }
 

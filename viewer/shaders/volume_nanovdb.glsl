@@ -30,23 +30,16 @@ vec4 nanovdb_filtered(vec3 uvw) {
   Number dens[8];
   bool any = false;
   for (int k = 0; k < 8; ++k) {
-    ivec3 o = ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
-    ivec3 i = i0 + o;
-    i.x = tiles ? wrap_index(i.x, n.x) : clamp_index(i.x, n.x);
-    i.y = clamp_index(i.y, n.y);
-    i.z = tiles ? wrap_index(i.z, n.z) : clamp_index(i.z, n.z);
-    corner[k] = i;
-    dens[k] = max(nanovdb_density(i + nanovdb_index_min()), 0.0);
+    corner[k] = trilinear_corner(i0, k, n, tiles);
+    dens[k] = max(nanovdb_density(corner[k] + nanovdb_index_min()), 0.0);
     any = any || dens[k] > 0.0;
   }
   if (!any) return vec4(0.0);
   bool detail = nanovdb_has_detail();
   vec4 acc = vec4(0.0);
   for (int k = 0; k < 8; ++k) {
-    ivec3 o = ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
-    vec3 w = mix(vec3(1.0) - f, f, vec3(o));
     vec4 t = detail ? vec4(dens[k], nanovdb_detail(corner[k] + nanovdb_index_min())) : vec4(dens[k], 0.0, 0.0, 0.0);
-    acc += (w.x * w.y * w.z) * t;
+    acc += trilinear_weight(f, k) * t;
   }
   return acc;
 }

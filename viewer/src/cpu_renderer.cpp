@@ -226,13 +226,10 @@ double reference_phase(const RenderSettings& s, double cos_theta) {
 }
 
 double reference_phase(PhaseMode mode, double g, double cos_theta) {
-  ref::CloudParams p{};
-  p.phase_mode = double(int(mode));
-  p.hg_g = g;
-  p.mie_table_size = double(mie_phase_table().size());
-  PreparedVolume empty;
-  CpuShader sh(p, empty, mie_phase_table(), no_lut());
-  return sh.phase_function(cos_theta);
+  RenderSettings s;
+  s.phase = mode;
+  s.g = g;
+  return reference_phase(s, cos_theta);
 }
 
 double reference_cloud_type_gradient(double h, double type) {
