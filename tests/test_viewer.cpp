@@ -913,6 +913,41 @@ TEST(ViewerErrors, HugeInputIsRefusedWithTheMemoryEstimate) {
 
 // --out goes through a temporary file renamed into place: a write that fails half-way (here the
 // file-size limit, as a full disk would) leaves the existing PNG byte for byte, and exits 2.
+// The path tracer's image and its standard error are one result: when the second cannot be
+// written (here a file-size limit between the PNG's size and the EXR's), neither is replaced.
+TEST(ViewerCli, PathTracerImageAndStandardErrorAreWrittenBothOrNeither) {
+  const fs::path dir = output_dir() / "pair";
+  fs::create_directories(dir);
+  auto slurp = [](const fs::path& f) {
+    std::ifstream in(f, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  auto pt = [&](const fs::path& out, const char* frame, std::string* err) {
+    return run({"synthetic:blob", "--headless", "--size", "24x14", "--backend", "pathtrace", "--spp", "2", "--set",
+                frame, "--out", out.string()},
+               err);
+  };
+  std::string err;
+  ASSERT_EQ(pt(dir / "keep.png", "render.frame=5", &err), 0) << err;  // what must survive
+  ASSERT_EQ(pt(dir / "probe.png", "render.frame=0", &err), 0) << err;  // the new result's sizes
+  const std::string png0 = slurp(dir / "keep.png"), exr0 = slurp(dir / "keep.stderr.exr");
+  const size_t png_new = fs::file_size(dir / "probe.png"), exr_new = fs::file_size(dir / "probe.stderr.exr");
+  ASSERT_LT(png_new + 64, exr_new) << "the limit must fall between the two files' sizes";
+  struct rlimit old_limit;
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old_limit), 0);
+  auto old_handler = std::signal(SIGXFSZ, SIG_IGN);
+  struct rlimit small = old_limit;
+  small.rlim_cur = png_new + 64;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  const int code = pt(dir / "keep.png", "render.frame=0", &err);
+  setrlimit(RLIMIT_FSIZE, &old_limit);
+  std::signal(SIGXFSZ, old_handler);
+  EXPECT_EQ(code, 2) << err;
+  EXPECT_NE(err.find("keep.stderr.exr"), std::string::npos) << err;
+  EXPECT_TRUE(slurp(dir / "keep.png") == png0) << "the PNG was replaced although its standard error was not";
+  EXPECT_TRUE(slurp(dir / "keep.stderr.exr") == exr0);
+}
+
 TEST(ViewerCli, FailedWriteLeavesTheExistingPngByteForByte) {
   fs::path p = output_dir() / "keep.png";
   std::string err;

@@ -384,12 +384,14 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
     ImageStats st = image_stats(img.linear);
     if (st.nonfinite) err << "warning: " << st.nonfinite << " non-finite values in the image\n";
     std::string path = frame_file_name(o.out, i);
-    write_image(path, img.display, img.linear);
-    out << "wrote " << path << "\n";
-    if (o.backend == "pathtrace") {  // beside it: the per-pixel standard error of the mean, linear
+    if (o.backend == "pathtrace") {  // beside it, both or neither: the per-pixel standard error, linear
       const std::string se_path = path.substr(0, path.size() - 4) + ".stderr.exr";
-      write_exr(se_path, standard_error);
-      out << "wrote " << se_path << " (per-pixel standard error of the linear radiance before bloom)\n";
+      write_images({{path, &img.display, &img.linear}, {se_path, &standard_error, &standard_error}});
+      out << "wrote " << path << "\nwrote " << se_path
+          << " (per-pixel standard error of the linear radiance before bloom)\n";
+    } else {
+      write_image(path, img.display, img.linear);
+      out << "wrote " << path << "\n";
     }
   }
   return 0;

@@ -106,8 +106,8 @@ Image read_png(const std::string& path) {
   return img;
 }
 
-void write_exr(const std::string& path, const Image& img) {
-  write_atomically(path, [&](const std::string& tmp) {
+namespace {
+void write_exr_file(const std::string& tmp, const std::string& path, const Image& img) {
     try {
       std::vector<Imf::Rgba> px(size_t(img.width) * img.height);
       for (int y = 0; y < img.height; ++y)
@@ -121,7 +121,11 @@ void write_exr(const std::string& path, const Image& img) {
     } catch (const std::exception& e) {
       throw IoError("cannot write EXR '" + path + "': " + e.what());
     }
-  });
+}
+}  // namespace
+
+void write_exr(const std::string& path, const Image& img) {
+  write_atomically(path, [&](const std::string& tmp) { write_exr_file(tmp, path, img); });
 }
 
 Image read_exr(const std::string& path) {
@@ -145,13 +149,30 @@ Image read_exr(const std::string& path) {
   }
 }
 
-void write_image(const std::string& path, const Image& display, const Image& linear) {
+namespace {
+// What write_image writes to `tmp` for `path` (by its extension).
+std::function<void(const std::string&)> image_filler(const std::string& path, const Image& display, const Image& linear) {
   std::string lower = path;
   std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return char(std::tolower(c)); });
   auto ends = [&](const std::string& s) { return lower.size() >= s.size() && lower.compare(lower.size() - s.size(), s.size(), s) == 0; };
-  if (ends(".png")) write_png(path, display);
-  else if (ends(".exr")) write_exr(path, linear);
-  else throw InputError("--out " + path + ": unknown image type (allowed: .png, .exr)");
+  if (ends(".png")) return [&path, &display](const std::string& tmp) { write_png_file(tmp, path, display); };
+  if (ends(".exr")) return [&path, &linear](const std::string& tmp) { write_exr_file(tmp, path, linear); };
+  throw InputError("--out " + path + ": unknown image type (allowed: .png, .exr)");
+}
+}  // namespace
+
+void write_image(const std::string& path, const Image& display, const Image& linear) {
+  write_atomically(path, image_filler(path, display, linear));
+}
+
+void write_images(const std::vector<ImageFile>& files) {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+  cloudgen::OutputBatch batch;  // every file staged, then all published or none
+  for (const ImageFile& f : files) batch.stage(f.path, image_filler(f.path, *f.display, *f.linear));
+  batch.commit();
+#else
+  for (const ImageFile& f : files) write_image(f.path, *f.display, *f.linear);
+#endif
 }
 
 ImageStats image_stats(const Image& img) {

@@ -26,6 +26,14 @@ Image read_exr(const std::string& path);
 
 /// Writes by extension (.png display image, .exr linear image).
 void write_image(const std::string& path, const Image& display, const Image& linear);
+/// Several images of one result (e.g. the path tracer's image and its standard error), each by its
+/// extension, all or nothing: a failed write leaves every earlier file as it was.
+struct ImageFile {
+  std::string path;
+  const Image* display;
+  const Image* linear;
+};
+void write_images(const std::vector<ImageFile>& files);
 
 struct ImageStats {
   int nonfinite = 0;      ///< NaN or inf values
