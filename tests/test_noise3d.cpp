@@ -363,6 +363,36 @@ TEST(Batch, MatchesPointEvaluation) {
     }
 }
 
+// High octaves on a tile whose size is a multiple of the period (the usual case: 128 samples,
+// periods 8..128) take the Worley kernel's residue-class loop, strides 8, 4, 2 and 1 here, for the
+// whole tile and for a box whose origin is not on a cell boundary; it must give the point values.
+TEST(Batch, RepeatingLatticeMatchesPointEvaluation) {
+  for (Kind k : {Kind::Worley, Kind::PerlinWorley}) {
+    FractalParams p = fp(k, 8, 4, 1234);
+    GridRegion whole;
+    whole.size = {64, 16, 8};
+    GridRegion part = whole;
+    part.origin = {5, 3, 1};
+    part.extent = {45, 7, 5};
+    for (const GridRegion& r : {whole, part}) {
+      const auto e = r.resolved_extent();
+      std::vector<float> f(r.count());
+      std::vector<double> d(r.count());
+      evaluate_grid(p, r, f.data());
+      evaluate_grid(p, r, d.data());
+      for (uint32_t kz = 0; kz < e[2]; ++kz)
+        for (uint32_t j = 0; j < e[1]; ++j)
+          for (uint32_t i = 0; i < e[0]; ++i) {
+            const uint32_t x = r.origin[0] + i, y = r.origin[1] + j, z = r.origin[2] + kz;
+            double ref = evaluate(p, double(x) * 8 / 64, double(y) * 8 / 16, double(z) * 8 / 8);
+            size_t q = (size_t(kz) * e[1] + j) * e[0] + i;
+            ASSERT_NEAR(f[q], ref, 1e-6) << kind_name(k) << " at " << x << "," << y << "," << z;
+            ASSERT_NEAR(d[q], ref, 1e-12) << kind_name(k) << " at " << x << "," << y << "," << z;
+          }
+    }
+  }
+}
+
 TEST(Batch, SubRegionEqualsTheSameSamplesOfTheWholeTile) {
   for (Kind k : {Kind::Perlin, Kind::Worley, Kind::PerlinWorley}) {
     FractalParams p = fp(k, 4, 3, 5);

@@ -68,6 +68,11 @@ struct Axis {
   std::vector<uint32_t> run;
   /// Signed copies of m for the gather path (high octaves, where runs are 1-2 samples long).
   std::vector<int32_t> mi;
+  /// Samples per cell when the lattice repeats exactly along the axis (the tile size a multiple of
+  /// the period): sample i + stride is then in the next list entry with the same fraction, for every
+  /// i. 0 otherwise. The Worley kernel uses it for short runs: the samples of one residue class
+  /// i mod stride read consecutive lattice entries with one shared fraction, a gather-free loop.
+  uint32_t stride = 0;
   bool short_runs() const { return run.size() > 1 && m.size() < 6 * (run.size() - 1); }
 };
 
@@ -94,6 +99,12 @@ Axis<T> make_axis(uint32_t size, uint32_t origin, uint32_t extent, uint32_t peri
     if (s == 0 || ax.m[s] != ax.m[s - 1]) ax.run.push_back(s);
   ax.run.push_back(extent);
   ax.mi.assign(ax.m.begin(), ax.m.end());
+  if (period > 0 && size % period == 0) {
+    const uint32_t st = size / period;
+    bool ok = st <= extent;
+    for (uint32_t s = st; ok && s < extent; ++s) ok = ax.m[s] == ax.m[s - st] + 1 && ax.f[s] == ax.f[s - st];
+    if (ok) ax.stride = st;
+  }
   ax.f.resize(extent + kLanes, T(0));  // chunked kernels may read up to kLanes past the end
   return ax;
 }
@@ -229,6 +240,7 @@ struct WorleyScratch {
   PlaneCache<Jitter<T>> planes;
   std::vector<T> jx, r2;  // [9][nx]
   std::vector<T> best;    // [ex]
+  std::vector<T> phase;   // [ex / stride]: one residue class of a repeating lattice
 };
 
 template <class T>
@@ -274,7 +286,34 @@ void worley_slice(const OctaveSetup<T>& s, uint32_t k, T* acc, WorleyScratch<T>&
     }
     T* __restrict best = sc.best.data();
     const T* __restrict f = X.f.data();
-    if (gather) {
+    if (gather && X.stride > 0) {
+      // About one sample per cell on an exactly repeating lattice: the samples r, r + stride,
+      // r + 2 stride, ... share the fraction f[r] and sit in consecutive lattice entries, so each
+      // residue class is a contiguous loop over the neighbours' constants (no gathers). The same
+      // candidates and operations as the gather loop below, so the same values.
+      const uint32_t st = X.stride;
+      sc.phase.resize(ex);
+      for (uint32_t r = 0; r < st; ++r) {
+        const size_t count = (ex - r + st - 1) / st;
+        const T fr = f[r];
+        const int32_t a0 = X.mi[r];
+        T* __restrict b = sc.phase.data();
+        for (size_t c = 0; c < count; ++c) b[c] = std::numeric_limits<T>::infinity();
+        for (int n = 0; n < 9; ++n) {
+          for (int dx = 0; dx < 3; ++dx) {
+            const T off = T(dx - 1);
+            const T* __restrict jx = sc.jx.data() + n * nx + (a0 + dx - 1);
+            const T* __restrict r2 = sc.r2.data() + n * nx + (a0 + dx - 1);
+            for (size_t c = 0; c < count; ++c) {
+              const T d = jx[c] + off - fr;
+              const T d2 = d * d + r2[c];
+              b[c] = d2 < b[c] ? d2 : b[c];
+            }
+          }
+        }
+        for (size_t c = 0; c < count; ++c) best[r + c * st] = b[c];
+      }
+    } else if (gather) {
       // About one sample per cell: gather the neighbours' constants per sample instead.
       const int32_t* __restrict mi = X.mi.data();
       for (size_t i = 0; i < ex; ++i) best[i] = std::numeric_limits<T>::infinity();
