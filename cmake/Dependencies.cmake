@@ -30,13 +30,14 @@ if(CLOUD_BUILD_CLOUDGEN)
   cloud_require(OpenVDB_FOUND "OpenVDB" "libopenvdb-dev libboost-dev libboost-iostreams-dev libblosc-dev")
   find_package(OpenEXR CONFIG QUIET)
   cloud_require(OpenEXR_FOUND "OpenEXR" "libopenexr-dev")
-  find_package(PNG QUIET)
-  cloud_require(PNG_FOUND "libpng" "libpng-dev")
 endif()
 
 # GLM: cloudgen compiles the motion formulas (cloudgen/motion.glsl) with its GLSL-named types.
 find_package(glm CONFIG QUIET)
 cloud_require(glm_FOUND "GLM" "libglm-dev")
+# libpng: flow-map images (cloud_motion), atlases, the viewer's pictures.
+find_package(PNG QUIET)
+cloud_require(PNG_FOUND "libpng" "libpng-dev")
 
 if(CLOUD_BUILD_VIEWER)
   find_package(glfw3 3.3 CONFIG QUIET)

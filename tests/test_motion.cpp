@@ -310,6 +310,35 @@ TEST(ViewerMotionCli, FramesWriteAPatternOrOnlyTheLastFrame) {
   EXPECT_NE(err.find("motion.wind_speed"), std::string::npos) << err;
 }
 
+// A flow map image on the viewer's command line: the procedural map's own image gives the
+// procedural picture within a display level or two, a coarse map moves the cloud elsewhere, and a
+// bad file exits 1 naming it.
+TEST(ViewerMotionCli, FlowMapImageMovesTheClouds) {
+  testutil::TempDir dir;
+  cloudgen::write_flow_map_png((dir.path / "fine.png").string(), 256, 64);
+  cloudgen::write_flow_map_png((dir.path / "coarse.png").string(), 4, 2);
+  std::string err;
+  auto frame = [&](const std::string& map, const std::string& out) {
+    std::vector<std::string> a = {"synthetic:blob", "--headless", "--size", "96x54", "--time", "40",
+                                  "--set", "motion.wind_speed=0", "--set", "motion.flow_speed=0.02",
+                                  "--set", "motion.flow_forward=600", "--out", (dir.path / out).string()};
+    if (!map.empty()) a.insert(a.end(), {"--set", "motion.flow_map=" + map});
+    EXPECT_EQ(run(a, &err), 0) << err;
+    return read_png((dir.path / out).string());
+  };
+  const Image proc = frame("", "proc.png"), fine = frame((dir.path / "fine.png").string(), "fine.png"),
+              coarse = frame((dir.path / "coarse.png").string(), "coarse.png");
+  const double fine_diff = max_abs_diff(proc, fine), coarse_diff = max_abs_diff(proc, coarse);
+  std::cout << "flow map image vs procedural: max |diff| fine " << fine_diff << ", coarse " << coarse_diff << "\n";
+  EXPECT_LT(fine_diff, 3.0 / 255);
+  EXPECT_GT(coarse_diff, 0.05);
+  EXPECT_EQ(run({"synthetic:blob", "--headless", "--set", "motion.flow_map=" + (dir.path / "none.png").string(), "--out",
+                 (dir.path / "y.png").string()},
+                &err),
+            1);
+  EXPECT_NE(err.find("motion.flow_map " + (dir.path / "none.png").string() + ": no such file"), std::string::npos) << err;
+}
+
 // ------------------------------------------------------------------------------ temporal upsampling
 
 namespace {

@@ -3,6 +3,7 @@
 // time derivative, t = 0 and still motion against the static grid, the loop rule, CLI errors and
 // determinism across thread counts.
 #include <gtest/gtest.h>
+#include <png.h>
 
 #include <algorithm>
 #include <cmath>
@@ -327,7 +328,7 @@ TEST(Sequence, AFailedFrameLeavesNoFrame) {
   {
     std::ofstream(dir / "c_0001.vdb") << "old";
   }
-  fs::create_directory(dir / "c_0003.vdb");
+  std::filesystem::create_directory(dir / "c_0003.vdb");
   EXPECT_EQ(run_cli("generate tiny -q --frames 0:3 -o " + dir / "c_####.vdb", &out), 1) << out;
   EXPECT_NE(out.find("c_0003.vdb: is a folder"), std::string::npos) << out;
   std::ifstream in(dir / "c_0001.vdb");
@@ -419,4 +420,140 @@ TEST(Sequence, DescriptorLimitIsRaisedOrNamed) {
             std::string::npos)
       << out;
   EXPECT_FALSE(std::filesystem::exists(dir / "b"));
+}
+
+// ------------------------------------------------------------------------------ flow-map images
+namespace {
+/// An 8-bit PNG of `channels` (1 = grey, 3 = RGB) filled by fill(x, y, c).
+template <class F>
+void write_png8(const std::string& path, int w, int h, int channels, F fill) {
+  std::vector<uint8_t> px(size_t(w) * h * channels);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < channels; ++c) px[(size_t(y) * w + x) * channels + c] = uint8_t(fill(x, y, c));
+  png_image im;
+  std::memset(&im, 0, sizeof im);
+  im.version = PNG_IMAGE_VERSION;
+  im.width = unsigned(w), im.height = unsigned(h), im.format = channels == 1 ? PNG_FORMAT_GRAY : PNG_FORMAT_RGB;
+  ASSERT_TRUE(png_image_write_to_file(&im, path.c_str(), 0, px.data(), 0, nullptr)) << im.message;
+}
+}  // namespace
+
+// `cloudgen flowmap`'s image of the procedural flow reads back as that flow: at texel centres
+// within the 16-bit step, and the displacement D(h, t) from the image within the bilinear filter's
+// error of the formula's (under 1% of the flow amplitudes at 256 x 64 texels).
+TEST(FlowMap, ProceduralImageReadsBackAsTheProceduralFlow) {
+  TempDir dir;
+  write_flow_map_png(dir / "flow.png", 256, 64);
+  const auto map = load_flow_map(dir / "flow.png");
+  ASSERT_EQ(map->width, 256);
+  ASSERT_EQ(map->height, 64);
+  double texel_err = 0;
+  for (int j = 0; j < 64; ++j)
+    for (int i = 0; i < 256; ++i) {
+      const double u = (i + 0.5) / 256, h = 1.0 - j / 63.0;
+      const glm::dvec2 d = map->sample(u, h) - motion_glsl::procedural_flow(glm::dvec2(u, h));
+      texel_err = std::max({texel_err, std::abs(d.x), std::abs(d.y)});
+    }
+  EXPECT_LE(texel_err, 1.0 / 65535 + 1e-12);
+  MotionParams proc, img;
+  proc.flow_speed = img.flow_speed = 0.05;
+  img.flow_map = map;
+  MotionParams wind_only = proc;
+  wind_only.flow_up = wind_only.flow_forward = 0;
+  double worst = 0, biggest = 0;
+  for (double t = 0; t < 40; t += 0.37)
+    for (double h = 0; h <= 1.0; h += 1.0 / 37) {
+      const glm::dvec3 a = motion_displacement(proc, t, h), b = motion_displacement(img, t, h);
+      worst = std::max(worst, glm::length(a - b));
+      biggest = std::max(biggest, glm::length(a - motion_displacement(wind_only, t, h)));
+    }
+  std::printf("  image flow vs procedural: max |D| difference %.3f m (flow amplitude %.0f / %.0f m, largest flow %.1f m)\n",
+              worst, proc.flow_up, proc.flow_forward, biggest);
+  EXPECT_GT(biggest, 100.0);  // the flow does move the cloud
+  EXPECT_LT(worst, 0.01 * proc.flow_forward);
+}
+
+// A baked frame with an image flow map is the static volume at p - D(h, t) of that map; a coarse
+// map (8 x 4 texels) moves the cloud differently from the procedural flow.
+TEST(FlowMap, BakedFrameFollowsTheImage) {
+  TempDir dir;
+  write_flow_map_png(dir / "coarse.png", 8, 4);
+  const Volume stat = tiny(false);
+  MotionParams m;
+  m.wind_speed = 2;
+  m.flow_speed = 0.05;
+  MotionParams mi = m;
+  mi.flow_map = load_flow_map(dir / "coarse.png");
+  const MotionFrame f = bake_frame(stat, mi, 70, 10.0, 2);
+  const Compare c = compare_frame(stat, mi, f);
+  EXPECT_LT(c.max_err, 1e-5);
+  EXPECT_EQ(c.outside, 0.0);
+  const Compare other = compare_frame(stat, m, f);  // against the procedural flow's positions
+  EXPECT_GT(other.max_err, 0.05);
+}
+
+// Bad flow maps: the message names the key, the file and what is wrong; nothing is half-set.
+TEST(FlowMap, BadFilesAreRefusedWithTheReason) {
+  TempDir dir;
+  std::ofstream(dir / "text.png") << "not an image";
+  write_png8(dir / "grey.png", 4, 4, 1, [](int x, int, int) { return x * 60; });
+  std::filesystem::create_directory(dir / "folder.png");
+  auto error = [](const std::string& path) {
+    MotionParams m;
+    try {
+      set_motion_key(m, "flow_map", path, "--set");
+    } catch (const InputError& e) {
+      EXPECT_FALSE(m.flow_map) << path;
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error(dir / "missing.png").find("--set motion.flow_map " + (dir / "missing.png") + ": no such file"), std::string::npos);
+  EXPECT_NE(error(dir / "text.png").find("not a PNG file"), std::string::npos);
+  EXPECT_NE(error(dir / "grey.png").find("a grey image"), std::string::npos);
+  EXPECT_NE(error(dir / "folder.png").find("not a regular file"), std::string::npos);
+  EXPECT_NE(error("").find("give a PNG file or \"procedural\""), std::string::npos);
+  // An 8-bit RGB map: 0 -> -1, 255 -> +1 per channel, R = up, G = forward.
+  write_png8(dir / "rgb.png", 2, 1, 3, [](int x, int, int c) { return c == 0 ? x * 255 : 255 - x * 255; });
+  MotionParams m;
+  set_motion_key(m, "flow_map", dir / "rgb.png", "--set");
+  ASSERT_TRUE(m.flow_map);
+  EXPECT_EQ(m.flow_map->texels[0], glm::dvec2(-1, 1));
+  EXPECT_EQ(m.flow_map->texels[1], glm::dvec2(1, -1));
+  EXPECT_EQ(flow_map_name(m), dir / "rgb.png");
+  set_motion_key(m, "flow_map", "procedural", "--set");
+  EXPECT_FALSE(m.flow_map);
+}
+
+// In a preset, a relative flow_map is found next to the preset; with --set, from the current
+// folder; a bad one is a preset problem naming /motion/flow_map.
+TEST(FlowMap, PresetPathsResolveFromThePresetsFolder) {
+  TempDir dir;
+  std::filesystem::create_directory(dir / "p");
+  write_flow_map_png(dir / "p/flow.png", 16, 8);
+  std::ofstream(dir / "p/moving.json") << R"({"resolution": [16, 8, 16], "motion": {"flow_map": "flow.png"}})";
+  const Preset p = load_preset(dir / "p/moving.json");
+  ASSERT_TRUE(p.motion.flow_map);
+  EXPECT_EQ(p.motion.flow_map->width, 16);
+  try {
+    load_preset(dir / "p/moving.json", {"motion.flow_map=flow.png"});  // from the current folder: not there
+    ADD_FAILURE() << "a --set flow map was looked up next to the preset";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/motion/flow_map: motion.flow_map flow.png: no such file"), std::string::npos) << e.what();
+  }
+  const Preset q = load_preset(dir / "p/moving.json", {"motion.flow_map=" + (dir / "p/flow.png")});
+  EXPECT_TRUE(q.motion.flow_map);
+  const Preset r = load_preset(dir / "p/moving.json", {"motion.flow_map=procedural"});
+  EXPECT_FALSE(r.motion.flow_map);
+  // The CLI: flowmap writes one, a sequence bakes with it and records it in the frame's metadata.
+  std::string out;
+  ASSERT_EQ(run_cli("flowmap -q --size 32x8 -o " + (dir / "f.png"), &out), 0) << out;
+  ASSERT_EQ(run_cli("generate " + kPresets + "tiny.json -q --set motion.flow_map=" + (dir / "f.png") +
+                        " --frames 1:2 --fps 4 -o " + (dir / "c_##.vdb"),
+                    &out),
+            0)
+      << out;
+  ASSERT_EQ(run_cli("info " + (dir / "c_02.vdb"), &out), 0) << out;
+  EXPECT_NE(out.find(dir / "f.png"), std::string::npos) << out;
 }

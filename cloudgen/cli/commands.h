@@ -20,6 +20,7 @@ std::function<void(double)> progress_bar(const std::string& label, bool quiet);
 
 void add_noise_command(CLI::App& app, std::function<void()>& run);
 void add_phase_command(CLI::App& app, std::function<void()>& run);
+void add_flowmap_command(CLI::App& app, std::function<void()>& run);
 void add_blender_command(CLI::App& app, std::function<void()>& run);
 
 /// "cumulus" -> the shipped presets/cumulus.json when no such file exists in the working folder.

@@ -37,7 +37,28 @@ const std::vector<MotionKey>& motion_keys() {
   return keys;
 }
 
+const char* const kFlowMapKey = "flow_map";
+const char* const kFlowMapDoc =
+    "the flow map: \"procedural\" (the curl of a three-wave stream function) or a PNG (x = flow phase, wraps; "
+    "y = height, top row = top of the layer; R = up, G = forward as value * 2 - 1); `cloudgen flowmap` writes the "
+    "procedural one to paint over";
+
+std::string flow_map_name(const MotionParams& m) { return m.flow_map ? m.flow_map->path : "procedural"; }
+
 void set_motion_key(MotionParams& m, const std::string& key, const std::string& value, const std::string& where) {
+  if (key == kFlowMapKey) {
+    if (value == "procedural") {
+      m.flow_map.reset();
+      return;
+    }
+    if (value.empty()) throw InputError(where + " motion.flow_map=: give a PNG file or \"procedural\"");
+    try {
+      m.flow_map = load_flow_map(value);
+    } catch (const InputError& e) {
+      throw InputError(where + " " + e.what());
+    }
+    return;
+  }
   for (const MotionKey& k : motion_keys()) {
     if (k.key != key) continue;
     char* end = nullptr;
@@ -52,7 +73,7 @@ void set_motion_key(MotionParams& m, const std::string& key, const std::string& 
   }
   std::string known;
   for (const MotionKey& k : motion_keys()) known += (known.empty() ? "" : ", ") + k.key;
-  throw InputError(where + " motion." + key + ": unknown key (known: " + known + ")");
+  throw InputError(where + " motion." + key + ": unknown key (known: " + known + ", " + kFlowMapKey + ")");
 }
 
 bool motion_moves(const MotionParams& m) {
@@ -94,6 +115,7 @@ std::string motion_help() {
   for (const MotionKey& k : motion_keys())
     s += "  motion." + k.key + " " + range(k) + (k.unit.empty() ? "" : " " + k.unit) + " (default " +
          fmt(d.*k.member) + "): " + k.doc + "\n";
+  s += std::string("  motion.") + kFlowMapKey + " procedural | FILE.png (default procedural): " + kFlowMapDoc + "\n";
   return s;
 }
 
@@ -102,6 +124,7 @@ std::string motion_markdown() {
   std::string md = "| key | range | unit | default | meaning |\n|---|---|---|---|---|\n";
   for (const MotionKey& k : motion_keys())
     md += "| motion." + k.key + " | " + range(k) + " | " + k.unit + " | " + fmt(d.*k.member) + " | " + k.doc + " |\n";
+  md += std::string("| motion.") + kFlowMapKey + " | procedural, FILE.png |  | procedural | " + kFlowMapDoc + " |\n";
   return md;
 }
 

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <map>
@@ -244,6 +245,12 @@ std::vector<Spec> build_table() {
         (k.unit.empty() ? "" : "(" + k.unit + ") ") + k.doc + "; used by `--frames` sequences (docs/motion.md).",
         [member](Preset& p, const json& j, const Index&) { p.motion.*member = j.get<double>(); });
   }
+  add("/motion/flow_map", "string", "\"procedural\"", 0, 0,
+      "The flow map: \"procedural\" (the curl of a three-wave stream function) or a PNG file, relative to the "
+      "preset's folder (relative to the current folder when given with --set); x = flow phase (wraps), y = height "
+      "(top row = top of the layer), R = up and G = forward as value * 2 - 1. `cloudgen flowmap` writes the "
+      "procedural one to paint over (docs/motion.md).",
+      [](Preset& p, const json& j, const Index&) { p.motion_flow_map = j.get<std::string>(); });
   return t;
 }
 
@@ -424,6 +431,19 @@ Preset parse_preset(const std::string& text, const std::string& source, const st
   Preset p;  // the table's defaults
   p.source_path = source;
   r.walk(p, doc);
+  if (r.problems().empty() && p.motion_flow_map != "procedural") {
+    // A file named in the preset is found next to it; one given with --set, from where the user is.
+    const bool from_set = std::any_of(overrides.begin(), overrides.end(), [](const std::string& ov) {
+      return ov.rfind("motion.flow_map=", 0) == 0;
+    });
+    std::filesystem::path file = p.motion_flow_map;
+    if (!from_set && file.is_relative()) file = std::filesystem::path(source).parent_path() / file;
+    try {
+      p.motion.flow_map = load_flow_map(file.string());
+    } catch (const InputError& e) {
+      r.problem("/motion/flow_map", e.what());
+    }
+  }
   if (r.problems().empty()) cross_checks(p, r);
   if (!r.problems().empty()) {
     std::string all;

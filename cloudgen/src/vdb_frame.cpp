@@ -52,6 +52,9 @@ void write_vdb_frame(const MotionFrame& f, const std::string& path, const Export
   density->insertMeta("motion.loop", openvdb::BoolMetadata(f.loop));
   for (const MotionKey& k : motion_keys())
     density->insertMeta("motion." + k.key, openvdb::DoubleMetadata(f.motion.*k.member));
+  density->insertMeta(std::string("motion.") + kFlowMapKey, openvdb::StringMetadata(flow_map_name(f.motion)));
+  if (f.motion.flow_map)
+    density->insertMeta("motion.flow_map_fnv1a", openvdb::StringMetadata(std::to_string(f.motion.flow_map->fnv1a)));
   density->insertMeta("motion.box_min_y", openvdb::DoubleMetadata(f.box.min_y()));
   density->insertMeta("motion.box_height", openvdb::DoubleMetadata(f.box.height()));
   vdb::write_grids(f.volume, grids, path, o, batch, erosion);

@@ -176,6 +176,7 @@ std::string describe_settings(const RenderSettings& s) {
   for (const ParamDef& p : render_params()) out += "render." + p.key + "=" + p.get(s) + "\n";
   for (const cloudgen::MotionKey& k : cloudgen::motion_keys())
     out += "motion." + k.key + "=" + param::fmt(s.motion.*k.member) + "\n";
+  out += std::string("motion.") + cloudgen::kFlowMapKey + "=" + cloudgen::flow_map_name(s.motion) + "\n";
   return out;
 }
 

@@ -39,26 +39,39 @@ vec2 procedural_flow(vec2 uv) {
   return vec2(dv / nv, -du / nu);  // curl: (d psi/dv, -d psi/du)
 }
 
-// The seed's seamless flow (its equations 1-3): two lookups of the flow map at (phase, height)
-// half a period apart, blended by abs(0.5 - P0) * 2 so that each lookup's jump at its phase wrap
-// has weight 0. Continuous in t and h, in [-1, 1]^2, periodic in t with period 1 / speed_hz.
+// The seed's two phases half a period apart (its equations 1-2): P0 = frac(t * speed) and
+// P1 = frac(t * speed + 0.5).
+vec2 flow_phases(Number t, Number speed_hz) { return vec2(fract(t * speed_hz), fract(t * speed_hz + 0.5)); }
+
+// The seed's blend of the two flow lookups s0 (at phase P0) and s1 (at P1), its equation 3: weight
+// abs(0.5 - P0) * 2, so that each lookup's jump at its phase wrap has weight 0.
+vec2 flow_blend(Number p0, vec2 s0, vec2 s1) { return mix(s0, s1, abs(0.5 - p0) * 2.0); }
+
+// The seamless flow of the procedural map at (phase, height): continuous in t and h, in [-1, 1]^2,
+// periodic in t with period 1 / speed_hz. A flow map given as an image (cloudgen/motion.h FlowMap)
+// is looked up at the same two phases and blended by flow_blend.
 vec2 flow_offset(Number t, Number h, Number speed_hz) {
-  Number p0 = fract(t * speed_hz);
-  Number p1 = fract(t * speed_hz + 0.5);
-  vec2 s0 = procedural_flow(vec2(p0, h));
-  vec2 s1 = procedural_flow(vec2(p1, h));
-  return mix(s0, s1, abs(0.5 - p0) * 2.0);
+  vec2 p = flow_phases(t, speed_hz);
+  return flow_blend(p.x, procedural_flow(vec2(p.x, h)), procedural_flow(vec2(p.y, h)));
 }
 
-// Displacement D(h, t) in metres of the cloud at height fraction h (clamped to [0, 1]) and time t:
+// Displacement in metres at height fraction ph (already clamped to [0, 1]) and time t, given the
+// flow offset relative to its value at t = 0 (so that D(h, 0) = 0):
 //  - wind along `wind_xz` at speed_mps, tops faster than bottoms: speed * (1 + shear * h);
-//  - the seed's equation 5, pos' = pos + p_h * offset * (up, forward): the flow offset, relative to
-//    its value at t = 0 so that D(h, 0) = 0, scaled by h and by the up / forward amplitudes.
+//  - the seed's equation 5, pos' = pos + p_h * offset * (up, forward): the flow offset scaled by h
+//    and by the up / forward amplitudes.
+vec3 motion_displacement_of(Number t, Number ph, vec2 wind_xz, Number speed_mps, Number shear, vec2 off,
+                            Number flow_up_m, Number flow_forward_m) {
+  vec3 forward = vec3(wind_xz.x, 0.0, wind_xz.y);
+  vec3 wind = forward * (speed_mps * t * (1.0 + shear * ph));
+  return wind + vec3(0.0, ph * off.x * flow_up_m, 0.0) + forward * (ph * off.y * flow_forward_m);
+}
+
+// Displacement D(h, t) in metres of the cloud at height fraction h (clamped to [0, 1]) and time t
+// with the procedural flow map.
 vec3 motion_displacement(Number t, Number h, vec2 wind_xz, Number speed_mps, Number shear,
                          Number flow_hz, Number flow_up_m, Number flow_forward_m) {
   Number ph = clamp(h, 0.0, 1.0);
-  vec3 forward = vec3(wind_xz.x, 0.0, wind_xz.y);
-  vec3 wind = forward * (speed_mps * t * (1.0 + shear * ph));
   vec2 off = flow_offset(t, ph, flow_hz) - flow_offset(0.0, ph, flow_hz);
-  return wind + vec3(0.0, ph * off.x * flow_up_m, 0.0) + forward * (ph * off.y * flow_forward_m);
+  return motion_displacement_of(t, ph, wind_xz, speed_mps, shear, off, flow_up_m, flow_forward_m);
 }

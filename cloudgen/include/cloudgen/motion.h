@@ -3,6 +3,8 @@
 // double precision with glm's GLSL-named functions.
 #pragma once
 #include <cmath>
+#include <cstdint>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -10,6 +12,30 @@
 #include <glm/glm.hpp>
 
 namespace cloudgen {
+
+/// A flow map given as an image (seed 003's flow texture): per texel the flow (up, forward) in
+/// [-1, 1], from the red and green channels as `value * 2 - 1` (8 or 16 bits per channel; 0.5 is no
+/// flow). x is the flow phase (it wraps: the map is one cycle, left edge after right edge; texel i
+/// at phase (i + 0.5) / width), y is the height fraction: the top row at the top of the layer, the
+/// bottom row at its base (row j at h = 1 - j / (height - 1)). Looked up bilinearly.
+struct FlowMap {
+  int width = 0, height = 0;
+  std::vector<glm::dvec2> texels;  ///< row-major, row 0 = the image's top row
+  std::string path;                ///< as the user gave it (for metadata and messages)
+  uint64_t fnv1a = 0;              ///< FNV-1a 64 of the channel values, recorded with baked frames
+  /// The flow at (phase u, height fraction h).
+  glm::dvec2 sample(double u, double h) const;
+};
+
+/// Reads a PNG flow map (RGB, RGBA or palette; 8 or 16 bits). Throws InputError naming the file and
+/// what is wrong (missing, not a PNG, grey, larger than 16384 texels a side).
+std::shared_ptr<const FlowMap> load_flow_map(const std::string& path);
+/// The procedural flow map (motion.glsl procedural_flow) as a width x height image in the layout
+/// load_flow_map reads: 16-bit RGB, R = up, G = forward, B = 0.5. A start for painting one.
+std::vector<uint16_t> procedural_flow_image(int width, int height);
+/// Writes procedural_flow_image as a 16-bit RGB PNG to `file` (a staged temporary: OutputBatch).
+/// Throws IoError with libpng's reason.
+void write_flow_map_png(const std::string& file, int width, int height);
 
 /// Motion parameters (seed 003). The defaults move the clouds gently, so a time alone shows motion;
 /// wind_speed = 0 and flow_speed = 0 (or both amplitudes 0) keep them still.
@@ -20,6 +46,8 @@ struct MotionParams {
   double flow_speed = 1.0 / 120.0;  ///< flow-map cycles per second (the seed's `speed`)
   double flow_up = 120.0;           ///< flow amplitude along up at the top, m
   double flow_forward = 300.0;      ///< flow amplitude along the wind at the top, m
+  /// The flow map image (`motion.flow_map=FILE.png`); null: the procedural map of motion.glsl.
+  std::shared_ptr<const FlowMap> flow_map;
 };
 
 struct MotionKey {
@@ -33,8 +61,13 @@ struct MotionKey {
 /// The table: every motion.KEY with its range and meaning (defaults are MotionParams' initialisers).
 const std::vector<MotionKey>& motion_keys();
 /// Sets one key from text; `where` names the source for the message (e.g. "--set"). Throws
-/// InputError naming the key, the value and the allowed range, or the known keys.
+/// InputError naming the key, the value and the allowed range, or the known keys. `flow_map` takes
+/// a PNG path (read now, relative to the current directory) or "procedural".
 void set_motion_key(MotionParams& m, const std::string& key, const std::string& value, const std::string& where);
+/// The flow_map key: its name (in set_motion_key, --help and the docs) and its value as text
+/// ("procedural" or the image's path).
+extern const char* const kFlowMapKey;
+std::string flow_map_name(const MotionParams& m);
 /// True when any part of the motion is non-zero (a still setting skips the displacement entirely).
 bool motion_moves(const MotionParams& m);
 /// The box the motion measures heights in, as a volume's metadata records it (the volume header's
@@ -65,10 +98,20 @@ using std::sin;
 }  // namespace
 }  // namespace motion_glsl
 
-/// D(h, t) of motion.glsl with the table's parameters (metres; see motion.glsl for the convention).
+/// D(h, t) of motion.glsl with the table's parameters (metres; see motion.glsl for the convention):
+/// the procedural flow, or the flow map image looked up at the same two phases and blended alike.
 inline glm::dvec3 motion_displacement(const MotionParams& m, double t, double h) {
-  return motion_glsl::motion_displacement(t, h, motion_glsl::wind_direction_xz(m.wind_direction), m.wind_speed,
-                                          m.wind_shear, m.flow_speed, m.flow_up, m.flow_forward);
+  const glm::dvec2 wind = motion_glsl::wind_direction_xz(m.wind_direction);
+  if (!m.flow_map)
+    return motion_glsl::motion_displacement(t, h, wind, m.wind_speed, m.wind_shear, m.flow_speed, m.flow_up,
+                                            m.flow_forward);
+  const double ph = glm::clamp(h, 0.0, 1.0);
+  auto offset = [&](double time) {
+    const glm::dvec2 p = motion_glsl::flow_phases(time, m.flow_speed);
+    return motion_glsl::flow_blend(p.x, m.flow_map->sample(p.x, ph), m.flow_map->sample(p.y, ph));
+  };
+  return motion_glsl::motion_displacement_of(t, ph, wind, m.wind_speed, m.wind_shear, offset(t) - offset(0.0),
+                                             m.flow_up, m.flow_forward);
 }
 
 }  // namespace cloudgen

@@ -89,6 +89,7 @@ struct Preset {
   View view;  ///< optional camera, sun and render.* settings (viewer, `cloudgen blender`, README)
 
   MotionParams motion;  ///< the `motion` section: wind and flow map of a baked sequence (`--frames`)
+  std::string motion_flow_map = "procedural";  ///< /motion/flow_map as written (motion.flow_map holds the image)
 };
 
 /// One entry of the parameter table.
