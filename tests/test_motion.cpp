@@ -210,10 +210,12 @@ TEST(ViewerMotion, MovingDensityIsTheStaticDensityAtDisplacedPositions) {
 // rule is one of altitude, evaluated where a sample is seen). Tolerance: the viewer's motion
 // table is within 1 cm of the formula the bake evaluates (test above); measured 1.6e-5.
 TEST(ViewerMotion, BakedFrameEqualsTheViewersDisplacedDensity) {
-  for (const char* kind : {"blob", "noise"}) {
-    cloudgen::Volume stat = synthetic_volume(kind);
+  for (const char* kind : {"blob", "noise", "noise+curl"}) {
+    const bool curl = std::string(kind) == "noise+curl";
+    cloudgen::Volume stat = synthetic_volume(curl ? "noise" : kind);
     MotionParams m;
     m.wind_speed = 4;
+    if (curl) m.curl_amplitude = 150, m.curl_scale = 250, m.curl_rise = 3;
     const int64_t frame = 12;
     const double fps = 0.5, t = frame / fps;
     cloudgen::MotionFrame baked = cloudgen::bake_frame(stat, m, frame, fps, 2);
@@ -224,6 +226,7 @@ TEST(ViewerMotion, BakedFrameEqualsTheViewersDisplacedDensity) {
     RenderSettings still = s;
     still.motion.wind_speed = 0;
     still.motion.flow_speed = 0;
+    still.motion.curl_amplitude = 0;  // the frame holds the distorted detail
     FrameSetup shown = frame_at(frame_vol, still, 0.0);
     const cloudgen::Volume& v = baked.volume;
     double worst = 0, peak = 0;
@@ -241,6 +244,43 @@ TEST(ViewerMotion, BakedFrameEqualsTheViewersDisplacedDensity) {
     EXPECT_GT(peak, 0.1) << kind;
     EXPECT_LE(worst, 1e-3) << kind;
   }
+}
+
+// The curl distortion of the detail lookup (cloudgen/curl_distortion.glsl): GL and the CPU
+// reference agree with it on (the same texels, filtered by hand on both); it changes the image only
+// through the detail (with erosion 0 the image is the same bit for bit), most at the base; and
+// with curl_rise it churns over time while a still setting (rise 0) keeps the light volume.
+TEST(ViewerMotion, CurlDistortsTheDetailOnGlAndCpuAlike) {
+  PreparedVolume vol = prepare_volume(synthetic_volume("noise"), 8);
+  ASSERT_TRUE(vol.has_detail);
+  RenderSettings s;
+  s.erosion = 0.8;
+  s.exact_filter = true;
+  s.motion.wind_speed = 0;
+  s.motion.flow_speed = 0;
+  RenderSettings curl = s;
+  curl.motion.curl_amplitude = 120;
+  curl.motion.curl_scale = 200;
+  curl.motion.curl_rise = 0;
+  const FrameSetup f0 = frame_at(vol, s, 0.0, 96, 54), f1 = frame_at(vol, curl, 0.0, 96, 54);
+  EXPECT_EQ(f1.params.curl_amplitude_m, 120.0);
+  EXPECT_EQ(f1.params.motion_on, 0.0) << "a curl field that does not rise is a still setting";
+  const FrameImages gl0 = render_gl(vol, f0), gl1 = render_gl(vol, f1), cpu1 = render_cpu(vol, f1);
+  const double changed = max_abs_diff(gl0.display, gl1.display), gl_cpu = rmse(gl1.linear, cpu1.linear);
+  std::cout << "curl distortion: max |diff| vs none " << changed << ", GL vs CPU RMSE " << gl_cpu << "\n";
+  EXPECT_GT(changed, 0.03) << "the distortion must show";
+  EXPECT_LT(gl_cpu, 2e-4);
+  // Only the detail moves: with no erosion the picture is the undistorted one exactly.
+  RenderSettings flat = s, flat_curl = curl;
+  flat.erosion = flat_curl.erosion = 0;
+  EXPECT_EQ(max_abs_diff(render_cpu(vol, frame_at(vol, flat, 0.0, 96, 54)).linear, render_cpu(vol, frame_at(vol, flat_curl, 0.0, 96, 54)).linear), 0.0);
+  // Rising, it moves with time and makes the frame a moving one.
+  RenderSettings rising = curl;
+  rising.motion.curl_rise = 5;
+  const FrameSetup r0 = frame_at(vol, rising, 0.0, 96, 54), r1 = frame_at(vol, rising, 20.0, 96, 54);
+  EXPECT_EQ(r1.params.motion_on, 1.0);
+  EXPECT_EQ(max_abs_diff(render_gl(vol, r0).linear, gl1.linear), 0.0) << "time 0 is the still distortion";
+  EXPECT_GT(max_abs_diff(render_gl(vol, r1).display, gl1.display), 0.02);
 }
 
 // Occupancy skipping looks cells up at displaced positions; make_frame shortens the large step by

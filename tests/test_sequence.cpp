@@ -241,6 +241,26 @@ TEST(Sequence, LoopEndsWhereItBegins) {
   MotionParams calm = m;
   calm.wind_speed = 0;
   EXPECT_NO_THROW(loop_motion(calm, T, motion_box(tiny(false))));
+  // A rising curl field loops by rising whole tiles of itself.
+  MotionParams churn = calm;
+  churn.curl_amplitude = 100;
+  churn.curl_rise = 7;
+  const MotionBox box = motion_box(stat);
+  const MotionParams lc = loop_motion(churn, T, box);
+  const double ey = box.dims[1] * box.voxel_size;
+  const double tiles = lc.curl_rise * T / (ey / curl_repeats(lc, glm::dvec3(box.dims[0], box.dims[1], box.dims[2]) * box.voxel_size).y);
+  EXPECT_NEAR(tiles, std::round(tiles), 1e-9);
+  EXPECT_GE(std::round(tiles), 1.0);
+  const Volume first = bake_frame(stat, lc, r.first, fps).volume, again = bake_frame(stat, lc, r.last + 1, fps).volume;
+  double after = 0;
+  for (int c = 0; c < 3; ++c)
+    for (size_t i = 0; i < first.detail[c].size(); ++i) after = std::max(after, std::abs(double(again.detail[c][i]) - first.detail[c][i]));
+  EXPECT_LT(after, 1e-4) << "the detail of frame B + 1 must be frame A's";
+  ASSERT_FALSE(first.detail[0].empty());
+  const Volume mid = bake_frame(stat, lc, r.first + int64_t(r.count() / 3), fps).volume;
+  double churned = 0;
+  for (size_t i = 0; i < first.detail[0].size(); ++i) churned = std::max(churned, std::abs(double(mid.detail[0][i]) - first.detail[0][i]));
+  EXPECT_GT(churned, 0.01) << "the rising curl field must move the detail in between";
 }
 
 TEST(Sequence, FramePathsFollowBlendersNaming) {

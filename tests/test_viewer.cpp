@@ -84,7 +84,9 @@ TEST(ViewerMath, AnalyticLobesAreCloudgensAndIntegrateToOne) {
     for (int i = 0; i < n; ++i) {
       const double th = M_PI * (i + 0.5) / n, c = std::cos(th);
       const double got = reference_phase(s, c);
-      if (i % 997 == 0) EXPECT_DOUBLE_EQ(got, cloudgen::phase::draine_hg(fit, c)) << d;
+      if (i % 997 == 0) {
+        EXPECT_DOUBLE_EQ(got, cloudgen::phase::draine_hg(fit, c)) << d;
+      }
       sum += got * std::sin(th) * (M_PI / n);
     }
     EXPECT_NEAR(2 * M_PI * sum, 1.0, 2e-3) << "draine-hg d " << d;
@@ -94,7 +96,9 @@ TEST(ViewerMath, AnalyticLobesAreCloudgensAndIntegrateToOne) {
   const int n = 200000;
   for (int i = 0; i < n; ++i) {
     const double th = M_PI * (i + 0.5) / n, c = std::cos(th), v = reference_phase(t, c);
-    if (i % 997 == 0) EXPECT_DOUBLE_EQ(v, cloudgen::phase::two_lobe_hg(0.9, -0.3, 0.97, c));
+    if (i % 997 == 0) {
+      EXPECT_DOUBLE_EQ(v, cloudgen::phase::two_lobe_hg(0.9, -0.3, 0.97, c));
+    }
     sum += v * std::sin(th) * (M_PI / n);
     mean_cos += v * c * std::sin(th) * (M_PI / n);
   }
@@ -716,7 +720,9 @@ TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
   CV_EXPECT_OFFSET(motion_on);
   CV_EXPECT_OFFSET(wind_dir_x);
   CV_EXPECT_OFFSET(flow_speed_hz);
-  CV_EXPECT_OFFSET(motion_pad);
+  CV_EXPECT_OFFSET(curl_shift);
+  CV_EXPECT_OFFSET(curl_repeats);
+  CV_EXPECT_OFFSET(curl_amplitude_m);
   CV_EXPECT_OFFSET(ms_octaves);
   CV_EXPECT_OFFSET(ambient_below_color);
   CV_EXPECT_OFFSET(ambient_pad);

@@ -1,5 +1,6 @@
-// Flow maps given as images (cloudgen/motion.h FlowMap): reading a PNG with libpng, the bilinear
-// lookup, and the procedural map rendered as an image.
+// The motion's two fields (cloudgen/motion.h): flow maps given as images (FlowMap: reading a PNG
+// with libpng, the bilinear lookup, the procedural map rendered as an image) and the curl field
+// that distorts the detail lookup (curl_field_texels, from libnoise3d's curl).
 #include <png.h>
 
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include <vector>
 
 #include "cloudgen/motion.h"
+#include "noise3d/noise3d.h"
 #include "cloudgen/volume.h"
 
 namespace cloudgen {
@@ -141,6 +143,34 @@ void write_flow_map_png(const std::string& file, int width, int height) {
   if (!png_image_write_to_file(&im, file.c_str(), 0, img.data(), 0, nullptr))
     throw IoError(file + ": PNG write failed: " + im.message);
   png_image_free(&im);
+}
+
+}  // namespace cloudgen
+
+// ------------------------------------------------------------------------------ the curl field
+namespace cloudgen {
+
+const std::vector<glm::vec4>& curl_field_texels() {
+  static const std::vector<glm::vec4> texels = [] {
+    constexpr int n = kCurlFieldSize;
+    constexpr uint32_t lattice = 4;
+    std::vector<glm::dvec3> c(size_t(n) * n * n);
+    double peak = 0;
+    for (int k = 0; k < n; ++k)
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+          const double s = double(lattice) / n;
+          const auto v = noise3d::curl((i + 0.5) * s, (j + 0.5) * s, (k + 0.5) * s, noise3d::Period::cube(lattice),
+                                       0xc011c0de5eedull);
+          glm::dvec3& t = c[(size_t(k) * n + j) * n + i];
+          t = glm::dvec3(v[0], v[1], v[2]);
+          peak = std::max({peak, std::abs(t.x), std::abs(t.y), std::abs(t.z)});
+        }
+    std::vector<glm::vec4> out(c.size());
+    for (size_t q = 0; q < c.size(); ++q) out[q] = glm::vec4(glm::vec3(c[q] / peak), 0.0f);
+    return out;
+  }();
+  return texels;
 }
 
 }  // namespace cloudgen

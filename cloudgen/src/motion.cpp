@@ -33,6 +33,12 @@ const std::vector<MotionKey>& motion_keys() {
        "flow-map amplitude along up at the top of the layer (scaled by the height fraction)"},
       {"flow_forward", &MotionParams::flow_forward, 0, 1e5, "m",
        "flow-map amplitude along the wind at the top of the layer (scaled by the height fraction)"},
+      {"curl_amplitude", &MotionParams::curl_amplitude, 0, 1e4, "m",
+       "curl-noise distortion of the detail lookup at the cloud base, fading to none at the top (0 = off; "
+       "needs the detail channels)"},
+      {"curl_scale", &MotionParams::curl_scale, 10, 1e6, "m",
+       "size of one tile of the curl field (rounded so the volume holds whole tiles)"},
+      {"curl_rise", &MotionParams::curl_rise, 0, 100, "m/s", "speed at which the curl field rises through the cloud"},
   };
   return keys;
 }
@@ -77,7 +83,18 @@ void set_motion_key(MotionParams& m, const std::string& key, const std::string& 
 }
 
 bool motion_moves(const MotionParams& m) {
-  return m.wind_speed > 0 || (m.flow_speed > 0 && (m.flow_up > 0 || m.flow_forward > 0));
+  return m.wind_speed > 0 || (m.flow_speed > 0 && (m.flow_up > 0 || m.flow_forward > 0)) ||
+         (m.curl_amplitude > 0 && m.curl_rise > 0);
+}
+
+glm::dvec3 curl_repeats(const MotionParams& m, const glm::dvec3& extent_m) {
+  glm::dvec3 r;
+  for (int a = 0; a < 3; ++a) r[a] = std::max(1.0, std::round(extent_m[a] / m.curl_scale));
+  return r;
+}
+
+double curl_shift(const MotionParams& m, double t, double extent_y, double repeats_y) {
+  return m.curl_rise * t * repeats_y / extent_y;
 }
 
 bool motion_height_box(const std::vector<std::pair<std::string, std::string>>& metadata, double& min_y,

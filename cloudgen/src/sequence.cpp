@@ -27,6 +27,23 @@ std::string fmt(double v) {
 
 int64_t mod(int64_t a, int64_t n) { return ((a % n) + n) % n; }
 
+// The curl distortion of the detail lookup, from the text the viewer compiles.
+namespace curl_glsl {
+using Number = double;
+using vec3 = glm::dvec3;
+using ivec3 = glm::ivec3;
+using glm::clamp;
+using glm::floor;
+using glm::mix;
+vec3 curl_texel(ivec3 i) {
+  constexpr size_t n = kCurlFieldSize;
+  const glm::vec4& t = curl_field_texels()[(size_t(i.z) * n + size_t(i.y)) * n + size_t(i.x)];
+  return vec3(t.x, t.y, t.z);
+}
+#include "cloudgen/curl_distortion.glsl"
+static_assert(CV_CURL_SIZE == kCurlFieldSize, "curl_distortion.glsl and cloudgen/motion.h agree on the field size");
+}  // namespace curl_glsl
+
 /// The two voxel indices and weights a trilinear read at index coordinate u uses along one axis
 /// (voxel centres at integers), or `inside` false when u lies outside the box [-0.5, n - 0.5]
 /// and the axis does not wrap (then the value is 0).
@@ -182,6 +199,21 @@ MotionParams loop_motion(const MotionParams& m, double T, const MotionBox& box, 
       note("motion.flow_speed " + fmt(m.flow_speed) + " -> " + fmt(out.flow_speed) + " cycles/s: " + fmt(n) +
            " whole flow cycle(s) in " + fmt(T) + " s");
   }
+  if (m.curl_amplitude > 0 && m.curl_rise > 0) {
+    // The curl field repeats vertically every extent / repeats metres: rise a whole number of those.
+    const double ey = box.dims[1] * box.voxel_size;
+    const glm::dvec3 rep = curl_repeats(m, glm::dvec3(box.dims[0], box.dims[1], box.dims[2]) * box.voxel_size);
+    const double tile = ey / rep.y;
+    const double n = std::max(1.0, std::round(m.curl_rise * T / tile));
+    out.curl_rise = n * tile / T;
+    for (const MotionKey& k : motion_keys())
+      if (k.key == "curl_rise" && out.curl_rise > k.hi)
+        throw InputError("--loop: a whole curl tile (" + fmt(tile) + " m) in " + fmt(T) + " s needs motion.curl_rise = " +
+                         fmt(out.curl_rise) + " m/s, above its maximum " + fmt(k.hi) + "; make the sequence longer");
+    if (out.curl_rise != m.curl_rise)
+      note("motion.curl_rise " + fmt(m.curl_rise) + " -> " + fmt(out.curl_rise) + " m/s: the curl field rises " + fmt(n) +
+           " whole tile(s) of " + fmt(tile) + " m in " + fmt(T) + " s");
+  }
   return out;
 }
 
@@ -276,6 +308,8 @@ MotionFrame bake_frame(const Volume& s, const MotionParams& m, int64_t frame, do
   struct Row {
     Taps y;
     std::vector<Taps> x, z;
+    glm::dvec3 d;  // the row's displacement in voxels
+    double h = 0;  // its height fraction
   };
   std::vector<Row> rows(ny);
   f.row_velocity.resize(ny);
@@ -285,12 +319,19 @@ MotionFrame bake_frame(const Volume& s, const MotionParams& m, int64_t frame, do
     const glm::dvec3 d = motion_displacement(m, f.time, h) / vs;
     f.row_velocity[j] = motion_velocity(m, f.time, h);
     Row& r = rows[j];
+    r.d = d;
+    r.h = h;
     r.y = taps(double(js) - d.y, n[1], false);
     r.x.resize(v.dims[0]);
     r.z.resize(v.dims[2]);
     for (uint32_t i = 0; i < v.dims[0]; ++i) r.x[i] = taps(double(fb.lo[0] + i) - d.x, n[0], s.tiles_xz);
     for (uint32_t k = 0; k < v.dims[2]; ++k) r.z[k] = taps(double(fb.lo[2] + k) - d.z, n[2], s.tiles_xz);
   }
+  // The curl distortion of the detail (motion.curl_*), over the static volume's box.
+  const bool curl_on = m.curl_amplitude > 0 && src.size() > 1;
+  const glm::dvec3 extent = glm::dvec3(double(n[0]), double(n[1]), double(n[2])) * vs;
+  const glm::dvec3 curl_rep = curl_repeats(m, extent);
+  const double curl_sh = curl_shift(m, f.time, extent.y, curl_rep.y);
   auto body = [&](const tbb::blocked_range<uint32_t>& zr) {
     for (uint32_t k = zr.begin(); k < zr.end(); ++k)
       for (uint32_t j = 0; j < ny; ++j) {
@@ -309,7 +350,29 @@ MotionFrame bake_frame(const Volume& s, const MotionParams& m, int64_t frame, do
           const Taps& tx = r.x[i];
           if (!tx.inside) continue;
           const size_t out = v.index(i, j, k);
-          for (size_t c = 0; c < src.size(); ++c) {
+          if (curl_on) {
+            // The detail channels are read where the curl field moves them (medium.glsl: at the
+            // static uvw plus the offset, the texture's clamp or wrap at the box's faces).
+            const glm::dvec3 st(double(fb.lo[0] + i) - r.d.x, double(fb.lo[1] + j) - r.d.y, double(fb.lo[2] + k) - r.d.z);
+            const glm::dvec3 uvw = (st + 0.5) / glm::dvec3(double(n[0]), double(n[1]), double(n[2]));
+            const glm::dvec3 q = st + curl_glsl::curl_detail_offset_m(uvw, r.h, curl_rep, curl_sh, m.curl_amplitude) / vs;
+            auto axis = [&](double u, int a, bool wrap) {
+              return taps(wrap ? u : std::clamp(u, -0.5, double(n[a]) - 0.5), n[a], wrap);
+            };
+            const Taps qx = axis(q.x, 0, s.tiles_xz), qy = axis(q.y, 1, false), qz = axis(q.z, 2, s.tiles_xz);
+            for (size_t c = 1; c < src.size(); ++c) {
+              const float* ch = src[c]->data();
+              double acc = 0;
+              for (int e = 0; e < 4; ++e) {
+                const int64_t y = e & 1 ? qy.i1 : qy.i0, z = e & 2 ? qz.i1 : qz.i0;
+                const size_t b = s.index(0, uint32_t(y), uint32_t(z));
+                acc += (e & 1 ? qy.w1 : qy.w0) * (e & 2 ? qz.w1 : qz.w0) *
+                       (qx.w0 * double(ch[b + size_t(qx.i0)]) + qx.w1 * double(ch[b + size_t(qx.i1)]));
+              }
+              (*dst[c])[out] = float(acc);
+            }
+          }
+          for (size_t c = 0; c < (curl_on ? 1 : src.size()); ++c) {
             const float* ch = src[c]->data();
             double acc = 0;
             for (int q = 0; q < 4; ++q)

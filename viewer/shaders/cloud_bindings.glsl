@@ -119,6 +119,8 @@ Number mie_table_value(int i) { return texelFetch(s_mie, i, 0).r; }
 vec2 coverage_texel(ivec2 texel) { return texelFetch(s_coverage, texel, 0).rg; }
 layout(binding = CV_UNIT_MOTION) uniform sampler2D s_motion;        // RGBA32F: D(h) for this and the last frame
 vec3 motion_texel(int i, int row) { return texelFetch(s_motion, ivec2(i, row), 0).xyz; }
+layout(binding = CV_UNIT_CURL) uniform sampler3D s_curl;  // RGBA32F: the curl field (cloudgen/curl_distortion.glsl)
+vec3 curl_texel(ivec3 i) { return texelFetch(s_curl, i, 0).xyz; }
 ivec2 coverage_size() { return textureSize(s_coverage, 0); }
 // Distance skipping and the light volume (march.glsl, lighting.glsl).
 layout(binding = CV_UNIT_DISTANCE) uniform usampler3D s_distance;    // R8UI: cells to the nearest cell holding density

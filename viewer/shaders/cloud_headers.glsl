@@ -13,6 +13,7 @@
 #include "phase.glsl"
 #include "cloud_type.glsl"
 #include "motion.glsl"
+#include "curl_distortion.glsl"
 #include "medium.glsl"
 #include "atmosphere.glsl"
 #include "sky_atmosphere.glsl"

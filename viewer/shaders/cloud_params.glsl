@@ -91,7 +91,7 @@ struct CloudParams {
   Number flow_speed_hz;
   Number flow_up_m;
   Number flow_forward_m;
-  Number motion_pad;
+  Number curl_shift;        // curl distortion (cloudgen/curl_distortion.glsl): the field's rise, in its tiles
   Number height_min_m;      // box mode: the box heights are measured in (motion, erosion), min y
   Number height_size_m;     //   relative to the camera, and its height
   Number height_pad0;
@@ -114,4 +114,6 @@ struct CloudParams {
   Number draine_w_d;        // draine-hg: the Draine lobe's weight
   Number phase_pad0;
   Number phase_pad1;
+  // Curl-noise distortion of the detail lookup (motion.curl_*; cloudgen/curl_distortion.glsl).
+  vec3 curl_repeats;        Number curl_amplitude_m;  // whole tiles of the field per volume axis; 0 = off
 };

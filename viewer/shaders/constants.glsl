@@ -55,6 +55,7 @@
 #define CV_BINDING_NANOVDB 0
 #define CV_UNIT_NANOVDB_PAGES 15
 #define CV_UNIT_IRRADIANCE 16         // RGBA32F: the sky's irradiance on the ground (atmosphere LUT)
+#define CV_UNIT_CURL 17               // RGBA32F: the curl field that distorts the detail lookup
 
 // Fixed sizes.
 #define CV_COVERAGE_MAP_SIZE 256   // layer-mode coverage map, texels per side

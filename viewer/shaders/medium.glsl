@@ -151,7 +151,15 @@ Number cloud_density(vec3 p) {
   }
   Number erosion = u_cloud.erosion;
   if (u_cloud.has_detail > 0.5 && erosion > 0.0 && base > 0.0) {
-    Number detail = dot(vec3(v.y, v.z, v.w), vec3(0.625, 0.25, 0.125));
+    vec3 dv = vec3(v.y, v.z, v.w);
+    if (u_cloud.curl_amplitude_m > 0.0) {
+      // The detail is read where the curl field moves it (motion.curl_*): the base shape stays.
+      vec3 off = curl_detail_offset_m(uvw, seen_h, u_cloud.curl_repeats, u_cloud.curl_shift, u_cloud.curl_amplitude_m);
+      vec3 q = uvw + off / volume_uvw_extent_m();
+      vec4 w = u_cloud.exact_filter > 0.5 ? volume_trilinear(q) : volume_filtered(q);
+      dv = vec3(w.y, w.z, w.w);
+    }
+    Number detail = dot(dv, vec3(0.625, 0.25, 0.125));
     // Wispy (inverted detail) near the cloud base, billowy higher up (Schneider 2015): a rule of
     // the altitude, so taken where the sample is seen, not where the moving cloud came from (a
     // baked motion frame, which moves the channels, then erodes exactly like the moving volume).

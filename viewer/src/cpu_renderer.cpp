@@ -22,6 +22,7 @@
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
 #include "cloudgen/nvdb.h"
 #endif
+#include "cloudgen/motion.h"
 #include "glsl_cpp.h"  // last: defines IN/OUT/INOUT
 
 namespace cloudviewer {
@@ -136,6 +137,11 @@ struct CpuShader {
   }
   ivec2 coverage_size() const { return ivec2(CV_COVERAGE_MAP_SIZE, CV_COVERAGE_MAP_SIZE); }
   vec3 motion_texel(int i, int row) const { return (*motion)[size_t(row) * CV_MOTION_LUT_SIZE + size_t(i)]; }
+  vec3 curl_texel(ivec3 i) const {
+    constexpr size_t n = cloudgen::kCurlFieldSize;
+    const glm::vec4& t = cloudgen::curl_field_texels()[(size_t(i.z) * n + size_t(i.y)) * n + size_t(i.x)];
+    return vec3(t.x, t.y, t.z);
+  }
 
 // The list and order of shaders/cloud_headers.glsl (after its GLSL-only bindings), plus post.glsl.
 #include "../shaders/common.glsl"
@@ -144,6 +150,7 @@ struct CpuShader {
 #include "../shaders/phase.glsl"
 #include "cloudgen/cloud_type.glsl"
 #include "cloudgen/motion.glsl"
+#include "cloudgen/curl_distortion.glsl"
 #include "../shaders/medium.glsl"
 #include "../shaders/atmosphere.glsl"
 #include "../shaders/sky_atmosphere.glsl"
@@ -154,6 +161,7 @@ struct CpuShader {
 #include "../shaders/temporal.glsl"
 #include "../shaders/post.glsl"
 };
+static_assert(CV_CURL_SIZE == cloudgen::kCurlFieldSize, "curl_distortion.glsl and cloudgen/motion.h agree on the curl field size");
 
 struct Buffer {
   int w, h;

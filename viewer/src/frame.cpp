@@ -30,6 +30,13 @@ void apply_motion(const RenderSettings& s, bool baked, double height, ref::Cloud
   p.flow_up_m = m.flow_up;
   p.flow_forward_m = m.flow_forward;
   p.motion_on = s.time != 0 && cloudgen::motion_moves(m) && !baked ? 1 : 0;
+  // The curl distortion of the detail lookup (cloudgen/curl_distortion.glsl), over the box or the
+  // repeating texture; a baked frame already holds it.
+  const glm::dvec3 extent = p.layer_on > 0.5 ? glm::dvec3(p.tile_x_m, p.layer_top_m - p.layer_bottom_m, p.tile_z_m)
+                                             : p.volume_size_m;
+  p.curl_amplitude_m = baked ? 0.0 : m.curl_amplitude;
+  p.curl_repeats = cloudgen::curl_repeats(m, extent);
+  p.curl_shift = cloudgen::curl_shift(m, s.time, extent.y, p.curl_repeats.y);
   if (p.motion_on < 0.5) return;
   // Moving clouds: the distance field's jumps are proven for the still volume, and the light volume
   // would need a rebuild every frame; both give way to the thesis scheme (made exact below) and

@@ -11,6 +11,7 @@
 #include <epoxy/gl.h>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "cloudgen/motion.h"
 #include "cloudviewer/atmosphere.h"
 #include "cloudviewer/constants.h"
 #include "cloudviewer/errors.h"
@@ -240,7 +241,7 @@ struct GlRenderer::Impl {
   ShaderSource shaders;
   std::vector<Target> targets = make_targets();
   std::vector<Pass> passes = make_passes();
-  GLuint tex_volume = 0, tex_occ = 0, tex_dist = 0, tex_mie = 0, tex_coverage = 0, tex_motion = 0;
+  GLuint tex_volume = 0, tex_occ = 0, tex_dist = 0, tex_mie = 0, tex_coverage = 0, tex_motion = 0, tex_curl = 0;
   int volume_serial = 0;              // counts set_volume calls (part of the light volume's key)
   std::vector<double> light_key;      // what the light volume was built from; empty = not built
   int light_builds = 0;
@@ -370,7 +371,8 @@ struct GlRenderer::Impl {
     return {double(volume_serial), p.sun_dir.x, p.sun_dir.y, p.sun_dir.z, p.volume_size_m.x, p.volume_size_m.y,
             p.volume_size_m.z, p.tiles_xz, p.has_detail, p.sigma_t_per_m, p.erosion, p.density_scale,
             p.exact_filter, p.light_mode, p.light_samples, p.light_step_m, p.light_growth, p.df_light,
-            p.light_volume_dims.x, p.light_volume_dims.y, p.light_volume_dims.z};
+            p.light_volume_dims.x, p.light_volume_dims.y, p.light_volume_dims.z, p.curl_amplitude_m,
+            p.curl_repeats.x, p.curl_repeats.y, p.curl_repeats.z, p.curl_shift};
   }
   // nanovdb_storage.glsl's switches: rebuilds the programs when they change.
   int storage = 0;  // 0 dense, 1 nanovdb from a storage buffer, 2 nanovdb from a buffer texture
@@ -510,13 +512,21 @@ GlRenderer::GlRenderer(ShaderSource shaders) : impl_(std::make_unique<Impl>()) {
   glTextureStorage2D(m.tex_motion, 1, GL_RGBA32F, CV_MOTION_LUT_SIZE, 2);
   glTextureParameteri(m.tex_motion, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTextureParameteri(m.tex_motion, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  // The curl field (cloudgen/curl_distortion.glsl reads it with texelFetch and filters by hand, as
+  // the CPU reference does).
+  const std::vector<glm::vec4>& curl = cloudgen::curl_field_texels();
+  glCreateTextures(GL_TEXTURE_3D, 1, &m.tex_curl);
+  glTextureStorage3D(m.tex_curl, 1, GL_RGBA32F, cloudgen::kCurlFieldSize, cloudgen::kCurlFieldSize, cloudgen::kCurlFieldSize);
+  glTextureSubImage3D(m.tex_curl, 0, 0, 0, 0, cloudgen::kCurlFieldSize, cloudgen::kCurlFieldSize, cloudgen::kCurlFieldSize, GL_RGBA, GL_FLOAT, curl.data());
+  glTextureParameteri(m.tex_curl, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTextureParameteri(m.tex_curl, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
 }
 
 GlRenderer::~GlRenderer() {
   Impl& m = *impl_;
   m.delete_programs();
   m.delete_targets();
-  GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_dist, m.tex_mie, m.tex_coverage, m.tex_motion};
+  GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_dist, m.tex_mie, m.tex_coverage, m.tex_motion, m.tex_curl};
   for (GLuint t : texs)
     if (t) glDeleteTextures(1, &t);
   if (m.tex_nano) glDeleteTextures(1, &m.tex_nano);
@@ -712,6 +722,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glBindTextureUnit(CV_UNIT_MIE, m.tex_mie);
   glBindTextureUnit(CV_UNIT_COVERAGE, m.tex_coverage);
   glBindTextureUnit(CV_UNIT_MOTION, m.tex_motion);
+  glBindTextureUnit(CV_UNIT_CURL, m.tex_curl);
   glDisable(GL_BLEND);
   glDisable(GL_CULL_FACE);
   glDisable(GL_FRAMEBUFFER_SRGB);

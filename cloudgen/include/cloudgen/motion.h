@@ -37,6 +37,13 @@ std::vector<uint16_t> procedural_flow_image(int width, int height);
 /// Throws IoError with libpng's reason.
 void write_flow_map_png(const std::string& file, int width, int height);
 
+/// The curl field that distorts the detail lookup (curl_distortion.glsl): CV_CURL_SIZE^3 texels,
+/// x fastest, the curl of libnoise3d's tileable potential (4 lattice cells per tile, a fixed seed),
+/// each component divided by the largest one so it lies in [-1, 1]; w = 0. Built once.
+const std::vector<glm::vec4>& curl_field_texels();
+/// Texels per side of that field: curl_distortion.glsl's CV_CURL_SIZE (static_asserted where both are seen).
+inline constexpr int kCurlFieldSize = 32;
+
 /// Motion parameters (seed 003). The defaults move the clouds gently, so a time alone shows motion;
 /// wind_speed = 0 and flow_speed = 0 (or both amplitudes 0) keep them still.
 struct MotionParams {
@@ -46,6 +53,9 @@ struct MotionParams {
   double flow_speed = 1.0 / 120.0;  ///< flow-map cycles per second (the seed's `speed`)
   double flow_up = 120.0;           ///< flow amplitude along up at the top, m
   double flow_forward = 300.0;      ///< flow amplitude along the wind at the top, m
+  double curl_amplitude = 0.0;       ///< curl distortion of the detail lookup at the base, m (0 = off)
+  double curl_scale = 800.0;         ///< size of one tile of the curl field, m (whole tiles per volume)
+  double curl_rise = 2.0;            ///< the curl field rises through the cloud at this speed, m/s
   /// The flow map image (`motion.flow_map=FILE.png`); null: the procedural map of motion.glsl.
   std::shared_ptr<const FlowMap> flow_map;
 };
@@ -68,6 +78,10 @@ void set_motion_key(MotionParams& m, const std::string& key, const std::string& 
 /// ("procedural" or the image's path).
 extern const char* const kFlowMapKey;
 std::string flow_map_name(const MotionParams& m);
+/// The curl field's whole repeats over a volume of `extent_m` per axis: max(1, round(extent / curl_scale)).
+glm::dvec3 curl_repeats(const MotionParams& m, const glm::dvec3& extent_m);
+/// How far the curl field has risen at time t, in its tiles: curl_rise * t * repeats_y / extent_y.
+double curl_shift(const MotionParams& m, double t, double extent_y, double repeats_y);
 /// True when any part of the motion is non-zero (a still setting skips the displacement entirely).
 bool motion_moves(const MotionParams& m);
 /// The box the motion measures heights in, as a volume's metadata records it (the volume header's
