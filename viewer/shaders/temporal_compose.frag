@@ -2,9 +2,13 @@
 // Temporal upsampling, step 3: the resolved cloud layer over the full-resolution background. With
 // the precomputed sky the air in front of the background (smooth over the image) comes from the
 // sparse pixels: bilinear over the four around this pixel that see the same kind of background
-// (sky, or ground within 5% of this pixel's distance); where none does (edges of the ground, the
-// horizon) it is evaluated here. The ground's own radiance, its shadows and the sun's disc stay
-// per pixel. The analytic sky is cheap: compose_over as the full cloud pass does.
+// (sky, or ground). A ground neighbour's air is carried to this pixel's distance t as if the air
+// along the ray were uniform (transmittance T^(t / t_k), inscattered light in proportion to
+// 1 - T): exact for a uniform medium, and nearly so between rays 4 pixels apart, which is what
+// lets the far ground near the horizon, whose distance changes fast from row to row, use its
+// neighbours. Where no neighbour sees the same kind (the horizon line) the air is evaluated here.
+// The ground's own radiance, its shadows and the sun's disc stay per pixel. The analytic sky is
+// cheap: compose_over as the full cloud pass does.
 #include "cloud_headers.glsl"
 layout(binding = CV_UNIT_PASS_INPUT0) uniform sampler2D s_cloud;
 layout(binding = CV_UNIT_PASS_INPUT1) uniform sampler2D s_scene_color;
@@ -27,13 +31,22 @@ vec3 background(ivec2 px, vec3 rd, float t, vec3 scene_color) {
     ivec2 q = clamp(g0 + o, ivec2(0), qn - 1);
     vec4 a = texelFetch(s_air, q, 0);
     bool q_sky = a.w >= CV_NO_HIT_TEST;
-    bool same = sky ? q_sky : (!q_sky && abs(a.w - t) <= 0.05 * t);
     float w = (o.x == 1 ? f.x : 1.0 - f.x) * (o.y == 1 ? f.y : 1.0 - f.y);
-    if (same) {
+    if (sky != q_sky) continue;
+    vec3 tk = texelFetch(s_air_t, q, 0).rgb;
+    if (sky) {
       inscattered += w * a.rgb;
-      transmittance += w * texelFetch(s_air_t, q, 0).rgb;
-      wsum += w;
+      transmittance += w * tk;
+    } else {
+      float r = t / max(a.w, 1e-3);
+      vec3 tt = pow(max(tk, vec3(1e-6)), vec3(r));
+      vec3 lost = vec3(1.0) - tk;
+      // I(t) = I_k (1 - T(t)) / (1 - T_k); for nearly clear air (1 - T_k -> 0) the limit I_k t / t_k.
+      vec3 scale = mix(vec3(r), (vec3(1.0) - tt) / max(lost, vec3(1e-6)), step(vec3(1e-4), lost));
+      inscattered += w * a.rgb * scale;
+      transmittance += w * tt;
     }
+    wsum += w;
   }
   if (wsum >= 0.2) {
     inscattered /= wsum;
