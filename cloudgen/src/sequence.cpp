@@ -35,11 +35,7 @@ using ivec3 = glm::ivec3;
 using glm::clamp;
 using glm::floor;
 using glm::mix;
-vec3 curl_texel(ivec3 i) {
-  constexpr size_t n = kCurlFieldSize;
-  const glm::vec4& t = curl_field_texels()[(size_t(i.z) * n + size_t(i.y)) * n + size_t(i.x)];
-  return vec3(t.x, t.y, t.z);
-}
+vec3 curl_texel(ivec3 i) { return curl_field_texel(i.x, i.y, i.z); }
 #include "cloudgen/curl_distortion.glsl"
 static_assert(CV_CURL_SIZE == kCurlFieldSize, "curl_distortion.glsl and cloudgen/motion.h agree on the field size");
 }  // namespace curl_glsl

@@ -137,11 +137,7 @@ struct CpuShader {
   }
   ivec2 coverage_size() const { return ivec2(CV_COVERAGE_MAP_SIZE, CV_COVERAGE_MAP_SIZE); }
   vec3 motion_texel(int i, int row) const { return (*motion)[size_t(row) * CV_MOTION_LUT_SIZE + size_t(i)]; }
-  vec3 curl_texel(ivec3 i) const {
-    constexpr size_t n = cloudgen::kCurlFieldSize;
-    const glm::vec4& t = cloudgen::curl_field_texels()[(size_t(i.z) * n + size_t(i.y)) * n + size_t(i.x)];
-    return vec3(t.x, t.y, t.z);
-  }
+  vec3 curl_texel(ivec3 i) const { return cloudgen::curl_field_texel(i.x, i.y, i.z); }
 
 // The list and order of shaders/cloud_headers.glsl (after its GLSL-only bindings), plus post.glsl.
 #include "../shaders/common.glsl"

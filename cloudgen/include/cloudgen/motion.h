@@ -43,6 +43,13 @@ void write_flow_map_png(const std::string& file, int width, int height);
 const std::vector<glm::vec4>& curl_field_texels();
 /// Texels per side of that field: curl_distortion.glsl's CV_CURL_SIZE (static_asserted where both are seen).
 inline constexpr int kCurlFieldSize = 32;
+/// Texel (x, y, z) of that field, each index in [0, kCurlFieldSize): curl_distortion.glsl's
+/// curl_texel for the C++ includers (the viewer's CPU reference, the sequence bake).
+inline glm::dvec3 curl_field_texel(int x, int y, int z) {
+  constexpr size_t n = kCurlFieldSize;
+  const glm::vec4& t = curl_field_texels()[(size_t(z) * n + size_t(y)) * n + size_t(x)];
+  return glm::dvec3(t.x, t.y, t.z);
+}
 
 /// Motion parameters (seed 003). The defaults move the clouds gently, so a time alone shows motion;
 /// wind_speed = 0 and flow_speed = 0 (or both amplitudes 0) keep them still.
