@@ -534,6 +534,10 @@ TEST(FlowMap, BadFilesAreRefusedWithTheReason) {
   EXPECT_NE(error(dir / "grey.png").find("a grey image"), std::string::npos);
   EXPECT_NE(error(dir / "folder.png").find("not a regular file"), std::string::npos);
   EXPECT_NE(error("").find("give a PNG file or \"procedural\""), std::string::npos);
+  // Wider than the limit: refused from the header, before any texel is stored.
+  write_png8(dir / "wide.png", kFlowMapMaxSide + 1, 1, 3, [](int, int, int) { return 128; });
+  EXPECT_NE(error(dir / "wide.png").find("4097 x 1 texels; a flow map may have at most 4096 a side"), std::string::npos)
+      << error(dir / "wide.png");
   // An 8-bit RGB map: 0 -> -1, 255 -> +1 per channel, R = up, G = forward.
   write_png8(dir / "rgb.png", 2, 1, 3, [](int x, int, int c) { return c == 0 ? x * 255 : 255 - x * 255; });
   MotionParams m;

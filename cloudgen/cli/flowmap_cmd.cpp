@@ -18,8 +18,10 @@ struct FlowmapArgs {
 void run_flowmap(const FlowmapArgs& a) {
   int w = 0, h = 0;
   char tail = 0;
-  if (std::sscanf(a.size.c_str(), "%dx%d%c", &w, &h, &tail) != 2 || w < 2 || h < 2 || w > 16384 || h > 16384)
-    throw InputError("--size " + printable(a.size) + ": expected WIDTHxHEIGHT, each 2..16384 (e.g. 256x64)");
+  const int most = kFlowMapMaxSide;
+  if (std::sscanf(a.size.c_str(), "%dx%d%c", &w, &h, &tail) != 2 || w < 2 || h < 2 || w > most || h > most)
+    throw InputError("--size " + printable(a.size) + ": expected WIDTHxHEIGHT, each 2.." + std::to_string(most) +
+                     " (e.g. 256x64)");
   const std::string ext = a.out.size() >= 4 ? a.out.substr(a.out.size() - 4) : "";
   if (ext != ".png" && ext != ".PNG") throw InputError("-o " + printable(a.out) + ": a flow map is written as .png");
   OutputBatch batch;

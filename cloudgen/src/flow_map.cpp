@@ -20,7 +20,9 @@
 namespace cloudgen {
 namespace {
 
-constexpr int kMaxSide = 16384;
+// A flow map is a few hundred texels a side; 4096 bounds what a mistaken file can make us allocate
+// (4096^2 texels: 256 MiB of dvec2) before libpng reads a row.
+constexpr int kMaxSide = kFlowMapMaxSide;
 
 struct PngRead {
   png_structp png = nullptr;
@@ -81,12 +83,14 @@ std::shared_ptr<const FlowMap> load_flow_map(const std::string& path) {
   if (setjmp(png_jmpbuf(r.png))) throw InputError(what + ": " + *message);
   png_init_io(r.png, r.file);
   png_set_sig_bytes(r.png, 8);
-  png_set_user_limits(r.png, kMaxSide, kMaxSide);
   png_read_info(r.png, r.info);
   w = png_get_image_width(r.png, r.info);
   h = png_get_image_height(r.png, r.info);
   depth = png_get_bit_depth(r.png, r.info);
   color = png_get_color_type(r.png, r.info);
+  if (w > png_uint_32(kMaxSide) || h > png_uint_32(kMaxSide))
+    throw InputError(what + ": " + std::to_string(w) + " x " + std::to_string(h) + " texels; a flow map may have at most " +
+                     std::to_string(kMaxSide) + " a side (a few hundred is plenty: it is one flow cycle by the layer's height)");
   if (!(color & PNG_COLOR_MASK_COLOR))
     throw InputError(what + ": a grey image has one value per texel; a flow map needs two (R = up, G = forward)");
   // Values as stored: palettes expanded to RGB, no gamma or colour-space conversion.

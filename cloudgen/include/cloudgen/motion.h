@@ -28,7 +28,8 @@ struct FlowMap {
 };
 
 /// Reads a PNG flow map (RGB, RGBA or palette; 8 or 16 bits). Throws InputError naming the file and
-/// what is wrong (missing, not a PNG, grey, larger than 16384 texels a side).
+/// what is wrong (missing, not a PNG, grey, larger than kFlowMapMaxSide texels a side).
+inline constexpr int kFlowMapMaxSide = 4096;
 std::shared_ptr<const FlowMap> load_flow_map(const std::string& path);
 /// The procedural flow map (motion.glsl procedural_flow) as a width x height image in the layout
 /// load_flow_map reads: 16-bit RGB, R = up, G = forward, B = 0.5. A start for painting one.
