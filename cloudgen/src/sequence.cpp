@@ -27,19 +27,6 @@ std::string fmt(double v) {
 
 int64_t mod(int64_t a, int64_t n) { return ((a % n) + n) % n; }
 
-// The curl distortion of the detail lookup, from the text the viewer compiles.
-namespace curl_glsl {
-using Number = double;
-using vec3 = glm::dvec3;
-using ivec3 = glm::ivec3;
-using glm::clamp;
-using glm::floor;
-using glm::mix;
-vec3 curl_texel(ivec3 i) { return curl_field_texel(i.x, i.y, i.z); }
-#include "cloudgen/curl_distortion.glsl"
-static_assert(CV_CURL_SIZE == kCurlFieldSize, "curl_distortion.glsl and cloudgen/motion.h agree on the field size");
-}  // namespace curl_glsl
-
 /// The two voxel indices and weights a trilinear read at index coordinate u uses along one axis
 /// (voxel centres at integers), or `inside` false when u lies outside the box [-0.5, n - 0.5]
 /// and the axis does not wrap (then the value is 0).
@@ -64,6 +51,28 @@ Taps taps(double u, int64_t n, bool wrap) {
   t.w1 = f;
   t.inside = true;
   return t;
+}
+
+/// The four (y, z) corners of a trilinear read of `s`: their weights and where their x rows start.
+struct CornersYZ {
+  double w[4];
+  size_t base[4];
+};
+CornersYZ corners_yz(const Volume& s, const Taps& ty, const Taps& tz) {
+  CornersYZ c;
+  for (int q = 0; q < 4; ++q) {
+    const int64_t y = q & 1 ? ty.i1 : ty.i0, z = q & 2 ? tz.i1 : tz.i0;
+    c.w[q] = (q & 1 ? ty.w1 : ty.w0) * (q & 2 ? tz.w1 : tz.w0);
+    c.base[q] = s.index(0, uint32_t(y), uint32_t(z));
+  }
+  return c;
+}
+/// Channel `ch` of `s` read trilinearly at those corners and the x taps.
+double trilinear(const float* ch, const CornersYZ& c, const Taps& tx) {
+  double acc = 0;
+  for (int q = 0; q < 4; ++q)
+    acc += c.w[q] * (tx.w0 * double(ch[c.base[q] + size_t(tx.i0)]) + tx.w1 * double(ch[c.base[q] + size_t(tx.i1)]));
+  return acc;
 }
 
 }  // namespace
@@ -325,7 +334,8 @@ MotionFrame bake_frame(const Volume& s, const MotionParams& m, int64_t frame, do
   }
   // The curl distortion of the detail (motion.curl_*), over the static volume's box.
   const bool curl_on = m.curl_amplitude > 0 && src.size() > 1;
-  const glm::dvec3 extent = glm::dvec3(double(n[0]), double(n[1]), double(n[2])) * vs;
+  const glm::dvec3 dims = glm::dvec3(double(n[0]), double(n[1]), double(n[2]));
+  const glm::dvec3 extent = dims * vs;
   const glm::dvec3 curl_rep = curl_repeats(m, extent);
   const double curl_sh = curl_shift(m, f.time, extent.y, curl_rep.y);
   auto body = [&](const tbb::blocked_range<uint32_t>& zr) {
@@ -334,14 +344,7 @@ MotionFrame bake_frame(const Volume& s, const MotionParams& m, int64_t frame, do
         const Row& r = rows[j];
         const Taps& tz = r.z[k];
         if (!r.y.inside || !tz.inside) continue;
-        // The four (y, z) corners of this row and slice: their weights and where their x rows start.
-        double wyz[4];
-        size_t base[4];
-        for (int q = 0; q < 4; ++q) {
-          const int64_t y = q & 1 ? r.y.i1 : r.y.i0, z = q & 2 ? tz.i1 : tz.i0;
-          wyz[q] = (q & 1 ? r.y.w1 : r.y.w0) * (q & 2 ? tz.w1 : tz.w0);
-          base[q] = s.index(0, uint32_t(y), uint32_t(z));
-        }
+        const CornersYZ row = corners_yz(s, r.y, tz);  // the same for every x of this row and slice
         for (uint32_t i = 0; i < v.dims[0]; ++i) {
           const Taps& tx = r.x[i];
           if (!tx.inside) continue;
@@ -350,31 +353,16 @@ MotionFrame bake_frame(const Volume& s, const MotionParams& m, int64_t frame, do
             // The detail channels are read where the curl field moves them (medium.glsl: at the
             // static uvw plus the offset, the texture's clamp or wrap at the box's faces).
             const glm::dvec3 st(double(fb.lo[0] + i) - r.d.x, double(fb.lo[1] + j) - r.d.y, double(fb.lo[2] + k) - r.d.z);
-            const glm::dvec3 uvw = (st + 0.5) / glm::dvec3(double(n[0]), double(n[1]), double(n[2]));
-            const glm::dvec3 q = st + curl_glsl::curl_detail_offset_m(uvw, r.h, curl_rep, curl_sh, m.curl_amplitude) / vs;
+            const glm::dvec3 uvw = (st + 0.5) / dims;
+            const glm::dvec3 q = st + curl_detail_offset_m(m, uvw, r.h, curl_rep, curl_sh) / vs;
             auto axis = [&](double u, int a, bool wrap) {
               return taps(wrap ? u : std::clamp(u, -0.5, double(n[a]) - 0.5), n[a], wrap);
             };
             const Taps qx = axis(q.x, 0, s.tiles_xz), qy = axis(q.y, 1, false), qz = axis(q.z, 2, s.tiles_xz);
-            for (size_t c = 1; c < src.size(); ++c) {
-              const float* ch = src[c]->data();
-              double acc = 0;
-              for (int e = 0; e < 4; ++e) {
-                const int64_t y = e & 1 ? qy.i1 : qy.i0, z = e & 2 ? qz.i1 : qz.i0;
-                const size_t b = s.index(0, uint32_t(y), uint32_t(z));
-                acc += (e & 1 ? qy.w1 : qy.w0) * (e & 2 ? qz.w1 : qz.w0) *
-                       (qx.w0 * double(ch[b + size_t(qx.i0)]) + qx.w1 * double(ch[b + size_t(qx.i1)]));
-              }
-              (*dst[c])[out] = float(acc);
-            }
+            const CornersYZ moved = corners_yz(s, qy, qz);
+            for (size_t c = 1; c < src.size(); ++c) (*dst[c])[out] = float(trilinear(src[c]->data(), moved, qx));
           }
-          for (size_t c = 0; c < (curl_on ? 1 : src.size()); ++c) {
-            const float* ch = src[c]->data();
-            double acc = 0;
-            for (int q = 0; q < 4; ++q)
-              acc += wyz[q] * (tx.w0 * double(ch[base[q] + size_t(tx.i0)]) + tx.w1 * double(ch[base[q] + size_t(tx.i1)]));
-            (*dst[c])[out] = float(acc);
-          }
+          for (size_t c = 0; c < (curl_on ? 1 : src.size()); ++c) (*dst[c])[out] = float(trilinear(src[c]->data(), row, tx));
         }
       }
   };

@@ -157,7 +157,6 @@ struct CpuShader {
 #include "../shaders/temporal.glsl"
 #include "../shaders/post.glsl"
 };
-static_assert(CV_CURL_SIZE == cloudgen::kCurlFieldSize, "curl_distortion.glsl and cloudgen/motion.h agree on the curl field size");
 
 struct Buffer {
   int w, h;

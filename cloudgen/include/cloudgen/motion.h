@@ -110,15 +110,26 @@ namespace {
 using Number = double;
 using vec2 = glm::dvec2;
 using vec3 = glm::dvec3;
+using ivec3 = glm::ivec3;
 using glm::clamp;
+using glm::floor;
 using glm::fract;
 using glm::mix;
 using std::abs;
 using std::cos;
 using std::sin;
 #include "cloudgen/motion.glsl"
+vec3 curl_texel(ivec3 i) { return curl_field_texel(i.x, i.y, i.z); }
+#include "cloudgen/curl_distortion.glsl"
+static_assert(CV_CURL_SIZE == kCurlFieldSize, "curl_distortion.glsl and kCurlFieldSize agree on the field size");
 }  // namespace
 }  // namespace motion_glsl
+
+/// The detail lookup's curl offset in metres (curl_distortion.glsl) with the table's amplitude.
+inline glm::dvec3 curl_detail_offset_m(const MotionParams& m, const glm::dvec3& uvw, double seen_h,
+                                       const glm::dvec3& repeats, double shift) {
+  return motion_glsl::curl_detail_offset_m(uvw, seen_h, repeats, shift, m.curl_amplitude);
+}
 
 /// D(h, t) of motion.glsl with the table's parameters (metres; see motion.glsl for the convention):
 /// the procedural flow, or the flow map image looked up at the same two phases and blended alike.
