@@ -364,6 +364,19 @@ struct GlRenderer::Impl {
     check_fbo(t.fbo[0], t.name.c_str());
     light_key.clear();
   }
+  // The curl field (cloudgen/curl_distortion.glsl reads it with texelFetch and filters by hand, as
+  // the CPU reference does), built and uploaded the first time a frame distorts the detail: it is
+  // off by default, and building it costs a few milliseconds.
+  void ensure_curl_texture() {
+    if (tex_curl) return;
+    const std::vector<glm::vec4>& curl = cloudgen::curl_field_texels();
+    const int n = cloudgen::kCurlFieldSize;
+    glCreateTextures(GL_TEXTURE_3D, 1, &tex_curl);
+    glTextureStorage3D(tex_curl, 1, GL_RGBA32F, n, n, n);
+    glTextureSubImage3D(tex_curl, 0, 0, 0, 0, n, n, n, GL_RGBA, GL_FLOAT, curl.data());
+    glTextureParameteri(tex_curl, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(tex_curl, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  }
   // What the light volume depends on, camera excluded (positions are camera-relative, the texels
   // are in the box's own coordinates): the sun, the volume, the medium and the light march.
   std::vector<double> light_volume_key(const FrameSetup& f) const {
@@ -512,14 +525,6 @@ GlRenderer::GlRenderer(ShaderSource shaders) : impl_(std::make_unique<Impl>()) {
   glTextureStorage2D(m.tex_motion, 1, GL_RGBA32F, CV_MOTION_LUT_SIZE, 2);
   glTextureParameteri(m.tex_motion, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTextureParameteri(m.tex_motion, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-  // The curl field (cloudgen/curl_distortion.glsl reads it with texelFetch and filters by hand, as
-  // the CPU reference does).
-  const std::vector<glm::vec4>& curl = cloudgen::curl_field_texels();
-  glCreateTextures(GL_TEXTURE_3D, 1, &m.tex_curl);
-  glTextureStorage3D(m.tex_curl, 1, GL_RGBA32F, cloudgen::kCurlFieldSize, cloudgen::kCurlFieldSize, cloudgen::kCurlFieldSize);
-  glTextureSubImage3D(m.tex_curl, 0, 0, 0, 0, cloudgen::kCurlFieldSize, cloudgen::kCurlFieldSize, cloudgen::kCurlFieldSize, GL_RGBA, GL_FLOAT, curl.data());
-  glTextureParameteri(m.tex_curl, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-  glTextureParameteri(m.tex_curl, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
 }
 
 GlRenderer::~GlRenderer() {
@@ -722,6 +727,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glBindTextureUnit(CV_UNIT_MIE, m.tex_mie);
   glBindTextureUnit(CV_UNIT_COVERAGE, m.tex_coverage);
   glBindTextureUnit(CV_UNIT_MOTION, m.tex_motion);
+  if (f.params.curl_amplitude_m > 0) m.ensure_curl_texture();
   glBindTextureUnit(CV_UNIT_CURL, m.tex_curl);
   glDisable(GL_BLEND);
   glDisable(GL_CULL_FACE);
