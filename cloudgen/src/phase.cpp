@@ -162,6 +162,57 @@ double two_lobe_hg(double g1, double g2, double w, double c) { return lobes::lob
 
 double draine(double g, double alpha, double c) { return lobes::lobe_draine(g, alpha, c); }
 
+// With s = 1 + g^2 - 2 g x, the integral of (1 + alpha x^2) s^(-3/2) over x in [-1, c] is
+// (J(s(-1)) - J(s(c))) / (2 g) with J(s) = -2 (1 + alpha a^2 / b^2) s^(-1/2) - 4 alpha a / b^2 s^(1/2)
+// + 2 alpha / (3 b^2) s^(3/2), a = 1 + g^2, b = 2 g; Draine's normalisation 2 pi K, K = (1 - g^2) /
+// (4 pi (1 + alpha (1 + 2 g^2) / 3)), turns it into the probability.
+double draine_cdf(double g, double alpha, double c) {
+  c = std::clamp(c, -1.0, 1.0);
+  if (std::fabs(g) < 0.05) {
+    // 8-point Gauss-Legendre on 4 panels of [-1, c]: the integrand's nearest singularity is at
+    // x = (1 + g^2) / (2 g), beyond 10, so the rule is exact to rounding.
+    static const double node[4] = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267, 0.9602898564975363};
+    static const double weight[4] = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763};
+    const double h = (c + 1) / 4;
+    double sum = 0;
+    for (int panel = 0; panel < 4; ++panel) {
+      const double mid = -1 + h * (panel + 0.5);
+      for (int k = 0; k < 4; ++k)
+        for (double sign : {-1.0, 1.0}) sum += weight[k] * draine(g, alpha, mid + sign * node[k] * h / 2);
+    }
+    return std::clamp(2 * M_PI * sum * h / 2, 0.0, 1.0);
+  }
+  const double a = 1 + g * g, b = 2 * g;
+  auto J = [&](double s) {
+    const double r = std::sqrt(s);
+    return -2 * (1 + alpha * a * a / (b * b)) / r - 4 * alpha * a / (b * b) * r + 2 * alpha / (3 * b * b) * s * r;
+  };
+  const double norm = (1 - g * g) / (2 * (1 + alpha * (1 + 2 * g * g) / 3));
+  return std::clamp(norm * (J((1 + g) * (1 + g)) - J(a - b * c)) / b, 0.0, 1.0);
+}
+
+double sample_draine(double g, double alpha, double u) {
+  u = std::clamp(u, 0.0, 1.0);
+  double lo = -1, hi = 1;
+  // Start from HG's inverse CDF at the same u: Draine is HG times a smooth factor.
+  double c = 1 - 2 * u;
+  if (std::fabs(g) > 1e-4) {
+    const double q = (1 - g * g) / (1 - g + 2 * g * u);
+    c = std::clamp((1 + g * g - q * q) / (2 * g), -1.0, 1.0);
+  }
+  for (int it = 0; it < 100; ++it) {
+    const double f = draine_cdf(g, alpha, c) - u;
+    if (f == 0) return c;
+    (f < 0 ? lo : hi) = c;
+    const double step = f / (2 * M_PI * draine(g, alpha, c));
+    double next = c - step;
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);  // Newton left the bracket: bisect
+    if (std::fabs(next - c) < 1e-14 || hi - lo < 1e-14) return next;
+    c = next;
+  }
+  return c;
+}
+
 DraineHgFit draine_hg_fit(double d) {
   if (!(d >= 5 && d <= 50)) throw InputError("HG+Draine fit: droplet diameter " + std::to_string(d) + " um is outside [5, 50]");
   return {lobes::draine_fit_g_hg(d), lobes::draine_fit_g_d(d), lobes::draine_fit_alpha(d), lobes::draine_fit_w_d(d)};

@@ -23,6 +23,7 @@
 #include "cloudgen/nvdb.h"
 #endif
 #include "cloudgen/motion.h"
+#include "cloudgen/phase.h"
 #include "glsl_cpp.h"  // last: defines IN/OUT/INOUT
 
 namespace cloudviewer {
@@ -398,18 +399,21 @@ struct Pcg32 {
 };
 
 // Sampling the phase function: HG analytically; the Mie table by the piecewise-constant CDF of
-// p(theta) sin(theta) over its bins; the two-lobe HG and the HG + Draine fit by their two HG lobes
-// (Draine's lobe by its HG), each weighted by phase / pdf so the estimate stays unbiased.
+// p(theta) sin(theta) over its bins, weighted by phase / pdf so the estimate stays unbiased; the
+// two-lobe HG by its two HG lobes and the HG + Draine fit by its HG lobe and Draine's lobe, each
+// lobe exactly (Draine's by its inverse CDF, cloudgen::phase::sample_draine), so their weight is 1.
 struct PhaseSampler {
   int mode = CV_PHASE_HG;
   double g = 0;
-  double lobe_g[2] = {0, 0}, lobe_w = 1;  // two-lobe proposals: w HG(g0) + (1 - w) HG(g1)
+  double lobe_g[2] = {0, 0}, lobe_w = 1;  // two lobes: w HG(g0) + (1 - w) HG(g1) or Draine(g1, alpha)
+  double draine_alpha = 0;
   std::vector<double> cdf;   // Mie: per bin, cumulative probability
   std::vector<double> mass;  // Mie: probability of each bin
   int bins = 0;
   PhaseSampler(const ref::CloudParams& p, const std::vector<float>& mie) : mode(int(p.phase_mode)), g(p.hg_g) {
     if (mode == CV_PHASE_TWO_LOBE_HG) lobe_g[0] = p.hg_g, lobe_g[1] = p.hg_g2, lobe_w = p.lobe_weight;
-    if (mode == CV_PHASE_DRAINE_HG) lobe_g[0] = p.draine_g_hg, lobe_g[1] = p.draine_g_d, lobe_w = 1 - p.draine_w_d;
+    if (mode == CV_PHASE_DRAINE_HG)
+      lobe_g[0] = p.draine_g_hg, lobe_g[1] = p.draine_g_d, lobe_w = 1 - p.draine_w_d, draine_alpha = p.draine_alpha;
     if (mode != CV_PHASE_MIE) return;
     bins = int(mie.size()) - 1;
     double total = 0;
@@ -438,10 +442,13 @@ struct PhaseSampler {
     };
     if (mode == CV_PHASE_HG && std::abs(g) > 1e-4) {
       cos_t = hg_sample(g, u1);
-    } else if (mode == CV_PHASE_TWO_LOBE_HG || mode == CV_PHASE_DRAINE_HG) {
+    } else if (mode == CV_PHASE_TWO_LOBE_HG) {
       cos_t = hg_sample(u1 < lobe_w ? lobe_g[0] : lobe_g[1], rng.uniform());
       const double pdf = lobe_w * sh.lobe_hg(lobe_g[0], cos_t) + (1 - lobe_w) * sh.lobe_hg(lobe_g[1], cos_t);
       weight = sh.phase_function(cos_t) / pdf;
+    } else if (mode == CV_PHASE_DRAINE_HG) {
+      // The mixture's own lobes, each sampled exactly: the pdf is the phase function, weight 1.
+      cos_t = u1 < lobe_w ? hg_sample(lobe_g[0], rng.uniform()) : cloudgen::phase::sample_draine(lobe_g[1], draine_alpha, rng.uniform());
     } else if (mode == CV_PHASE_MIE) {
       int i = int(std::lower_bound(cdf.begin(), cdf.end(), u1) - cdf.begin());
       i = std::min(i, bins - 1);

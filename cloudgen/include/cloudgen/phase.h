@@ -55,6 +55,14 @@ double henyey_greenstein(double g, double cos_theta);
 double two_lobe_hg(double g1, double g2, double w, double cos_theta);
 /// Draine's phase function (Draine 2003): HG times (1 + alpha cos^2) / (1 + alpha (1 + 2 g^2) / 3).
 double draine(double g, double alpha, double cos_theta);
+/// Draine's lobe's cumulative distribution over the scattering cosine: the probability that
+/// cos theta <= c (0 at c = -1, 1 at c = 1). Closed form for |g| >= 0.05; below, where the closed
+/// form's 1/g^3 terms cancel, Gauss-Legendre quadrature (the integrand is then nearly a cubic).
+double draine_cdf(double g, double alpha, double c);
+/// The scattering cosine at which draine_cdf reaches u in [0, 1]: an exact inverse-CDF sample of
+/// Draine's lobe (Newton's method on draine_cdf, kept inside a shrinking bracket; the result is
+/// within 1e-12 of the root), so a path tracer weights it by 1 instead of phase / pdf.
+double sample_draine(double g, double alpha, double u);
 /// Jendersie & d'Eon 2023: (1 - w_D) HG(g_HG) + w_D Draine(g_D, alpha), parameters fitted as
 /// functions of the droplet diameter d in [5, 50] um.
 struct DraineHgFit {
