@@ -112,21 +112,33 @@ TEST(ViewerMath, AnalyticLobesAreCloudgensAndIntegrateToOne) {
   }
 }
 
-TEST(ViewerMath, MieTableHasForwardPeakFogbowAndGlory) {
-  const std::vector<float>& t = mie_phase_table();
-  const int n = int(t.size());
-  auto at_deg = [&](double deg) { return double(t[size_t(std::lround(deg / 180.0 * (n - 1)))]); };
-  EXPECT_GT(at_deg(0), 100 * at_deg(30));  // strong diffraction peak of ~10 um droplets
-  // Fogbow: a local maximum between 130 and 150 degrees above the 120-degree minimum region.
-  double fogbow = 0;
-  for (double d = 130; d <= 150; d += 0.1) fogbow = std::max(fogbow, at_deg(d));
-  EXPECT_GT(fogbow, 1.3 * at_deg(115));
-  // Glory: backscatter rises toward 180 degrees.
-  EXPECT_GT(at_deg(180), 1.5 * at_deg(170));
+// Each channel of the Mie table (650, 550, 450 nm) has the droplets' features, and diffraction
+// makes the forward peak rise toward blue as (size parameter)^2: blue / red at 0 degrees is
+// (650 / 450)^2 = 2.09 for the same droplets (measured 2.07).
+TEST(ViewerMath, MieTableHasForwardPeakFogbowAndGloryInEachChannel) {
+  load_mie_table("");
+  const MiePhaseTable& t = mie_phase_table();
+  const int n = t.size();
+  ASSERT_EQ(n, CV_MIE_TABLE_SIZE);
+  for (int c = 0; c < 3; ++c) {
+    SCOPED_TRACE(c);
+    auto at_deg = [&](double deg) { return double(t.at(int(std::lround(deg / 180.0 * (n - 1))), c)); };
+    EXPECT_GT(at_deg(0), 100 * at_deg(30));  // strong diffraction peak of ~10 um droplets
+    // Fogbow: a local maximum between 130 and 150 degrees above the 120-degree minimum region.
+    double fogbow = 0;
+    for (double d = 130; d <= 150; d += 0.1) fogbow = std::max(fogbow, at_deg(d));
+    EXPECT_GT(fogbow, 1.3 * at_deg(115));
+    // Glory: backscatter rises toward 180 degrees.
+    EXPECT_GT(at_deg(180), 1.5 * at_deg(170));
+  }
+  EXPECT_GT(t.at(0, 2), t.at(0, 1));
+  EXPECT_GT(t.at(0, 1), t.at(0, 0));
+  EXPECT_NEAR(t.at(0, 2) / t.at(0, 0), std::pow(650.0 / 450.0, 2), 0.1);
 }
 
-// --mie-table: a table from elsewhere (the sky-and-phase work) replaces the computed one,
-// resampled and renormalised: an unnormalised HG(0.5) given in 2-degree columns comes back as HG.
+// --mie-table: a table from elsewhere replaces the computed one, resampled and renormalised: an
+// unnormalised HG(0.5) given in 2-degree columns comes back as HG in every channel, and
+// `cloudgen phase`'s CSV (header line, angle_deg,r,g,b) sets each channel on its own.
 TEST(ViewerMath, MieTableFromAFileIsResampledAndNormalised) {
   fs::path path = output_dir() / "hg05.txt";
   {
@@ -135,50 +147,82 @@ TEST(ViewerMath, MieTableFromAFileIsResampledAndNormalised) {
     for (int d = 0; d <= 180; d += 2) out << d << " " << 3.0 * reference_phase(PhaseMode::HenyeyGreenstein, 0.5, std::cos(d * M_PI / 180)) << "\n";
   }
   load_mie_table(path.string());
+  RenderSettings mie = with({"render.phase=mie"});
   for (double d : {0.0, 31.0, 90.0, 151.0, 180.0}) {
     double c = std::cos(d * M_PI / 180);
-    EXPECT_NEAR(reference_phase(PhaseMode::Mie, 0, c) / reference_phase(PhaseMode::HenyeyGreenstein, 0.5, c), 1.0, 0.01) << d;
+    const glm::dvec3 got = reference_phase_rgb(mie, c);
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(got[k] / reference_phase(PhaseMode::HenyeyGreenstein, 0.5, c), 1.0, 0.01) << d << " channel " << k;
+  }
+  fs::path csv = output_dir() / "rgb.csv";
+  {
+    std::ofstream out(csv);
+    out << "angle_deg,r,g,b\n";
+    for (int d = 0; d <= 180; ++d) {
+      const double c = std::cos(d * M_PI / 180);
+      out << d << "," << reference_phase(PhaseMode::HenyeyGreenstein, 0.3, c) << "," << 2 * reference_phase(PhaseMode::HenyeyGreenstein, 0.5, c)
+          << "," << reference_phase(PhaseMode::HenyeyGreenstein, 0.7, c) << "\n";
+    }
+  }
+  load_mie_table(csv.string());
+  for (double d : {0.0, 31.0, 90.0, 151.0, 180.0}) {
+    double c = std::cos(d * M_PI / 180);
+    const glm::dvec3 got = reference_phase_rgb(mie, c);
+    const double want[3] = {0.3, 0.5, 0.7};
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(got[k] / reference_phase(PhaseMode::HenyeyGreenstein, want[k], c), 1.0, 0.01) << d << " channel " << k;
   }
   load_mie_table("");
-  EXPECT_GT(mie_phase_table()[0], 100.f);  // the computed droplet table (forward peak 218/sr) is back
+  EXPECT_GT(mie_phase_table().at(0, 1), 100.f);  // the computed droplet table (forward peak ~600/sr) is back
   std::ofstream(output_dir() / "bad_mie.txt") << "0 1\n90 x\n";
-  try {
-    load_mie_table((output_dir() / "bad_mie.txt").string());
-    FAIL() << "accepted a bad table";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("bad_mie.txt:2"), std::string::npos) << e.what();
+  std::ofstream(output_dir() / "bad_mie3.csv") << "angle_deg,r,g,b\n0,1,1,1\n90,1,1\n";
+  for (const char* bad : {"bad_mie.txt:2", "bad_mie3.csv:3"}) {
+    const std::string name = std::string(bad).substr(0, std::string(bad).find(':'));
+    try {
+      load_mie_table((output_dir() / name).string());
+      ADD_FAILURE() << "accepted a bad table " << name;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+    }
   }
   load_mie_table("");
 }
 
-// The Mie table is cloudgen's Lorenz-Mie result (550 nm, default droplets) and render.phase=mie
-// reads it in log space: at a table entry the phase is the entry, halfway between two it is their
-// geometric mean (linear interpolation would give the arithmetic mean, far above it next to the
-// forward peak), the whole integrates to 1 over the sphere, and the forward peak stands ~1e4 above
-// the side (MieTableHasForwardPeakFogbowAndGlory checks the rest of its shape).
+// The Mie table is cloudgen's Lorenz-Mie result (default droplets, per channel at 650, 550 and 450
+// nm) and render.phase=mie reads it in log space: at a table entry the phase is the entry, halfway
+// between two it is their geometric mean (linear interpolation would give the arithmetic mean, far
+// above it next to the forward peak), each channel integrates to 1 over the sphere, and the forward
+// peak stands ~1e4 above the side (MieTableHasForwardPeakFogbowAndGloryInEachChannel checks the rest
+// of its shape).
 TEST(ViewerMath, MieTableIsCloudgensSolutionInterpolatedInLogSpace) {
   load_mie_table("");
-  const std::vector<float>& t = mie_phase_table();
-  ASSERT_EQ(t.size(), size_t(CV_MIE_TABLE_SIZE));
-  std::vector<double> angles(t.size());
-  for (size_t j = 0; j < t.size(); ++j) angles[j] = 180.0 * double(j) / double(t.size() - 1);
-  const cloudgen::phase::BulkPhase ref = cloudgen::phase::mie_population({}, 550.0, angles);
-  for (size_t j : {size_t(0), size_t(10), size_t(548), size_t(1400), size_t(1800)})  // one solver: the same shape
-    EXPECT_NEAR(t[j] / t[900], ref.value[j] / ref.value[900], 1e-5 * ref.value[j] / ref.value[900]) << j;
-  auto phase_at = [](double deg) { return reference_phase(PhaseMode::Mie, 0, std::cos(deg * M_PI / 180)); };
-  for (int j : {0, 3, 40, 1399}) {
-    const double a = t[size_t(j)], b = t[size_t(j) + 1];
-    EXPECT_NEAR(phase_at(j * 0.1), a, 1e-5 * a) << j;
-    EXPECT_NEAR(phase_at((j + 0.5) * 0.1), std::sqrt(a * b), 1e-5 * std::sqrt(a * b)) << j;
+  const MiePhaseTable& t = mie_phase_table();
+  ASSERT_EQ(t.size(), CV_MIE_TABLE_SIZE);
+  std::vector<double> angles(size_t(t.size()));
+  for (size_t j = 0; j < angles.size(); ++j) angles[j] = 180.0 * double(j) / double(angles.size() - 1);
+  const RenderSettings mie = with({"render.phase=mie"});
+  const double nm[3] = {650, 550, 450};
+  for (int c = 0; c < 3; ++c) {
+    SCOPED_TRACE(nm[c]);
+    const cloudgen::phase::BulkPhase ref = cloudgen::phase::mie_population({}, nm[c], angles);
+    for (int j : {0, 10, 548, 1400, 1800})  // one solver: the same shape
+      EXPECT_NEAR(t.at(j, c) / t.at(900, c), ref.value[size_t(j)] / ref.value[900], 1e-5 * ref.value[size_t(j)] / ref.value[900]) << j;
+    auto phase_at = [&](double deg) { return reference_phase_rgb(mie, std::cos(deg * M_PI / 180))[c]; };
+    for (int j : {0, 3, 40, 1399}) {
+      const double a = t.at(j, c), b = t.at(j + 1, c);
+      EXPECT_NEAR(phase_at(j * 0.1), a, 1e-5 * a) << j;
+      EXPECT_NEAR(phase_at((j + 0.5) * 0.1), std::sqrt(a * b), 1e-5 * std::sqrt(a * b)) << j;
+    }
+    double integral = 0;  // midpoint rule in theta, 20 points per table step
+    for (int k = 0; k < 36000; ++k) {
+      const double th = (k + 0.5) * M_PI / 36000;
+      integral += phase_at(th * 180 / M_PI) * std::sin(th) * (M_PI / 36000);
+    }
+    EXPECT_NEAR(2 * M_PI * integral, 1.0, 2e-3);
+    EXPECT_GT(t.at(0, c) / t.at(900, c), 1e4);
+    std::cout << nm[c] << " nm: forward " << t.at(0, c) << "/sr, side (90) " << t.at(900, c) << ", back " << t.at(1800, c) << "\n";
   }
-  double integral = 0;  // midpoint rule in theta, 20 points per table step
-  for (int k = 0; k < 36000; ++k) {
-    const double th = (k + 0.5) * M_PI / 36000;
-    integral += phase_at(th * 180 / M_PI) * std::sin(th) * (M_PI / 36000);
-  }
-  EXPECT_NEAR(2 * M_PI * integral, 1.0, 2e-3);
-  EXPECT_GT(t[0] / t[900], 1e4);
-  std::cout << "Mie table: forward " << t[0] << "/sr, side (90) " << t[900] << ", back " << t[1800] << "\n";
+  EXPECT_DOUBLE_EQ(reference_phase(mie, 0.3), reference_phase_rgb(mie, 0.3).y) << "the scalar phase is green's";
 }
 
 TEST(ViewerSettings, SetParsesAndRejectsWithTheAllowedValues) {
@@ -1141,6 +1185,56 @@ TEST(ViewerVolume, OccupancyComesFromTheVolumeOrCloudgensBuilder) {
   w.occupancy_padding = 1;
   cloudgen::build_occupancy(w);
   EXPECT_TRUE(std::equal(other.occ.begin(), other.occ.end(), w.occupancy.begin()));
+}
+
+// The corona of render.phase=mie: a thin uniform slab in front of the sun, single scattering, a
+// 24-degree field of view centred on the sun. Diffraction by the droplets makes the aureole
+// reddish 1-10 degrees from the sun (the table's red / blue is 1.26 at 1 degree, 1.3-1.9 at 1.5-4)
+// and bluish inside 0.7 degrees: the cloud's own light (the image less the transmitted sky, T bg),
+// red / blue, divided by the same ratio with HG (grey: it cancels the sun's colour), exceeds 1.15
+// at 1.5-4 degrees. The GPU
+// reads the same RGB table: GL against the CPU reference >= 45 dB.
+TEST(ViewerMath, MiePhaseColoursTheCoronaAroundTheSun) {
+  const PreparedVolume& vol = volume("slab");
+  const int w = 96, h = 54;
+  Camera cam = default_camera(vol, 24, double(w) / h);
+  const glm::dvec3 fwd = glm::normalize(cam.target - cam.eye);
+  const Sun sun{glm::degrees(std::atan2(fwd.x, -fwd.z)), glm::degrees(std::asin(fwd.y))};
+  const glm::dvec3 to_sun = glm::normalize(sun.direction());
+  ASSERT_GT(glm::dot(to_sun, fwd), 0.9999) << "the sun is at the centre of the frame";
+  auto ratio = [&](const char* phase, double lo, double hi, double* db) {
+    RenderSettings s = with({phase, "render.ms_octaves=1", "render.ambient=0", "render.density=0.3", "render.ground=false",
+                             "render.sky=analytic", "render.bloom=0"});
+    RenderSettings none = s;
+    none.density = 0;
+    const FrameSetup f = make_frame(vol, s, cam, sun, w, h);
+    const FrameImages cpu = render_cpu(vol, f);
+    if (db) *db = psnr(render_gl(vol, f).display, cpu.display);
+    const Image bg = render_cpu(vol, make_frame(vol, none, cam, sun, w, h)).linear;
+    RenderSettings ts = s;
+    ts.output = OutputMode::Transmittance;
+    const Image T = render_cpu(vol, make_frame(vol, ts, cam, sun, w, h)).linear;
+    glm::dvec3 sum(0.0);
+    int n = 0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const glm::dvec4 q = f.inv_view_proj * glm::dvec4(2 * (x + 0.5) / w - 1, 2 * (y + 0.5) / h - 1, -1.0, 1.0);
+        const glm::dvec3 d = glm::normalize(glm::dvec3(q) / q.w);
+        const double a = std::acos(std::clamp(glm::dot(d, to_sun), -1.0, 1.0)) * 180 / M_PI;
+        if (a < lo || a > hi) continue;
+        for (int c = 0; c < 3; ++c) sum[c] += cpu.linear.at(x, y)[c] - T.at(x, y)[c] * bg.at(x, y)[c];  // the cloud's light
+        ++n;
+      }
+    EXPECT_GT(n, 0) << phase;
+    EXPECT_GT(sum.z, 0) << phase;
+    return sum.x / sum.z;
+  };
+  double db = 0;
+  const double mie = ratio("render.phase=mie", 1.5, 4, &db), hg = ratio("render.phase=hg", 1.5, 4, nullptr);
+  std::cout << "red / blue of the cloud light 1.5-4 degrees from the sun: mie " << mie << ", hg " << hg << "; GL vs CPU "
+            << db << " dB\n";
+  EXPECT_GT(mie / hg, 1.15) << "the corona's red aureole";
+  EXPECT_GT(db, 45.0);
 }
 
 // The fogbow and the glory of render.phase=mie, seen as a user would: a thin uniform slab, single

@@ -3,7 +3,7 @@
 layout(std140, binding = CV_BINDING_CLOUD) uniform CloudBlock { CloudParams u_cloud; };
 layout(binding = CV_UNIT_VOLUME) uniform sampler3D s_volume;        // RGBA32F: R base shape, G/B/A detail
 layout(binding = CV_UNIT_OCCUPANCY) uniform sampler3D s_occupancy;  // R8: 1 where a coarse cell may hold density
-layout(binding = CV_UNIT_MIE) uniform sampler1D s_mie;              // R32F: Mie phase over theta in [0, pi]
+layout(binding = CV_UNIT_MIE) uniform sampler1D s_mie;              // RGB32F: Mie phase over theta in [0, pi] (650/550/450 nm)
 layout(binding = CV_UNIT_COVERAGE) uniform sampler2D s_coverage;    // RG32F: layer coverage (R) and cloud type (G)
 
 // render.volume=nanovdb: the NanoVDB float grids back to back in one buffer (byte offsets in
@@ -115,7 +115,7 @@ vec4 volume_texel(ivec3 texel) { return texelFetch(s_volume, texel, 0); }
 vec4 volume_filtered(vec3 uvw) { return texture(s_volume, uvw); }
 #endif
 Number occupancy_texel(ivec3 cell) { return texelFetch(s_occupancy, cell, 0).r; }
-Number mie_table_value(int i) { return texelFetch(s_mie, i, 0).r; }
+vec3 mie_table_value(int i) { return texelFetch(s_mie, i, 0).rgb; }
 vec2 coverage_texel(ivec2 texel) { return texelFetch(s_coverage, texel, 0).rg; }
 layout(binding = CV_UNIT_MOTION) uniform sampler2D s_motion;        // RGBA32F: D(h) for this and the last frame
 vec3 motion_texel(int i, int row) { return texelFetch(s_motion, ivec2(i, row), 0).xyz; }

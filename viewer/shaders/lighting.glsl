@@ -112,13 +112,13 @@ Number light_volume_tau(vec3 p) {
 // talk; Hillaire, "Physically Based Sky, Atmosphere and Cloud Rendering in Frostbite", 2016): the
 // sun term is summed over render.ms_octaves octaves, octave i with weight a^i, optical depth scaled
 // by b^i and phase eccentricity by c^i (a, b, c = ms_attenuation, ms_extinction, ms_eccentricity;
-// a <= b keeps it energy-conserving). The phases of one camera ray, octave by octave: x is the
-// phase function itself, y..w Henyey-Greenstein with g c, g c^2, g c^3.
-vec4 octave_phases(Number cos_theta) {
+// a <= b keeps it energy-conserving). The phases of one camera ray for octaves 1..3:
+// Henyey-Greenstein with g c, g c^2, g c^3 (octave 0's is the phase function itself, per colour
+// channel: phase_function_rgb).
+vec3 octave_phases(Number cos_theta) {
   Number c = u_cloud.ms_eccentricity;
   Number g = u_cloud.hg_g;
-  return vec4(phase_function(cos_theta), phase_hg(cos_theta, g * c), phase_hg(cos_theta, g * c * c),
-              phase_hg(cos_theta, g * c * c * c));
+  return vec3(phase_hg(cos_theta, g * c), phase_hg(cos_theta, g * c * c), phase_hg(cos_theta, g * c * c * c));
 }
 
 // The ambient sky light at p, isotropic (the phase function integrates to 1, so it scatters as it
@@ -131,21 +131,23 @@ vec3 ambient_radiance(vec3 p) {
 }
 
 // Radiance scattered toward the viewer at p per unit sigma_s: sun irradiance * (phase *
-// Beer(tau), summed over the octaves) * powder mix + ambient sky radiance.
-vec3 inscattered_radiance(vec3 p, vec4 phases) {
+// Beer(tau), summed over the octaves) * powder mix + ambient sky radiance. phase0: the phase
+// function per channel (phase_function_rgb); phases: octaves 1..3's (octave_phases).
+vec3 inscattered_radiance(vec3 p, vec3 phase0, vec3 phases) {
   Number tau = 0.0;
   if (int(u_cloud.light_mode) != CV_LIGHT_OFF)
     tau = u_cloud.light_volume_on > 0.5 ? light_volume_tau(p) : light_optical_depth(p);
   Number powder = mix(1.0, powder_term(tau, u_cloud.powder_c), u_cloud.powder_strength);
-  Number transfer = phases.x * beer_lambert(tau);
+  Number higher = 0.0;
   int octaves = int(u_cloud.ms_octaves);
   if (octaves > 1) {
     Number a = u_cloud.ms_attenuation, b = u_cloud.ms_extinction;
-    transfer += a * phases.y * beer_lambert(tau * b);
-    if (octaves > 2) transfer += a * a * phases.z * beer_lambert(tau * b * b);
-    if (octaves > 3) transfer += a * a * a * phases.w * beer_lambert(tau * b * b * b);
+    higher += a * phases.x * beer_lambert(tau * b);
+    if (octaves > 2) higher += a * a * phases.y * beer_lambert(tau * b * b);
+    if (octaves > 3) higher += a * a * a * phases.z * beer_lambert(tau * b * b * b);
   }
-  vec3 sun = sun_color_at(p) * (u_cloud.sun_radiance * transfer * powder);
+  vec3 transfer = phase0 * beer_lambert(tau) + vec3(higher);
+  vec3 sun = sun_color_at(p) * transfer * (u_cloud.sun_radiance * powder);
   return sun + ambient_radiance(p);
 }
 

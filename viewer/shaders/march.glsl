@@ -22,7 +22,7 @@
 //   int    distance_texel(ivec3 cell)    L-infinity cells to the nearest cell holding density (0: it does)
 //   Number light_volume_texel(ivec3 t)   optical depth toward the sun at a light-volume texel
 //   Number light_volume_filtered(vec3 uvw)  its filtered lookup (exact on the CPU)
-//   Number mie_table_value(int i)        i-th entry of the Mie phase table over theta in [0, pi]
+//   vec3 mie_table_value(int i)          i-th entry of the Mie phase table over theta in [0, pi], RGB
 //   vec2   coverage_texel(ivec2 texel)   layer coverage map: R coverage, G cloud type, in [0, 1]
 //   ivec2  coverage_size()               size of the coverage map in texels
 //   vec3   motion_texel(int i, int row)  motion table D(h_i): row 0 this frame, row 1 the last (medium.glsl)
@@ -70,7 +70,8 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, O
   bool sparse_next = false;                        // the last sample was below density_step_below
   Number sigma_scale = u_cloud.sigma_t_per_m;
   Number albedo = u_cloud.albedo;
-  vec4 phases = octave_phases(dot(rd, u_cloud.sun_dir));
+  vec3 phase0 = phase_function_rgb(dot(rd, u_cloud.sun_dir));
+  vec3 phases = octave_phases(dot(rd, u_cloud.sun_dir));
   int max_iterations = int(u_cloud.max_iterations);
 
   bool large_mode = skipping;
@@ -115,7 +116,7 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, O
     Number density = cloud_density(p);
     if (density > 0.0) {
       Number sigma_t = density * sigma_scale;
-      vec3 source = inscattered_radiance(p, phases);
+      vec3 source = inscattered_radiance(p, phase0, phases);
       radiance += transmittance * integrate_step(source, albedo * sigma_t, sigma_t, seg);
       Number step_transmittance = exp(-sigma_t * seg);
       t_weighted += transmittance * (1.0 - step_transmittance) * (t + jitter * seg);

@@ -185,7 +185,7 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   p.light_step_m = s.light_step > 0 ? s.light_step : 2.5 * min_voxel;
   p.light_growth = s.light_growth;
   set_phase_params(p, s);
-  p.mie_table_size = double(mie_phase_table().size());
+  p.mie_table_size = CV_MIE_TABLE_SIZE;  // the table itself is computed only for Mie frames
   p.powder_strength = s.powder;
   p.ms_octaves = s.ms_octaves;
   p.ms_attenuation = s.ms_attenuation;

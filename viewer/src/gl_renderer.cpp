@@ -367,6 +367,22 @@ struct GlRenderer::Impl {
   // The curl field (cloudgen/curl_distortion.glsl reads it with texelFetch and filters by hand, as
   // the CPU reference does), built and uploaded the first time a frame distorts the detail: it is
   // off by default, and building it costs a few milliseconds.
+  // The Mie table (1D RGB float texture, fetched by index and interpolated by hand), uploaded for
+  // the first Mie frame (computing it takes seconds) and again after a --mie-table load.
+  int mie_generation = -1;
+  void ensure_mie_texture() {
+    const int generation = mie_table_generation();
+    if (tex_mie && generation == mie_generation) return;
+    const MiePhaseTable& mie = mie_phase_table();
+    if (!tex_mie) {
+      glCreateTextures(GL_TEXTURE_1D, 1, &tex_mie);
+      glTextureStorage1D(tex_mie, 1, GL_RGB32F, CV_MIE_TABLE_SIZE);
+      glTextureParameteri(tex_mie, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+      glTextureParameteri(tex_mie, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    }
+    glTextureSubImage1D(tex_mie, 0, 0, GLsizei(mie.size()), GL_RGB, GL_FLOAT, mie.rgb.data());
+    mie_generation = generation;
+  }
   void ensure_curl_texture() {
     if (tex_curl) return;
     const std::vector<glm::vec4>& curl = cloudgen::curl_field_texels();
@@ -507,13 +523,6 @@ GlRenderer::GlRenderer(ShaderSource shaders) : impl_(std::make_unique<Impl>()) {
   glVertexArrayAttribBinding(m.vao_ground, 0, 0);
   m.queries.resize(m.passes.size() + 1);
   glCreateQueries(GL_TIMESTAMP, GLsizei(m.queries.size()), m.queries.data());
-  // Mie table (1D float texture, fetched by index and interpolated by hand).
-  const std::vector<float>& mie = mie_phase_table();
-  glCreateTextures(GL_TEXTURE_1D, 1, &m.tex_mie);
-  glTextureStorage1D(m.tex_mie, 1, GL_R32F, GLsizei(mie.size()));
-  glTextureSubImage1D(m.tex_mie, 0, 0, GLsizei(mie.size()), GL_RED, GL_FLOAT, mie.data());
-  glTextureParameteri(m.tex_mie, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-  glTextureParameteri(m.tex_mie, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   const std::vector<float>& cov = coverage_map();
   const int n = CV_COVERAGE_MAP_SIZE;
   glCreateTextures(GL_TEXTURE_2D, 1, &m.tex_coverage);
@@ -724,6 +733,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   else glBindBufferRange(GL_SHADER_STORAGE_BUFFER, CV_BINDING_NANOVDB, m.buf_nano, 0, 32);
   glBindTextureUnit(CV_UNIT_NANOVDB_PAGES, m.tex_pages);
   m.nvdb_table = m.nvdb_pages_ok && f.settings.nanovdb_lookup == NanoLookup::Table ? 1 : 0;
+  if (int(f.params.phase_mode) == CV_PHASE_MIE) m.ensure_mie_texture();
   glBindTextureUnit(CV_UNIT_MIE, m.tex_mie);
   glBindTextureUnit(CV_UNIT_COVERAGE, m.tex_coverage);
   glBindTextureUnit(CV_UNIT_MOTION, m.tex_motion);

@@ -1,6 +1,6 @@
 // The Mie phase table of cloud droplets, from cloudgen's Lorenz-Mie solver (cloudgen/phase.h: BHMIE
-// over the default modified-gamma droplet population, 550 nm; the same numbers `cloudgen phase`
-// writes), and the parser of --mie-table files that replace it. phase.glsl interpolates the table
+// over the default modified-gamma droplet population at 650, 550 and 450 nm; the same numbers
+// `cloudgen phase` writes), and the parser of --mie-table files that replace it. phase.glsl interpolates the table
 // in log space (the forward peak is ~3e5 times the side value), so both are normalised under that
 // interpolant.
 #include <algorithm>
@@ -18,7 +18,9 @@ namespace cloudviewer {
 
 namespace {
 std::mutex g_mie_mutex;
-std::vector<float> g_mie_override;
+MiePhaseTable g_mie_override;
+int g_mie_generation = 0;
+const double kWavelengthsNm[3] = {650.0, 550.0, 450.0};
 
 // 2 pi int p(theta) sin(theta) dtheta of the table over equal steps in theta = 0..pi, p between two
 // entries interpolated in log space as phase.glsl does (16 midpoints per step).
@@ -35,77 +37,110 @@ double log_table_integral(const std::vector<double>& t) {
   }
   return 2 * M_PI * sum;
 }
+
+// Three channels of CV_MIE_TABLE_SIZE values, each normalised under the log interpolant.
+MiePhaseTable normalised(const std::vector<double> (&channels)[3], const std::string& what) {
+  MiePhaseTable t;
+  const int n = int(channels[0].size());
+  t.rgb.resize(size_t(n) * 3);
+  for (int c = 0; c < 3; ++c) {
+    const double integral = log_table_integral(channels[c]);
+    if (!(integral > 0) || !std::isfinite(integral)) throw InputError(what + ": the phase function integrates to 0");
+    for (int i = 0; i < n; ++i) t.rgb[size_t(i) * 3 + size_t(c)] = float(channels[c][size_t(i)] / integral);
+  }
+  return t;
+}
 }  // namespace
 
 void load_mie_table(const std::string& path) {
   std::lock_guard<std::mutex> lock(g_mie_mutex);
+  ++g_mie_generation;
   if (path.empty()) {
-    g_mie_override.clear();
+    g_mie_override = MiePhaseTable{};
     return;
   }
+  const std::string what = "--mie-table " + path;
   std::ifstream in(path);
-  if (!in) throw InputError("--mie-table " + path + ": no such file");
-  std::vector<double> theta, value;
+  if (!in) throw InputError(what + ": no such file");
+  std::vector<double> theta, value[3];
   std::string line;
   int columns = 0, line_no = 0;
+  bool header_allowed = true;
   while (std::getline(in, line)) {
     ++line_no;
     auto hash = line.find('#');
     if (hash != std::string::npos) line.resize(hash);
+    std::replace(line.begin(), line.end(), ',', ' ');  // cloudgen phase's CSV
     std::istringstream ls(line);
     std::vector<double> nums;
     double d;
     while (ls >> d) nums.push_back(d);
-    if (!ls.eof()) throw InputError("--mie-table " + path + ":" + std::to_string(line_no) + ": not a number");
+    const std::string where = what + ":" + std::to_string(line_no);
+    if (!ls.eof()) {
+      if (header_allowed && nums.empty()) {  // a header line such as "angle_deg,r,g,b"
+        header_allowed = false;
+        continue;
+      }
+      throw InputError(where + ": not a number");
+    }
     if (nums.empty()) continue;
+    header_allowed = false;
     if (columns == 0) columns = int(nums.size());
-    if (int(nums.size()) != columns || columns > 2)
-      throw InputError("--mie-table " + path + ":" + std::to_string(line_no) + ": expected " +
-                       (columns == 2 ? "2 columns (theta_degrees value)" : "1 value per line"));
+    if (int(nums.size()) != columns || columns == 3 || columns > 4)
+      throw InputError(where + ": expected " +
+                       std::string(columns == 4 ? "4 columns (angle_deg,r,g,b)"
+                                   : columns == 2 ? "2 columns (theta_degrees value)"
+                                   : columns == 1 ? "1 value per line"
+                                                  : "1 value, 2 columns (theta value) or 4 (angle_deg,r,g,b)"));
     for (double x : nums)
-      if (!std::isfinite(x)) throw InputError("--mie-table " + path + ":" + std::to_string(line_no) + ": not finite");
-    if (columns == 2) theta.push_back(nums[0]), value.push_back(nums[1]);
-    else value.push_back(nums[0]);
-    if (value.back() < 0) throw InputError("--mie-table " + path + ":" + std::to_string(line_no) + ": negative phase value");
+      if (!std::isfinite(x)) throw InputError(where + ": not finite");
+    if (columns >= 2) theta.push_back(nums[0]);
+    for (int c = 0; c < 3; ++c) {
+      const double v = columns == 4 ? nums[size_t(c) + 1] : nums.back();
+      if (v < 0) throw InputError(where + ": negative phase value");
+      value[c].push_back(v);
+    }
   }
-  if (value.size() < 2) throw InputError("--mie-table " + path + ": needs at least 2 values");
+  if (value[0].size() < 2) throw InputError(what + ": needs at least 2 values");
   if (columns == 1)
-    for (size_t i = 0; i < value.size(); ++i) theta.push_back(180.0 * double(i) / double(value.size() - 1));
+    for (size_t i = 0; i < value[0].size(); ++i) theta.push_back(180.0 * double(i) / double(value[0].size() - 1));
   for (size_t i = 1; i < theta.size(); ++i)
-    if (!(theta[i] > theta[i - 1])) throw InputError("--mie-table " + path + ": theta must increase");
-  if (theta.front() > 1e-6 || theta.back() < 180 - 1e-6)
-    throw InputError("--mie-table " + path + ": theta must cover 0 to 180 degrees");
-  const int n = 1801;
-  std::vector<double> t(n);
-  size_t j = 0;
-  for (int i = 0; i < n; ++i) {
-    double th = 180.0 * i / (n - 1);
-    while (j + 2 < theta.size() && theta[j + 1] < th) ++j;
-    double f = std::clamp((th - theta[j]) / (theta[j + 1] - theta[j]), 0.0, 1.0);
-    t[size_t(i)] = value[j] + f * (value[j + 1] - value[j]);
+    if (!(theta[i] > theta[i - 1])) throw InputError(what + ": theta must increase");
+  if (theta.front() > 1e-6 || theta.back() < 180 - 1e-6) throw InputError(what + ": theta must cover 0 to 180 degrees");
+  const int n = CV_MIE_TABLE_SIZE;
+  std::vector<double> t[3];
+  for (int c = 0; c < 3; ++c) {
+    t[c].resize(size_t(n));
+    size_t j = 0;
+    for (int i = 0; i < n; ++i) {
+      double th = 180.0 * i / (n - 1);
+      while (j + 2 < theta.size() && theta[j + 1] < th) ++j;
+      double f = std::clamp((th - theta[j]) / (theta[j + 1] - theta[j]), 0.0, 1.0);
+      t[c][size_t(i)] = value[c][j] + f * (value[c][j + 1] - value[c][j]);
+    }
   }
-  if (!(*std::max_element(t.begin(), t.end()) > 0))
-    throw InputError("--mie-table " + path + ": the phase function integrates to 0");
-  const double integral = log_table_integral(t);
-  g_mie_override.resize(n);
-  for (int i = 0; i < n; ++i) g_mie_override[size_t(i)] = float(t[size_t(i)] / integral);
+  g_mie_override = normalised(t, what);
 }
 
-const std::vector<float>& mie_phase_table(int n) {
-  static std::vector<float> table;
-  static int cached_n = 0;
+int mie_table_generation() {
   std::lock_guard<std::mutex> lock(g_mie_mutex);
-  if (!g_mie_override.empty()) return g_mie_override;
-  if (cached_n == n) return table;
+  return g_mie_generation;
+}
+
+const MiePhaseTable& mie_phase_table() {
+  static MiePhaseTable table;
+  std::lock_guard<std::mutex> lock(g_mie_mutex);
+  if (!g_mie_override.rgb.empty()) return g_mie_override;
+  if (!table.rgb.empty()) return table;
   // cloudgen's Mie solver over its default droplet population (effective radius 10 um, variance
-  // 0.111), green (550 nm), at the table's own angles.
+  // 0.111) at the table's own angles, per channel.
+  const int n = CV_MIE_TABLE_SIZE;
   std::vector<double> angles(static_cast<size_t>(n));
   for (int j = 0; j < n; ++j) angles[size_t(j)] = 180.0 * j / (n - 1);
-  std::vector<double> acc = cloudgen::phase::mie_population(cloudgen::phase::DropletSizes{}, 550.0, angles).value;
-  const double integral = log_table_integral(acc);
-  table.resize(size_t(n));
-  for (int j = 0; j < n; ++j) table[size_t(j)] = float(acc[size_t(j)] / integral);
-  cached_n = n;
+  std::vector<double> acc[3];
+  for (int c = 0; c < 3; ++c)
+    acc[c] = cloudgen::phase::mie_population(cloudgen::phase::DropletSizes{}, kWavelengthsNm[c], angles).value;
+  table = normalised(acc, "the computed Mie table");
   return table;
 }
 

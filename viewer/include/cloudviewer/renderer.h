@@ -127,8 +127,11 @@ double reference_light_optical_depth(const PreparedVolume& vol, const ref::Cloud
 
 /// The shared header's phase function (1/sr) evaluated in double precision (for tests and docs).
 double reference_phase(PhaseMode mode, double g, double cos_theta);
-/// The same for every render.phase mode and its parameters.
+/// The same for every render.phase mode and its parameters (the Mie table's green channel).
 double reference_phase(const RenderSettings& s, double cos_theta);
+/// Per colour channel, as the marcher uses it (phase_function_rgb: the Mie table's 650, 550 and
+/// 450 nm; an analytic lobe in all three).
+glm::dvec3 reference_phase_rgb(const RenderSettings& s, double cos_theta);
 /// temporal.glsl's cross matrix M[y][x] (seed 003) and the 4x4 block position frame `frame` marches,
 /// as the renderer and the tests use them (the same text the shaders compile).
 int reference_cross_matrix(int x, int y);
