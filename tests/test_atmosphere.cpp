@@ -63,6 +63,53 @@ glm::dvec3 brute_force_transmittance(const AtmosphereSettings& a, double r, doub
   return glm::exp(-sum * (dt / 3));
 }
 
+// Single scattering from altitude alt along unit v with the sun along unit s, unit solar
+// irradiance, to the top or the ground: 4000 midpoint samples along the ray, each with the sun's
+// transmittance by brute_force_transmittance (200 intervals) and zero in the Earth's shadow;
+// Rayleigh and Cornette-Shanks phases written out here.
+glm::dvec3 brute_single_scattering(const AtmosphereSettings& a, double alt, const glm::dvec3& v, const glm::dvec3& s) {
+  const double bottom = a.bottom_radius, top = a.top_radius;
+  glm::dvec3 o(0, bottom + alt, 0);
+  double b = glm::dot(o, v), c_top = glm::dot(o, o) - top * top, c_bot = glm::dot(o, o) - bottom * bottom;
+  bool ground = b < 0 && b * b - c_bot >= 0;
+  double t_end = ground ? -b - std::sqrt(b * b - c_bot) : -b + std::sqrt(std::max(0.0, b * b - c_top));
+  double nu = glm::dot(v, s), g = a.mie_g;
+  double p_r = 3 / (16 * M_PI) * (1 + nu * nu);
+  double p_m = 3 / (8 * M_PI) * (1 - g * g) / (2 + g * g) * (1 + nu * nu) / std::pow(1 + g * g - 2 * g * nu, 1.5);
+  const int n = 4000;
+  double dt = t_end / n;
+  glm::dvec3 tau(0.0), sum(0.0);
+  for (int k = 0; k < n; ++k) {
+    glm::dvec3 p = o + (k + 0.5) * dt * v;
+    double rp = glm::length(p), h = rp - bottom, mu_s = glm::dot(p, s) / rp;
+    glm::dvec3 sr = a.rayleigh_scattering * std::exp(-h / a.rayleigh_height);
+    double sm = a.mie_scattering * std::exp(-h / a.mie_height);
+    glm::dvec3 ext = brute_extinction(a, h);
+    bool shadow = mu_s < 0 && rp * rp * (mu_s * mu_s - 1) + bottom * bottom >= 0;
+    glm::dvec3 sun = shadow ? glm::dvec3(0.0) : brute_force_transmittance(a, rp, mu_s, 200);
+    sum += glm::exp(-(tau + ext * (0.5 * dt))) * (sr * p_r + glm::dvec3(sm * p_m)) * sun * dt;
+    tau += ext * dt;
+  }
+  return sum;
+}
+
+// n random sky rays: altitudes 0-20 km (denser low), views over the sphere, the sun from -5 to 90
+// degrees at any azimuth.
+std::vector<SkyQuery> random_sky_queries(int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  std::vector<SkyQuery> q;
+  for (int i = 0; i < n; ++i) {
+    SkyQuery k;
+    k.altitude = 20000 * std::pow(u01(rng), 2.0);
+    double mu = -1 + 2 * u01(rng), phi = 2 * M_PI * u01(rng), st = std::sqrt(1 - mu * mu);
+    k.view = glm::dvec3(st * std::cos(phi), mu, st * std::sin(phi));
+    k.sun = Sun{360 * u01(rng), -5 + 95 * u01(rng)}.direction();
+    q.push_back(k);
+  }
+  return q;
+}
+
 const PreparedVolume& blob() {
   static PreparedVolume v = prepare_volume(synthetic_volume("blob"), 8);
   return v;
@@ -700,31 +747,8 @@ TEST(Atmosphere, MultipleScatteringErrorFallsWithLutSize) {
 TEST(Atmosphere, SingleScatteringMatchesABruteForceIntegration) {
   AtmosphereSettings a = with({"atmosphere.scattering_orders=1"});
   AtmosphereLuts luts = compute_atmosphere_luts(make_atmosphere_params(a));
-  const double bottom = a.bottom_radius, top = a.top_radius;
-  auto brute = [&](double alt, const glm::dvec3& v, const glm::dvec3& s) {
-    glm::dvec3 o(0, bottom + alt, 0);
-    double b = glm::dot(o, v), c_top = glm::dot(o, o) - top * top, c_bot = glm::dot(o, o) - bottom * bottom;
-    bool ground = b < 0 && b * b - c_bot >= 0;
-    double t_end = ground ? -b - std::sqrt(b * b - c_bot) : -b + std::sqrt(std::max(0.0, b * b - c_top));
-    double nu = glm::dot(v, s), g = a.mie_g;
-    double p_r = 3 / (16 * M_PI) * (1 + nu * nu);
-    double p_m = 3 / (8 * M_PI) * (1 - g * g) / (2 + g * g) * (1 + nu * nu) / std::pow(1 + g * g - 2 * g * nu, 1.5);
-    const int n = 4000;
-    double dt = t_end / n;
-    glm::dvec3 tau(0.0), sum(0.0);
-    for (int k = 0; k < n; ++k) {
-      glm::dvec3 p = o + (k + 0.5) * dt * v;
-      double rp = glm::length(p), h = rp - bottom, mu_s = glm::dot(p, s) / rp;
-      glm::dvec3 sr = a.rayleigh_scattering * std::exp(-h / a.rayleigh_height);
-      double sm = a.mie_scattering * std::exp(-h / a.mie_height);
-      glm::dvec3 ext = brute_extinction(a, h);
-      bool shadow = mu_s < 0 && rp * rp * (mu_s * mu_s - 1) + bottom * bottom >= 0;
-      glm::dvec3 sun = shadow ? glm::dvec3(0.0) : brute_force_transmittance(a, rp, mu_s, 200);
-      sum += glm::exp(-(tau + ext * (0.5 * dt))) * (sr * p_r + glm::dvec3(sm * p_m)) * sun * dt;
-      tau += ext * dt;
-    }
-    return sum;
-  };
+  const double bottom = a.bottom_radius;
+  auto brute = [&](double alt, const glm::dvec3& v, const glm::dvec3& s) { return brute_single_scattering(a, alt, v, s); };
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u01(0.0, 1.0);
   double worst = 0, worst_ground = 0;
@@ -746,6 +770,103 @@ TEST(Atmosphere, SingleScatteringMatchesABruteForceIntegration) {
             << " (rays to the ground)\n";
   EXPECT_LT(worst, 0.01);
   EXPECT_LT(worst_ground, 0.01);
+}
+
+// Bruneton's parametrisation of the 4D scattering LUT inverts itself: every texel's (r, mu, mu_s,
+// nu) maps back onto that texel's centre on the mu_s, mu and r axes and, where nu is not clamped to
+// what mu and mu_s allow, on nu's (a wrong inverse lands texels away). Measured: 1e-12 texel on
+// nu, mu_s and r; 2e-4 on mu, where mu = (H^2 - rho^2 - d^2) / (2 r d) cancels for near-vertical
+// rays close to the ground.
+TEST(Atmosphere, ScatteringLutParametrisationMapsEachTexelOntoItself) {
+  const AtmosphereLuts luts = compute_atmosphere_luts(make_atmosphere_params(with({})));
+  const glm::dvec4 w = scattering_parametrisation_roundtrip(luts);
+  std::cout << "scattering LUT round trip, worst in texels: nu " << w.x << ", mu_s " << w.y << ", mu " << w.z << ", r "
+            << w.w << "\n";
+  EXPECT_LT(w.x, 1e-6);
+  EXPECT_LT(w.y, 1e-6);
+  EXPECT_LT(w.z, 1e-3);
+  EXPECT_LT(w.w, 1e-6);
+}
+
+// The 4D LUT's single scattering (atmosphere.scattering_orders=1) against the brute-force
+// integration at 300 random rays, at half Bruneton's size, his 256 x 128 x 32, the shipped
+// 512 x 128 x 32 (his with twice the mu_s texels) and double his: the relative error of each
+// channel (values below 1e-6, the Earth's shadow, left out), for rays to the sky and rays to the
+// ground from 200 m up. Rays to the ground from lower down are short and dim (below 3e-4 of the
+// solar irradiance, against 1e-3 to 0.1 for the sky): there the r axis's first interval, from the
+// ground to 62 m, is the error (reported, not bounded). Measured: RMS 3.2% / 1.6% / 0.79% / 0.55%,
+// worst 48% / 42% / 17% / 12%, the worst all with the sun within 3.5 degrees of the horizon,
+// mostly in blue. The bound, single scattering within 1%, holds as an RMS at the shipped
+// size (not at Bruneton's: docs/sky.md), and the error falls with the size.
+TEST(Atmosphere, ScatteringLutMatchesABruteForceIntegration) {
+  const AtmosphereSettings a = with({"atmosphere.scattering_orders=1"});
+  const AtmosphereLuts luts = compute_atmosphere_luts(make_atmosphere_params(a));
+  const std::vector<SkyQuery> q = random_sky_queries(300, 11);
+  std::vector<glm::dvec3> want;
+  std::vector<bool> low_ground;
+  for (const SkyQuery& k : q) {
+    want.push_back(brute_single_scattering(a, k.altitude, k.view, k.sun));
+    const double r = a.bottom_radius + k.altitude, mu = k.view.y;
+    low_ground.push_back(k.altitude < 200 && mu < 0 && r * r * (mu * mu - 1) + a.bottom_radius * a.bottom_radius >= 0);
+  }
+  double rms[4] = {0, 0, 0, 0};
+  for (int size = 0; size < 4; ++size) {
+    glm::ivec3 dims(0);
+    size_t computed = 0;
+    const std::vector<glm::dvec3> got = scattering_lookups_at_size(luts, size, q, dims, &computed);
+    double sum2 = 0, worst = 0, worst_low = 0;
+    int n = 0, n_low = 0, worst_i = 0;
+    for (size_t i = 0; i < q.size(); ++i)
+      for (int c = 0; c < 3; ++c) {
+        if (want[i][c] < 1e-6) continue;
+        const double e = got[i][c] / want[i][c] - 1;
+        if (low_ground[i]) {
+          worst_low = std::max(worst_low, std::abs(e)), ++n_low;
+          continue;
+        }
+        sum2 += e * e, ++n;
+        if (std::abs(e) > worst) worst = std::abs(e), worst_i = int(i);
+      }
+    rms[size] = std::sqrt(sum2 / std::max(n, 1));
+    const SkyQuery& k = q[size_t(worst_i)];
+    std::cout << "scattering LUT " << dims.x << "x" << dims.y << "x" << dims.z << " vs brute force: RMS relative "
+              << rms[size] << ", worst " << worst << " (alt " << k.altitude << " m, mu " << k.view.y << ", mu_s " << k.sun.y
+              << ", nu " << glm::dot(k.view, k.sun) << ") over " << n << " values; rays to the ground from below 200 m: "
+              << "worst " << worst_low << " over " << n_low << "; " << computed << " texels computed\n";
+  }
+  EXPECT_LT(rms[2], 0.01) << "the shipped size";
+  for (int size = 1; size < 4; ++size) EXPECT_LT(rms[size], rms[size - 1]) << "the error falls with the LUT size";
+}
+
+// All the orders (the default 4): the LUT, which folds orders 2..N into its Rayleigh part divided
+// by the Rayleigh phase, against the per-pixel march it is built from (same integrals, same
+// multiple-scattering LUT), at 200 random rays to the sky and to the ground from 200 m up, at
+// the shipped size. Bound: RMS 1%.
+TEST(Atmosphere, ScatteringLutWithAllOrdersMatchesTheMarch) {
+  const AtmosphereLuts luts = compute_atmosphere_luts(make_atmosphere_params(with({})));
+  std::vector<SkyQuery> q;
+  for (const SkyQuery& k : random_sky_queries(260, 23)) {
+    const double r = luts.params.bottom_radius_m + k.altitude, mu = k.view.y, b = luts.params.bottom_radius_m;
+    if (k.altitude < 200 && mu < 0 && r * r * (mu * mu - 1) + b * b >= 0) continue;
+    if (q.size() < 200) q.push_back(k);
+  }
+  glm::ivec3 dims(0);
+  const std::vector<glm::dvec3> got = scattering_lookups_at_size(luts, 2, q, dims);
+  double sum2 = 0, worst = 0;
+  int n = 0;
+  for (size_t i = 0; i < q.size(); ++i) {
+    const glm::dvec3 want = luts.sky_radiance(q[i].altitude, q[i].view, q[i].sun);
+    for (int c = 0; c < 3; ++c) {
+      if (want[c] < 1e-6) continue;
+      const double e = got[i][c] / want[c] - 1;
+      sum2 += e * e, ++n;
+      worst = std::max(worst, std::abs(e));
+    }
+  }
+  const double rms = std::sqrt(sum2 / std::max(n, 1));
+  std::cout << "scattering LUT (all orders) vs the march: RMS relative " << rms << ", worst " << worst << " over " << n
+            << " values\n";
+  EXPECT_LT(rms, 0.01);
 }
 
 // The clouds' ambient from both halves of the sphere (sky_ambient): from the ground, every ray

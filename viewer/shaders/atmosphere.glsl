@@ -257,6 +257,34 @@ vec3 ground_sky_irradiance(Number mu_s) {
   return mix(irradiance_texel(i0), irradiance_texel(i0 + 1), w);
 }
 
+// The single-scattering integrals along (r, mu) over [0, d_end] with the sun at mu_s and nu = v.s,
+// for unit solar irradiance, before the phase functions and the scattering coefficients: the sums
+// of T(view) T(sun) rho_R and of T(view) T(sun) rho_M, and (with `multiple`) of T(view) sigma_s
+// Psi_ms, over CV_SKY_SAMPLES samples at d = d_end x^2 (x: the midpoints of equal intervals), each
+// weighted 2 x: dense near the start, where the air is densest along most rays. Times
+// d_end / CV_SKY_SAMPLES they are the integrals. The per-pixel march and the scattering LUT's
+// texels both use it; `hits_ground` says which boundary ends the ray.
+void scattering_sums(Number r, Number mu, Number mu_s, Number nu, Number d_end, bool hits_ground, bool multiple,
+                     OUT(vec3) rayleigh, OUT(vec3) mie, OUT(vec3) ms) {
+  Number bottom = u_atmo.bottom_radius_m, top = u_atmo.top_radius_m;
+  rayleigh = vec3(0.0);
+  mie = vec3(0.0);
+  ms = vec3(0.0);
+  int n = CV_SKY_SAMPLES;
+  for (int i = 0; i < n; ++i) {
+    Number x = (Number(i) + 0.5) / Number(n);
+    Number d = d_end * x * x;
+    Number w = 2.0 * x;
+    Number r_d = clamp(sqrt(d * d + 2.0 * r * mu * d + r * r), bottom, top);
+    Number mu_s_d = clamp((r * mu_s + d * nu) / r_d, -1.0, 1.0);
+    vec3 t_view = transmittance_along(r, mu, d, hits_ground);
+    vec3 t = t_view * transmittance_to_sun(r_d, mu_s_d) * w;
+    rayleigh += t * rayleigh_density(r_d - bottom);
+    mie += t * mie_density(r_d - bottom);
+    if (multiple) ms += t_view * w * atmosphere_scattering_coefficient(r_d - bottom) * multiple_scattering_at(r_d, mu_s_d);
+  }
+}
+
 // Radiance of the sky seen from altitude `alt` (planet centre straight below, zenith +y) along unit
 // `v`, with the sun along unit `s` and `solar` its irradiance at the top of the atmosphere: single
 // Rayleigh + Mie scattering, plus orders 2..N from the multiple-scattering LUT, ray-marched per
@@ -288,26 +316,11 @@ vec3 atmosphere_scattering(Number alt, vec3 v, vec3 s, vec3 solar, Number t_max,
   bool hits_ground = ray_intersects_ground(r, mu);
   Number d_atmo = hits_ground ? distance_to_bottom_boundary(r, mu) : distance_to_top_boundary(r, mu);
   Number d_end = clamp(t_max - t0, 0.0, d_atmo);
-  int n = CV_SKY_SAMPLES;
-  Number dx = d_end / Number(n);
   vec3 rayleigh = vec3(0.0);
   vec3 mie = vec3(0.0);
   vec3 ms = vec3(0.0);
-  bool multiple = u_atmo.scattering_orders > 1.5;
-  for (int i = 0; i < n; ++i) {
-    // Samples at d = d_end x^2 (x: the midpoints of n equal intervals), weight 2 d_end x / n: dense
-    // near the camera, where the air is densest along most rays.
-    Number x = (Number(i) + 0.5) / Number(n);
-    Number d = d_end * x * x;
-    Number w = 2.0 * x;
-    Number r_d = clamp(sqrt(d * d + 2.0 * r * mu * d + r * r), bottom, top);
-    Number mu_s_d = clamp((r * mu_s + d * nu) / r_d, -1.0, 1.0);
-    vec3 t_view = transmittance_along(r, mu, d, hits_ground);
-    vec3 t = t_view * transmittance_to_sun(r_d, mu_s_d) * w;
-    rayleigh += t * rayleigh_density(r_d - bottom);
-    mie += t * mie_density(r_d - bottom);
-    if (multiple) ms += t_view * w * atmosphere_scattering_coefficient(r_d - bottom) * multiple_scattering_at(r_d, mu_s_d);
-  }
+  scattering_sums(r, mu, mu_s, nu, d_end, hits_ground, u_atmo.scattering_orders > 1.5, rayleigh, mie, ms);
+  Number dx = d_end / Number(CV_SKY_SAMPLES);
   t_end = t0 + d_end;
   transmittance = transmittance_along(r, mu, d_end, hits_ground);
   if (hits_ground && d_end >= d_atmo) {
@@ -366,4 +379,172 @@ vec3 atmosphere_sun_disc(Number alt, vec3 v, vec3 s, vec3 disc_radiance) {
     r = top;
   }
   return disc_radiance * transmittance_to_top(r, mu) * (limb * rim);
+}
+
+// ------------------------------------------------------------------------ the 4D scattering LUT
+// Bruneton & Neyret's table of the sky's scattered light S(r, mu, mu_s, nu) for unit solar
+// irradiance, with Bruneton's 2017 parametrisation (functions.glsl,
+// GetScatteringTextureUvwzFromRMuMuSNu): u_r = rho / H; u_mu the distance to the boundary the ray
+// ends on, mapped between its minimum and maximum, the rays that hit the ground in the lower half
+// of the mu axis and the others in the upper half, each half with its own half-texel margins (so a
+// lookup never mixes the two); u_mu_s from the distance to the top from the ground towards the sun,
+// mu_s_min and below at 0; u_nu = (nu + 1) / 2, linear. The 4D table is packed as
+// CV_SCATTERING_NU slices of CV_SCATTERING_MU_S texels side by side along x. Three RGB parts: the
+// single Rayleigh and the single Mie scattering, each before its phase function (Bruneton's
+// "scattering" and "single_mie_scattering" textures), and the orders 2..N (from the multiple-
+// scattering LUT, nearly isotropic). Bruneton folds the last into the first, divided by the
+// Rayleigh phase; interpolated linearly in nu over 8 slices, 1 / (1 + nu^2) is then 2% off
+// between slices, so here it keeps its own part.
+
+// (u_nu, u_mu_s, u_mu, u_r) in [0, 1] of (r, mu, mu_s, nu); hits_ground: the ray (r, mu) ends on
+// the ground.
+vec4 scattering_uvwz(Number r, Number mu, Number mu_s, Number nu, bool hits_ground) {
+  Number bottom = u_atmo.bottom_radius_m, top = u_atmo.top_radius_m;
+  Number H = sqrt(top * top - bottom * bottom);
+  Number rho = atmo_safe_sqrt(r * r - bottom * bottom);
+  Number u_r = unit_to_texcoord(clamp(rho / H, 0.0, 1.0), CV_SCATTERING_R);
+  Number r_mu = r * mu;
+  Number disc = r_mu * r_mu - r * r + bottom * bottom;
+  Number u_mu = 0.0;
+  if (hits_ground) {
+    Number d = -r_mu - atmo_safe_sqrt(disc);
+    Number d_min = r - bottom;
+    Number d_max = rho;
+    Number x = d_max > d_min ? (d - d_min) / (d_max - d_min) : 0.0;
+    u_mu = 0.5 - 0.5 * unit_to_texcoord(clamp(x, 0.0, 1.0), CV_SCATTERING_MU / 2);
+  } else {
+    Number d = -r_mu + atmo_safe_sqrt(disc + H * H);
+    Number d_min = top - r;
+    Number d_max = rho + H;
+    Number x = d_max > d_min ? (d - d_min) / (d_max - d_min) : 0.0;
+    u_mu = 0.5 + 0.5 * unit_to_texcoord(clamp(x, 0.0, 1.0), CV_SCATTERING_MU / 2);
+  }
+  Number d_s = distance_to_top_boundary(bottom, mu_s);
+  Number d_min_s = top - bottom;
+  Number d_max_s = H;
+  Number a = (d_s - d_min_s) / (d_max_s - d_min_s);
+  Number A = (distance_to_top_boundary(bottom, CV_SCATTERING_MU_S_MIN) - d_min_s) / (d_max_s - d_min_s);
+  Number u_mu_s = unit_to_texcoord(clamp(max(1.0 - a / A, 0.0) / (1.0 + a), 0.0, 1.0), CV_SCATTERING_MU_S);
+  return vec4(clamp((nu + 1.0) / 2.0, 0.0, 1.0), u_mu_s, u_mu, u_r);
+}
+
+// The inverse at the centre of texel `texel` (x = nu slice * CV_SCATTERING_MU_S + mu_s index):
+// (r, mu, mu_s, nu) and whether the ray hits the ground (the half of the mu axis it is in). A nu
+// slice sits at u_nu = slice / (CV_SCATTERING_NU - 1), so the first and last slices are nu = -1
+// and 1; nu is then clamped to what (mu, mu_s) allow.
+void scattering_texel_geometry(ivec3 texel, OUT(Number) r, OUT(Number) mu, OUT(Number) mu_s, OUT(Number) nu,
+                               OUT(bool) hits_ground) {
+  Number bottom = u_atmo.bottom_radius_m, top = u_atmo.top_radius_m;
+  int slice = texel.x / CV_SCATTERING_MU_S;
+  int i_mu_s = texel.x - slice * CV_SCATTERING_MU_S;
+  Number u_nu = Number(slice) / Number(CV_SCATTERING_NU - 1);
+  Number u_mu_s = (Number(i_mu_s) + 0.5) / Number(CV_SCATTERING_MU_S);
+  Number u_mu = (Number(texel.y) + 0.5) / Number(CV_SCATTERING_MU);
+  Number u_r = (Number(texel.z) + 0.5) / Number(CV_SCATTERING_R);
+  Number H = sqrt(top * top - bottom * bottom);
+  Number rho = H * texcoord_to_unit(u_r, CV_SCATTERING_R);
+  r = sqrt(rho * rho + bottom * bottom);
+  hits_ground = u_mu < 0.5;
+  if (hits_ground) {
+    Number d_min = r - bottom;
+    Number d_max = rho;
+    Number d = d_min + (d_max - d_min) * texcoord_to_unit(1.0 - 2.0 * u_mu, CV_SCATTERING_MU / 2);
+    mu = d == 0.0 ? -1.0 : clamp(-(rho * rho + d * d) / (2.0 * r * d), -1.0, 1.0);
+  } else {
+    Number d_min = top - r;
+    Number d_max = rho + H;
+    Number d = d_min + (d_max - d_min) * texcoord_to_unit(2.0 * u_mu - 1.0, CV_SCATTERING_MU / 2);
+    mu = d == 0.0 ? 1.0 : clamp((H * H - rho * rho - d * d) / (2.0 * r * d), -1.0, 1.0);
+  }
+  Number x_mu_s = texcoord_to_unit(u_mu_s, CV_SCATTERING_MU_S);
+  Number d_min_s = top - bottom;
+  Number d_max_s = H;
+  Number A = (distance_to_top_boundary(bottom, CV_SCATTERING_MU_S_MIN) - d_min_s) / (d_max_s - d_min_s);
+  Number a = (A - x_mu_s * A) / (1.0 + x_mu_s * A);
+  Number d_s = d_min_s + min(a, A) * (d_max_s - d_min_s);
+  mu_s = d_s == 0.0 ? 1.0 : clamp((H * H - d_s * d_s) / (2.0 * bottom * d_s), -1.0, 1.0);
+  Number spread = atmo_safe_sqrt((1.0 - mu * mu) * (1.0 - mu_s * mu_s));
+  nu = clamp(2.0 * u_nu - 1.0, mu * mu_s - spread, mu * mu_s + spread);
+}
+
+// The precompute: texel `texel`'s three parts (single Rayleigh, single Mie, orders 2..N), from the
+// same integrals as the per-pixel march (scattering_sums) along the whole ray to the boundary the
+// texel's half of the mu axis names.
+void compute_scattering_texel(ivec3 texel, OUT(vec3) rayleigh, OUT(vec3) mie, OUT(vec3) multiple) {
+  Number r = 0.0;
+  Number mu = 0.0;
+  Number mu_s = 0.0;
+  Number nu = 0.0;
+  bool hits_ground = false;
+  scattering_texel_geometry(texel, r, mu, mu_s, nu, hits_ground);
+  Number d_end = hits_ground ? distance_to_bottom_boundary(r, mu) : distance_to_top_boundary(r, mu);
+  vec3 sum_r = vec3(0.0);
+  vec3 sum_m = vec3(0.0);
+  vec3 sum_ms = vec3(0.0);
+  scattering_sums(r, mu, mu_s, nu, d_end, hits_ground, u_atmo.scattering_orders > 1.5, sum_r, sum_m, sum_ms);
+  Number dx = d_end / Number(CV_SKY_SAMPLES);
+  rayleigh = dx * sum_r * u_atmo.rayleigh_scattering_per_m;
+  mie = dx * sum_m * u_atmo.mie_scattering_per_m;
+  multiple = dx * sum_ms;
+}
+
+// One part of the table at (u_mu_s, u_mu, u_r) in nu slice `slice`: trilinear between the eight
+// nearest texel centres, by hand (GL and the CPU reference filter alike); the mu axis never
+// crosses the middle (the two halves' margins keep u_mu within its own half's texel centres).
+vec3 scattering_slice(int part, int slice, vec3 uvw) {
+  vec3 p = uvw * vec3(CV_SCATTERING_MU_S, CV_SCATTERING_MU, CV_SCATTERING_R) - 0.5;
+  int half_mu = CV_SCATTERING_MU / 2;
+  int lo_mu = p.y < Number(half_mu) - 0.5 ? 0 : half_mu;
+  ivec3 i0 = ivec3(clamp(floor(p.x), 0.0, Number(CV_SCATTERING_MU_S - 2)),
+                   clamp(floor(p.y), Number(lo_mu), Number(lo_mu + half_mu - 2)),
+                   clamp(floor(p.z), 0.0, Number(CV_SCATTERING_R - 2)));
+  vec3 f = clamp(p - vec3(i0), 0.0, 1.0);
+  vec3 acc = vec3(0.0);
+  for (int k = 0; k < 8; ++k) {
+    ivec3 o = ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
+    ivec3 t = i0 + o;
+    t.x += slice * CV_SCATTERING_MU_S;
+    Number w = (o.x == 1 ? f.x : 1.0 - f.x) * (o.y == 1 ? f.y : 1.0 - f.y) * (o.z == 1 ? f.z : 1.0 - f.z);
+    acc += w * (part == 0 ? scattering_texel(t) : part == 1 ? single_mie_texel(t) : scattering_multiple_texel(t));
+  }
+  return acc;
+}
+
+// The lookup: the three parts at (r, mu, mu_s, nu), linear between the two nearest nu slices.
+void scattering_lookup(Number r, Number mu, Number mu_s, Number nu, bool hits_ground, OUT(vec3) rayleigh,
+                       OUT(vec3) mie, OUT(vec3) multiple) {
+  vec4 uvwz = scattering_uvwz(r, mu, mu_s, nu, hits_ground);
+  Number x = uvwz.x * Number(CV_SCATTERING_NU - 1);
+  int slice = int(clamp(floor(x), 0.0, Number(CV_SCATTERING_NU - 2)));
+  Number w = clamp(x - Number(slice), 0.0, 1.0);
+  vec3 uvw = vec3(uvwz.y, uvwz.z, uvwz.w);
+  rayleigh = mix(scattering_slice(0, slice, uvw), scattering_slice(0, slice + 1, uvw), w);
+  mie = mix(scattering_slice(1, slice, uvw), scattering_slice(1, slice + 1, uvw), w);
+  multiple = vec3(0.0);
+  if (u_atmo.scattering_orders > 1.5) multiple = mix(scattering_slice(2, slice, uvw), scattering_slice(2, slice + 1, uvw), w);
+}
+
+// The sky's radiance from altitude `alt` along unit `v` with the sun along unit `s`, for solar
+// irradiance `solar`, to the top of the atmosphere or the ground, read from the table (all the
+// orders it holds): atmosphere_scattering's value with t_max = CV_NO_HIT, without the ground term.
+vec3 atmosphere_scattering_lut(Number alt, vec3 v, vec3 s, vec3 solar) {
+  Number bottom = u_atmo.bottom_radius_m, top = u_atmo.top_radius_m;
+  Number r = bottom + clamp(alt, 0.0, 1e9);
+  Number mu = clamp(v.y, -1.0, 1.0);
+  Number mu_s = clamp(s.y, -1.0, 1.0);
+  Number nu = clamp(dot(v, s), -1.0, 1.0);
+  if (r > top) {  // from space: start where the ray enters the atmosphere
+    Number rmu = r * mu;
+    Number disc = rmu * rmu - r * r + top * top;
+    if (disc < 0.0 || rmu > 0.0) return vec3(0.0);
+    Number t0 = -rmu - sqrt(disc);
+    mu = clamp((r * mu + t0) / top, -1.0, 1.0);
+    mu_s = clamp((r * mu_s + t0 * nu) / top, -1.0, 1.0);
+    r = top;
+  }
+  vec3 rayleigh = vec3(0.0);
+  vec3 mie = vec3(0.0);
+  vec3 multiple = vec3(0.0);
+  scattering_lookup(r, mu, mu_s, nu, ray_intersects_ground(r, mu), rayleigh, mie, multiple);
+  return solar * (rayleigh * rayleigh_phase(nu) + mie * mie_phase(u_atmo.mie_g, nu) + multiple);
 }

@@ -9,6 +9,8 @@
 #include <iomanip>
 #include <mutex>
 #include <sstream>
+#include <unordered_map>
+#include <utility>
 
 #include <tbb/parallel_for.h>
 
@@ -214,6 +216,9 @@ struct AtmosphereShader {
   vec3 transmittance_texel(ivec2 t) const { return (*lut)[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
   vec3 multiple_scattering_texel(ivec2 t) const { return (*ms)[size_t(t.y) * CV_MS_LUT_SIZE + size_t(t.x)]; }
   vec3 irradiance_texel(int t) const { return (*irr)[size_t(t)]; }
+  vec3 scattering_texel(ivec3) const { return vec3(0.0); }  // the 4D LUT: ScatteringShader below
+  vec3 single_mie_texel(ivec3) const { return vec3(0.0); }
+  vec3 scattering_multiple_texel(ivec3) const { return vec3(0.0); }
 
 #include "../shaders/atmosphere.glsl"
 };
@@ -236,6 +241,9 @@ struct SizedAtmosphereShader {
   vec3 transmittance_texel(ivec2 t) const { return (*lut)[size_t(t.y) * W + size_t(t.x)]; }
   vec3 multiple_scattering_texel(ivec2) const { return vec3(0.0); }  // not studied at other sizes
   vec3 irradiance_texel(int) const { return vec3(0.0); }
+  vec3 scattering_texel(ivec3) const { return vec3(0.0); }
+  vec3 single_mie_texel(ivec3) const { return vec3(0.0); }
+  vec3 scattering_multiple_texel(ivec3) const { return vec3(0.0); }
 #include "../shaders/atmosphere.glsl"
 #pragma pop_macro("CV_TRANSMITTANCE_W")
 #pragma pop_macro("CV_TRANSMITTANCE_H")
@@ -273,6 +281,9 @@ struct SizedMsShader {
   vec3 transmittance_texel(ivec2 t) const { return (*lut)[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
   vec3 multiple_scattering_texel(ivec2 t) const { return (*ms)[size_t(t.y) * N + size_t(t.x)]; }
   vec3 irradiance_texel(int) const { return vec3(0.0); }
+  vec3 scattering_texel(ivec3) const { return vec3(0.0); }
+  vec3 single_mie_texel(ivec3) const { return vec3(0.0); }
+  vec3 scattering_multiple_texel(ivec3) const { return vec3(0.0); }
 #include "../shaders/atmosphere.glsl"
 #pragma pop_macro("CV_MS_LUT_SIZE")
 };
@@ -290,6 +301,72 @@ std::vector<glm::dvec3> sized_ms_lookups(const ref::AtmosphereParams& p, const s
   std::vector<glm::dvec3> out;
   for (const glm::dvec2& q : r_mu_s) out.push_back(sh.multiple_scattering_at(q.x, q.y));
   size = N;
+  return out;
+}
+
+// Bruneton's 4D scattering LUT on the CPU at MuS x Mu x R texels per nu slice (8 slices), over the
+// other LUTs of `base`. Its texels are computed the first time a
+// lookup reads them (a lookup reads 32 of the 1M; thread-safe), each by the header's
+// compute_scattering_texel, so a study of a few hundred rays costs milliseconds.
+template <int MuS, int Mu, int R>
+struct ScatteringShader {
+  CV_GLSL_DOUBLE_TYPES;
+
+  struct Table {
+    std::mutex mutex;
+    std::unordered_map<int64_t, std::array<glm::dvec3, 3>> texels;
+  };
+  const ref::AtmosphereParams& u_atmo;
+  const AtmosphereLuts& base;
+  Table& table;
+
+#pragma push_macro("CV_SCATTERING_MU_S")
+#pragma push_macro("CV_SCATTERING_MU")
+#pragma push_macro("CV_SCATTERING_R")
+#undef CV_SCATTERING_MU_S
+#undef CV_SCATTERING_MU
+#undef CV_SCATTERING_R
+#define CV_SCATTERING_MU_S MuS
+#define CV_SCATTERING_MU Mu
+#define CV_SCATTERING_R R
+  static constexpr int NX = CV_SCATTERING_NU * CV_SCATTERING_MU_S, NY = CV_SCATTERING_MU, NZ = CV_SCATTERING_R;
+  vec3 transmittance_texel(ivec2 t) const { return base.transmittance[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
+  vec3 multiple_scattering_texel(ivec2 t) const {
+    return base.multiple_scattering[size_t(t.y) * CV_MS_LUT_SIZE + size_t(t.x)];
+  }
+  vec3 irradiance_texel(int t) const { return base.irradiance[size_t(t)]; }
+  const std::array<glm::dvec3, 3>& lut_texel(ivec3 t) const {
+    const int64_t key = (int64_t(t.z) * NY + t.y) * NX + t.x;
+    {
+      std::lock_guard<std::mutex> lock(table.mutex);
+      auto it = table.texels.find(key);
+      if (it != table.texels.end()) return it->second;
+    }
+    std::array<glm::dvec3, 3> v;
+    ScatteringShader self{u_atmo, base, table};
+    self.compute_scattering_texel(t, v[0], v[1], v[2]);
+    std::lock_guard<std::mutex> lock(table.mutex);
+    return table.texels.emplace(key, v).first->second;  // unordered_map: references stay valid
+  }
+  vec3 scattering_texel(ivec3 t) const { return lut_texel(t)[0]; }
+  vec3 single_mie_texel(ivec3 t) const { return lut_texel(t)[1]; }
+  vec3 scattering_multiple_texel(ivec3 t) const { return lut_texel(t)[2]; }
+#include "../shaders/atmosphere.glsl"
+#pragma pop_macro("CV_SCATTERING_MU_S")
+#pragma pop_macro("CV_SCATTERING_MU")
+#pragma pop_macro("CV_SCATTERING_R")
+};
+
+template <int MuS, int Mu, int R>
+std::vector<glm::dvec3> sized_scattering_lookups(const AtmosphereLuts& base, const std::vector<SkyQuery>& queries,
+                                                 glm::ivec3& size, size_t* texels_computed) {
+  using S = ScatteringShader<MuS, Mu, R>;
+  typename S::Table table;
+  S sh{base.params, base, table};
+  std::vector<glm::dvec3> out;
+  for (const SkyQuery& q : queries) out.push_back(sh.atmosphere_scattering_lut(q.altitude, q.view, q.sun, glm::dvec3(1.0)));
+  size = glm::ivec3(S::NX, S::NY, S::NZ);
+  if (texels_computed) *texels_computed = table.texels.size();
   return out;
 }
 
@@ -313,6 +390,47 @@ std::vector<glm::dvec3> multiple_scattering_lookups_at_size(const ref::Atmospher
     case 2: return sized_ms_lookups<64>(p, r_mu_s, size);
     default: throw std::invalid_argument("multiple_scattering_lookups_at_size: size_index must be 0, 1 or 2");
   }
+}
+
+std::vector<glm::dvec3> scattering_lookups_at_size(const AtmosphereLuts& luts, int size_index,
+                                                   const std::vector<SkyQuery>& queries, glm::ivec3& size,
+                                                   size_t* texels_computed) {
+  switch (size_index) {
+    case 0: return sized_scattering_lookups<16, 64, 16>(luts, queries, size, texels_computed);
+    case 1: return sized_scattering_lookups<32, 128, 32>(luts, queries, size, texels_computed);
+    case 2:
+      return sized_scattering_lookups<CV_SCATTERING_MU_S, CV_SCATTERING_MU, CV_SCATTERING_R>(luts, queries, size,
+                                                                                           texels_computed);
+    case 3: return sized_scattering_lookups<64, 256, 64>(luts, queries, size, texels_computed);
+    default: throw std::invalid_argument("scattering_lookups_at_size: size_index must be 0, 1, 2 or 3");
+  }
+}
+
+glm::dvec4 scattering_parametrisation_roundtrip(const AtmosphereLuts& luts) {
+  using S = ScatteringShader<CV_SCATTERING_MU_S, CV_SCATTERING_MU, CV_SCATTERING_R>;
+  S::Table table;
+  S sh{luts.params, luts, table};
+  glm::dvec4 worst(0.0);
+  for (int z = 0; z < S::NZ; ++z)
+    for (int y = 0; y < S::NY; ++y)
+      for (int x = 0; x < S::NX; ++x) {
+        double r = 0, mu = 0, mu_s = 0, nu = 0;
+        bool ground = false;
+        sh.scattering_texel_geometry(glm::ivec3(x, y, z), r, mu, mu_s, nu, ground);
+        const glm::dvec4 uvwz = sh.scattering_uvwz(r, mu, mu_s, nu, ground);
+        const int slice = x / CV_SCATTERING_MU_S, i_mu_s = x % CV_SCATTERING_MU_S;
+        // In texels of each axis: where the lookup lands against the texel's own centre.
+        const double spread = std::sqrt(std::max(0.0, (1 - mu * mu) * (1 - mu_s * mu_s)));
+        const double nu_set = 2.0 * slice / (CV_SCATTERING_NU - 1) - 1;
+        if (std::abs(nu - nu_set) < 1e-12 && spread > 1e-6)  // nu not clamped
+          worst.x = std::max(worst.x, std::abs(uvwz.x * (CV_SCATTERING_NU - 1) - slice));
+        worst.y = std::max(worst.y, std::abs(uvwz.y * CV_SCATTERING_MU_S - 0.5 - i_mu_s));
+        // At the ground (r texel 0, rho = 0) every ray of the lower half has length 0 and mu = -1:
+        // the half collapses onto one texel there (as in Bruneton's table), nothing to invert.
+        if (!(ground && z == 0)) worst.z = std::max(worst.z, std::abs(uvwz.z * CV_SCATTERING_MU - 0.5 - y));
+        worst.w = std::max(worst.w, std::abs(uvwz.w * CV_SCATTERING_R - 0.5 - z));
+      }
+  return worst;
 }
 
 AtmosphereLuts compute_atmosphere_luts(const ref::AtmosphereParams& p) {

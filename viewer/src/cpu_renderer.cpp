@@ -51,6 +51,9 @@ struct CpuShader {
     return lut.multiple_scattering[size_t(t.y) * CV_MS_LUT_SIZE + size_t(t.x)];
   }
   vec3 irradiance_texel(int t) const { return lut.irradiance[size_t(t)]; }
+  vec3 scattering_texel(ivec3) const { return vec3(0.0); }  // the 4D LUT is not rendered from yet
+  vec3 single_mie_texel(ivec3) const { return vec3(0.0); }
+  vec3 scattering_multiple_texel(ivec3) const { return vec3(0.0); }
 
   vec4 volume_texel(ivec3 t) {
     if (vol.nano) return nanovdb_texel(t);

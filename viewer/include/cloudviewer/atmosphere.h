@@ -122,6 +122,27 @@ std::vector<glm::dvec3> transmittance_lookups_at_size(const ref::AtmosphereParam
 std::vector<glm::dvec3> multiple_scattering_lookups_at_size(const ref::AtmosphereParams& p, int size_index,
                                                             const std::vector<glm::dvec2>& r_mu_s, int& size);
 
+/// A sky ray for the scattering-LUT study: from `altitude` (m above the ground) along unit `view`
+/// (zenith +y) with the sun along unit `sun`.
+struct SkyQuery {
+  double altitude = 0;
+  glm::dvec3 view{0, 1, 0}, sun{0, 1, 0};
+};
+/// Bruneton's 4D scattering LUT (atmosphere.glsl, atmosphere_scattering_lut) on the CPU at half
+/// Bruneton's 256 x 128 x 32 (size_index 0: 128 x 64 x 16), his size (1), the shipped size (2: his
+/// with twice the mu_s texels, 512 x 128 x 32) or double his (3: 512 x 256 x 64), 8 nu slices
+/// each, over the other LUTs of `luts`: the sky's radiance of each query for unit solar
+/// irradiance, to the top of the atmosphere or the ground. Texels are computed as lookups read
+/// them; `size` receives the 3D texture's size and `texels_computed` how many were computed.
+std::vector<glm::dvec3> scattering_lookups_at_size(const AtmosphereLuts& luts, int size_index,
+                                                   const std::vector<SkyQuery>& queries, glm::ivec3& size,
+                                                   size_t* texels_computed = nullptr);
+/// The scattering LUT's parametrisation checked at every texel of the shipped size: the texel's
+/// (r, mu, mu_s, nu) mapped back to texture coordinates lands this far (in texels) from the
+/// texel's centre, per axis (nu, mu_s, mu, r; nu where the texel's nu is not clamped to what its mu
+/// and mu_s allow; mu except the ground rays at r = bottom, which all have length 0).
+glm::dvec4 scattering_parametrisation_roundtrip(const AtmosphereLuts& luts);
+
 /// The LUTs of `s` as the renderers use them (parameters rounded to float, what the GPU sees),
 /// computed once per distinct atmosphere and shared (thread-safe).
 std::shared_ptr<const AtmosphereLuts> shared_atmosphere_luts(const AtmosphereSettings& s);
