@@ -226,15 +226,6 @@ double reference_light_optical_depth(const PreparedVolume& vol, const ref::Cloud
   return light_volume ? sh.light_volume_tau(p) : sh.light_optical_depth(p);
 }
 
-double reference_phase(const RenderSettings& s, double cos_theta) {
-  ref::CloudParams p{};
-  set_phase_params(p, s);
-  p.mie_table_size = CV_MIE_TABLE_SIZE;
-  PreparedVolume empty;
-  CpuShader sh(p, empty, no_lut());
-  return sh.phase_function(cos_theta);
-}
-
 glm::dvec3 reference_phase_rgb(const RenderSettings& s, double cos_theta) {
   ref::CloudParams p{};
   set_phase_params(p, s);
@@ -243,6 +234,9 @@ glm::dvec3 reference_phase_rgb(const RenderSettings& s, double cos_theta) {
   CpuShader sh(p, empty, no_lut());
   return sh.phase_function_rgb(cos_theta);
 }
+
+// phase_function is phase_function_rgb's green channel (the Mie table's) or its grey lobe.
+double reference_phase(const RenderSettings& s, double cos_theta) { return reference_phase_rgb(s, cos_theta).y; }
 
 double reference_phase(PhaseMode mode, double g, double cos_theta) {
   RenderSettings s;
