@@ -176,7 +176,8 @@ TEST(ViewerMath, MieTableFromAFileIsResampledAndNormalised) {
   EXPECT_GT(mie_phase_table().at(0, 1), 100.f);  // the computed droplet table (forward peak ~600/sr) is back
   std::ofstream(output_dir() / "bad_mie.txt") << "0 1\n90 x\n";
   std::ofstream(output_dir() / "bad_mie3.csv") << "angle_deg,r,g,b\n0,1,1,1\n90,1,1\n";
-  for (const char* bad : {"bad_mie.txt:2", "bad_mie3.csv:3"}) {
+  std::ofstream(output_dir() / "bad_red.csv") << "angle_deg,r,g,b\n0,0,1,1\n180,0,1,1\n";
+  for (const char* bad : {"bad_mie.txt:2", "bad_mie3.csv:3", "bad_red.csv: the red channel"}) {
     const std::string name = std::string(bad).substr(0, std::string(bad).find(':'));
     try {
       load_mie_table((output_dir() / name).string());

@@ -5,6 +5,7 @@
 // interpolant.
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <mutex>
 #include <sstream>
@@ -43,7 +44,11 @@ MiePhaseTable normalised(const std::vector<double> (&channels)[3], const std::st
   MiePhaseTable t;
   const int n = int(channels[0].size());
   t.rgb.resize(size_t(n) * 3);
+  const char* names[3] = {"red", "green", "blue"};
   for (int c = 0; c < 3; ++c) {
+    // All zero: the log interpolant's floor (1e-30) would integrate to a tiny positive number.
+    if (!(*std::max_element(channels[c].begin(), channels[c].end()) > 0))
+      throw InputError(what + ": the " + names[c] + " channel's phase function integrates to 0");
     const double integral = log_table_integral(channels[c]);
     if (!(integral > 0) || !std::isfinite(integral)) throw InputError(what + ": the phase function integrates to 0");
     for (int i = 0; i < n; ++i) t.rgb[size_t(i) * 3 + size_t(c)] = float(channels[c][size_t(i)] / integral);
@@ -60,6 +65,9 @@ void load_mie_table(const std::string& path) {
     return;
   }
   const std::string what = "--mie-table " + path;
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
+    throw InputError(what + ": not a regular file (a FIFO or a device would block or never end)");
   std::ifstream in(path);
   if (!in) throw InputError(what + ": no such file");
   std::vector<double> theta, value[3];
