@@ -110,6 +110,26 @@ std::vector<SkyQuery> random_sky_queries(int n, unsigned seed) {
   return q;
 }
 
+// RMS and worst relative error per channel of `got` against `want`, over the values above 1e-6
+// (the sky's light for unit solar irradiance is 1e-3 to 0.1; below 1e-6 is night); n: how many.
+struct RelativeError {
+  double rms = 0, worst = 0;
+  int n = 0;
+};
+RelativeError relative_error(const std::vector<glm::dvec3>& got, const std::vector<glm::dvec3>& want) {
+  RelativeError e;
+  double sum2 = 0;
+  for (size_t i = 0; i < got.size(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      if (want[i][c] < 1e-6) continue;
+      const double d = got[i][c] / want[i][c] - 1;
+      sum2 += d * d, ++e.n;
+      e.worst = std::max(e.worst, std::abs(d));
+    }
+  e.rms = std::sqrt(sum2 / std::max(e.n, 1));
+  return e;
+}
+
 const PreparedVolume& blob() {
   static PreparedVolume v = prepare_volume(synthetic_volume("blob"), 8);
   return v;
@@ -129,6 +149,15 @@ FrameSetup sky_frame(int w, int h, double sun_az, double sun_el, glm::dvec3 eye 
   if (eye != target) cam.eye = eye, cam.target = target, cam.fov_y_deg = fov;
   return make_frame(blob(), s, cam, Sun{sun_az, sun_el}, w, h);
 }
+
+// A named view for sky_frame: the sun at (az, el), the camera from eye to target (the default
+// camera when equal) with vertical field of view fov.
+struct SkyView {
+  const char* name;
+  double az, el;
+  glm::dvec3 eye, target;
+  double fov;
+};
 
 FrameImages gl_frame(const FrameSetup& f) {
   gl_context();
@@ -327,14 +356,8 @@ TEST(Atmosphere, DocsListTheCurrentParameters) {
 // filtering): the precomputed sky at noon, at sunset and seen from 1000 km, the blob in front.
 // Threshold 45 dB (the issue; Bruneton's own model test asserts 47 dB); measured values printed.
 TEST(AtmosphereSky, GlMatchesTheCpuReference) {
-  struct View {
-    const char* name;
-    double az, el;
-    glm::dvec3 eye, target;
-    double fov;
-  };
-  for (const View& v : {View{"noon", 0, 60, {}, {}, 60}, View{"sunset", 0, 2, {}, {}, 60},
-                        View{"space", 0, 20, {0, 1e6, 0}, {0, 0, -3e6}, 70}}) {
+  for (const SkyView& v : {SkyView{"noon", 0, 60, {}, {}, 60}, SkyView{"sunset", 0, 2, {}, {}, 60},
+                           SkyView{"space", 0, 20, {0, 1e6, 0}, {0, 0, -3e6}, 70}}) {
     FrameSetup f = sky_frame(160, 90, v.az, v.el, v.eye, v.target, v.fov);
     FrameImages gl = gl_frame(f);
     FrameImages cpu = render_cpu(blob(), f);
@@ -343,6 +366,49 @@ TEST(AtmosphereSky, GlMatchesTheCpuReference) {
     std::cout << v.name << ": precomputed sky, PSNR GL vs CPU " << p << " dB\n";
     EXPECT_GT(p, 45.0) << v.name;
   }
+}
+
+// render.sky_lut: the sky and the aerial perspective read from the 4D scattering LUT, which the GL
+// renderer computes in a precompute pass. Against the per-pixel march (the same integrals, no
+// interpolation) and against the CPU reference reading the same LUT (texels computed in double as
+// the pixels read them): noon, sunset, from space, and from 10 km over the ground (the ground seen
+// through 10-60 km of air: the S(x) - T S(p) segment lookups). One renderer for all the views: the
+// 4D pass runs once, since none of them changes an atmosphere.* key, and not at all while
+// render.sky_lut is off.
+TEST(AtmosphereSky, ScatteringLutSkyMatchesTheMarchAndTheCpuReference) {
+  gl_context();
+  GlRenderer r{ShaderSource()};
+  r.set_volume(blob());
+  for (const SkyView& v : {SkyView{"noon", 0, 60, {}, {}, 60}, SkyView{"sunset", 0, 2, {}, {}, 60},
+                           SkyView{"space", 0, 20, {0, 1e6, 0}, {0, 0, -3e6}, 70},
+                           SkyView{"10 km", 40, 20, {0, 1e4, 0}, {0, 0, -3e4}, 60}}) {
+    FrameSetup march = sky_frame(160, 90, v.az, v.el, v.eye, v.target, v.fov);
+    FrameSetup lut = sky_frame(160, 90, v.az, v.el, v.eye, v.target, v.fov, {"render.sky_lut=true"});
+    r.render(march);
+    FrameImages gl_march = r.read_back();
+    r.render(lut);
+    FrameImages gl_lut = r.read_back();
+    FrameImages cpu_lut = render_cpu(blob(), lut);
+    EXPECT_EQ(image_stats(gl_lut.linear).nonfinite, 0) << v.name;
+    EXPECT_GE(image_stats(gl_lut.linear).min, 0.0) << v.name;
+    const double vs_march = psnr(gl_lut.display, gl_march.display), vs_cpu = psnr(gl_lut.display, cpu_lut.display);
+    std::cout << v.name << ": LUT sky, PSNR against the march " << vs_march << " dB, GL vs CPU " << vs_cpu << " dB\n";
+    EXPECT_GT(vs_march, 60.0) << v.name;  // measured 71-84 dB
+    EXPECT_GT(vs_cpu, 45.0) << v.name;    // the issue's bound; measured 88-119 dB
+  }
+  EXPECT_EQ(r.lut_computations("atmosphere_scattering"), 1);
+  EXPECT_EQ(r.lut_computations("atmosphere_transmittance"), 1);
+  // Another viewport and the march: nothing recomputed; an atmosphere key changed with the LUT
+  // off: the small LUTs only; the LUT back on: the 4D pass again.
+  r.render(sky_frame(64, 36, 0, 30));
+  EXPECT_EQ(r.lut_computations("atmosphere_transmittance"), 1);
+  FrameSetup hazy = sky_frame(64, 36, 0, 30, {}, {}, 60, {"atmosphere.mie_height=2000"});
+  r.render(hazy);
+  EXPECT_EQ(r.lut_computations("atmosphere_transmittance"), 2);
+  EXPECT_EQ(r.lut_computations("atmosphere_scattering"), 1);
+  r.render(sky_frame(64, 36, 0, 30, {}, {}, 60, {"atmosphere.mie_height=2000", "render.sky_lut=true"}));
+  EXPECT_EQ(r.lut_computations("atmosphere_scattering"), 2);
+  EXPECT_EQ(r.lut_computations("atmosphere_transmittance"), 2);
 }
 
 // Looking up from the ground (fov 90: the bottom row at the horizon, the top row at the zenith),
@@ -851,22 +917,44 @@ TEST(Atmosphere, ScatteringLutWithAllOrdersMatchesTheMarch) {
     if (q.size() < 200) q.push_back(k);
   }
   glm::ivec3 dims(0);
-  const std::vector<glm::dvec3> got = scattering_lookups_at_size(luts, 2, q, dims);
-  double sum2 = 0, worst = 0;
-  int n = 0;
-  for (size_t i = 0; i < q.size(); ++i) {
-    const glm::dvec3 want = luts.sky_radiance(q[i].altitude, q[i].view, q[i].sun);
-    for (int c = 0; c < 3; ++c) {
-      if (want[c] < 1e-6) continue;
-      const double e = got[i][c] / want[c] - 1;
-      sum2 += e * e, ++n;
-      worst = std::max(worst, std::abs(e));
-    }
+  std::vector<glm::dvec3> want;
+  for (const SkyQuery& k : q) want.push_back(luts.sky_radiance(k.altitude, k.view, k.sun));
+  const RelativeError e = relative_error(scattering_lookups_at_size(luts, 2, q, dims), want);
+  std::cout << "scattering LUT (all orders) vs the march: RMS relative " << e.rms << ", worst " << e.worst << " over "
+            << e.n << " values\n";
+  EXPECT_LT(e.rms, 0.01);
+}
+
+// Aerial perspective through the LUT: the light the air scatters over the first t metres of a ray,
+// Bruneton's S(x) - T(x, p) S(p) from two lookups, against the march over the same segment, at
+// random rays (as above) cut at t uniform in 5-95% of the distance to the boundary. The error of a
+// difference of two lookups grows where S(p) is nearly S(x) (short segments far from the camera's
+// dense air), so the bound is looser than for whole rays. Measured: RMS 3.8%, worst 67%, on a
+// twilight ray (sun 4.8 degrees down) grazing the horizon from 8.7 km, where the light is 1/1000 of
+// the day's; the only green value off by more than 8%.
+TEST(Atmosphere, ScatteringLutSegmentsMatchTheMarch) {
+  const AtmosphereLuts luts = compute_atmosphere_luts(make_atmosphere_params(with({})));
+  const double b = luts.params.bottom_radius_m, top = luts.params.top_radius_m;
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  std::vector<SkyQuery> q;
+  for (const SkyQuery& k : random_sky_queries(400, 31)) {
+    const double r = b + k.altitude, mu = k.view.y;
+    const bool ground = mu < 0 && r * r * (mu * mu - 1) + b * b >= 0;
+    if (k.altitude < 200 && ground) continue;
+    const double d = ground ? -r * mu - std::sqrt(std::max(0.0, r * r * (mu * mu - 1) + b * b))
+                            : -r * mu + std::sqrt(std::max(0.0, r * r * (mu * mu - 1) + top * top));
+    SkyQuery s = k;
+    s.t_max = d * (0.05 + 0.9 * u01(rng));
+    if (q.size() < 200) q.push_back(s);
   }
-  const double rms = std::sqrt(sum2 / std::max(n, 1));
-  std::cout << "scattering LUT (all orders) vs the march: RMS relative " << rms << ", worst " << worst << " over " << n
-            << " values\n";
-  EXPECT_LT(rms, 0.01);
+  glm::ivec3 dims(0);
+  std::vector<glm::dvec3> want;
+  for (const SkyQuery& k : q) want.push_back(luts.sky_radiance(k.altitude, k.view, k.sun, k.t_max));
+  const RelativeError e = relative_error(scattering_lookups_at_size(luts, 2, q, dims), want);
+  std::cout << "scattering LUT segments vs the march: RMS relative " << e.rms << ", worst " << e.worst << " over "
+            << e.n << " values\n";
+  EXPECT_LT(e.rms, 0.05);
 }
 
 // The clouds' ambient from both halves of the sphere (sky_ambient): from the ground, every ray

@@ -750,6 +750,7 @@ TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
   CV_EXPECT_OFFSET(skip_distance);
   CV_EXPECT_OFFSET(df_light);
   CV_EXPECT_OFFSET(transmittance_cutoff);
+  CV_EXPECT_OFFSET(sky_lut);
   CV_EXPECT_OFFSET(ground_half_extent_m);
   CV_EXPECT_OFFSET(camera_world_mod_m);
   CV_EXPECT_OFFSET(shadow_samples);
@@ -774,7 +775,8 @@ TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
   EXPECT_EQ(r.pass_names().front(), "atmosphere_transmittance");  // the LUT precomputes come first
   EXPECT_EQ(r.pass_names().at(1), "atmosphere_multiple_scattering");
   EXPECT_EQ(r.pass_names().at(2), "atmosphere_irradiance");
-  EXPECT_EQ(r.pass_names().at(3), "ground");
+  EXPECT_EQ(r.pass_names().at(3), "atmosphere_scattering");
+  EXPECT_EQ(r.pass_names().at(4), "ground");
   EXPECT_EQ(r.pass_names().back(), "tonemap");
 }
 

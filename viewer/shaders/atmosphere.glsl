@@ -285,102 +285,6 @@ void scattering_sums(Number r, Number mu, Number mu_s, Number nu, Number d_end, 
   }
 }
 
-// Radiance of the sky seen from altitude `alt` (planet centre straight below, zenith +y) along unit
-// `v`, with the sun along unit `s` and `solar` its irradiance at the top of the atmosphere: single
-// Rayleigh + Mie scattering, plus orders 2..N from the multiple-scattering LUT, ray-marched per
-// pixel (CV_SKY_SAMPLES midpoint samples, each reading the transmittance LUT and the multiple-
-// scattering LUT) up to the top, the ground or t_max. `transmittance` receives the view
-// ray's transmittance over that segment (0 when it ends on the ground), `t_end` its length from the
-// camera (CV_NO_HIT when the ray misses the atmosphere) and `ground` the ground radiance there
-// (albedo / pi * (direct sun + the sky's irradiance); 0 when the ray does not end on the ground).
-vec3 atmosphere_scattering(Number alt, vec3 v, vec3 s, vec3 solar, Number t_max, OUT(vec3) transmittance,
-                           OUT(Number) t_end, OUT(vec3) ground) {
-  Number bottom = u_atmo.bottom_radius_m, top = u_atmo.top_radius_m;
-  transmittance = vec3(1.0);
-  ground = vec3(0.0);
-  t_end = CV_NO_HIT;
-  Number r = bottom + clamp(alt, 0.0, 1e9);
-  Number mu = clamp(v.y, -1.0, 1.0);
-  Number mu_s = clamp(s.y, -1.0, 1.0);
-  Number nu = clamp(dot(v, s), -1.0, 1.0);
-  Number t0 = 0.0;
-  if (r > top) {  // from space: start where the ray enters the atmosphere
-    Number rmu = r * mu;
-    Number disc = rmu * rmu - r * r + top * top;
-    if (disc < 0.0 || rmu > 0.0) return vec3(0.0);
-    t0 = -rmu - sqrt(disc);
-    mu = clamp((r * mu + t0) / top, -1.0, 1.0);
-    mu_s = clamp((r * mu_s + t0 * nu) / top, -1.0, 1.0);
-    r = top;
-  }
-  bool hits_ground = ray_intersects_ground(r, mu);
-  Number d_atmo = hits_ground ? distance_to_bottom_boundary(r, mu) : distance_to_top_boundary(r, mu);
-  Number d_end = clamp(t_max - t0, 0.0, d_atmo);
-  vec3 rayleigh = vec3(0.0);
-  vec3 mie = vec3(0.0);
-  vec3 ms = vec3(0.0);
-  scattering_sums(r, mu, mu_s, nu, d_end, hits_ground, u_atmo.scattering_orders > 1.5, rayleigh, mie, ms);
-  Number dx = d_end / Number(CV_SKY_SAMPLES);
-  t_end = t0 + d_end;
-  transmittance = transmittance_along(r, mu, d_end, hits_ground);
-  if (hits_ground && d_end >= d_atmo) {
-    Number mu_s_g = clamp((r * mu_s + d_end * nu) / bottom, -1.0, 1.0);
-    ground = u_atmo.ground_albedo / CV_PI * solar *
-             (transmittance_to_sun(bottom, mu_s_g) * max(mu_s_g, 0.0) + ground_sky_irradiance(mu_s_g));
-  }
-  return solar * dx * (rayleigh * u_atmo.rayleigh_scattering_per_m * rayleigh_phase(nu) +
-                       mie * u_atmo.mie_scattering_per_m * mie_phase(u_atmo.mie_g, nu) + ms);
-}
-
-// ------------------------------------------------------------------------------ ground irradiance
-// The sky's irradiance on the horizontal ground (Bruneton's indirect irradiance, here of all the
-// orders the sky holds) for unit solar irradiance, as a function of the sun's cosine mu_s:
-// E(mu_s) = int_hemisphere L_sky(w) cos(theta) dw, from atmosphere_scattering (whose rays from the
-// ground upwards never read this LUT). The direct sunlight stays analytic.
-vec3 compute_irradiance_texel(int texel) {
-  Number x = texcoord_to_unit((Number(texel) + 0.5) / Number(CV_IRRADIANCE_W), CV_IRRADIANCE_W);
-  Number mu_s = clamp(2.0 * x - 1.0, -1.0, 1.0);
-  vec3 s = vec3(sqrt(max(1.0 - mu_s * mu_s, 0.0)), mu_s, 0.0);
-  vec3 e = vec3(0.0);
-  for (int i = 0; i < CV_IRRADIANCE_BANDS; ++i) {
-    Number mu = (Number(i) + 0.5) / Number(CV_IRRADIANCE_BANDS);
-    Number sin_t = sqrt(max(1.0 - mu * mu, 0.0));
-    for (int j = 0; j < CV_IRRADIANCE_SECTORS; ++j) {
-      Number phi = CV_PI * (Number(j) + 0.5) / Number(CV_IRRADIANCE_SECTORS);
-      vec3 v = vec3(sin_t * cos(phi), mu, sin_t * sin(phi));
-      vec3 t = vec3(1.0);
-      vec3 g = vec3(0.0);
-      Number t_end = 0.0;
-      e += atmosphere_scattering(0.0, v, s, vec3(1.0), CV_NO_HIT, t, t_end, g) * mu;
-    }
-  }
-  return e * (2.0 * CV_PI / Number(CV_IRRADIANCE_BANDS * CV_IRRADIANCE_SECTORS));  // d(mu) d(phi), phi over 2 pi
-}
-
-// The sun's disc along unit `v` (radiance relative to `disc_radiance`): limb darkening
-// 1 - 0.6 (1 - cos theta) across the disc (theta: the angle at the sun's surface), an anti-aliased
-// rim, and the transmittance to the top (0 where the line of sight hits the ground: a partial set).
-vec3 atmosphere_sun_disc(Number alt, vec3 v, vec3 s, vec3 disc_radiance) {
-  Number r = u_atmo.bottom_radius_m + clamp(alt, 0.0, 1e9);
-  Number alpha = u_atmo.sun_angular_radius;
-  Number angle = acos(clamp(dot(v, s), -1.0, 1.0));
-  if (angle >= alpha * 1.2) return vec3(0.0);
-  Number x = min(angle / alpha, 1.0);
-  Number limb = 1.0 - 0.6 * (1.0 - sqrt(max(1.0 - x * x, 0.0)));
-  Number rim = 1.0 - smoothstep(0.9, 1.2, angle / alpha);
-  Number mu = clamp(v.y, -1.0, 1.0);
-  if (ray_intersects_ground(r, mu)) return vec3(0.0);
-  Number top = u_atmo.top_radius_m;
-  if (r > top) {  // from space: through the atmosphere from where the line of sight enters it
-    Number rmu = r * mu;
-    Number disc = rmu * rmu - r * r + top * top;
-    if (disc < 0.0 || rmu > 0.0) return disc_radiance * (limb * rim);
-    mu = clamp(-sqrt(disc) / top, -1.0, 1.0);  // (r mu + t0) / top at the entry t0 = -r mu - sqrt(disc)
-    r = top;
-  }
-  return disc_radiance * transmittance_to_top(r, mu) * (limb * rim);
-}
-
 // ------------------------------------------------------------------------ the 4D scattering LUT
 // Bruneton & Neyret's table of the sky's scattered light S(r, mu, mu_s, nu) for unit solar
 // irradiance, with Bruneton's 2017 parametrisation (functions.glsl,
@@ -524,27 +428,152 @@ void scattering_lookup(Number r, Number mu, Number mu_s, Number nu, bool hits_gr
   if (u_atmo.scattering_orders > 1.5) multiple = mix(scattering_slice(2, slice, uvw), scattering_slice(2, slice + 1, uvw), w);
 }
 
-// The sky's radiance from altitude `alt` along unit `v` with the sun along unit `s`, for solar
-// irradiance `solar`, to the top of the atmosphere or the ground, read from the table (all the
-// orders it holds): atmosphere_scattering's value with t_max = CV_NO_HIT, without the ground term.
-vec3 atmosphere_scattering_lut(Number alt, vec3 v, vec3 s, vec3 solar) {
-  Number bottom = u_atmo.bottom_radius_m, top = u_atmo.top_radius_m;
-  Number r = bottom + clamp(alt, 0.0, 1e9);
-  Number mu = clamp(v.y, -1.0, 1.0);
-  Number mu_s = clamp(s.y, -1.0, 1.0);
-  Number nu = clamp(dot(v, s), -1.0, 1.0);
-  if (r > top) {  // from space: start where the ray enters the atmosphere
-    Number rmu = r * mu;
-    Number disc = rmu * rmu - r * r + top * top;
-    if (disc < 0.0 || rmu > 0.0) return vec3(0.0);
-    Number t0 = -rmu - sqrt(disc);
-    mu = clamp((r * mu + t0) / top, -1.0, 1.0);
-    mu_s = clamp((r * mu_s + t0 * nu) / top, -1.0, 1.0);
-    r = top;
-  }
+// Where a view ray from altitude `alt` (planet centre straight below, zenith +y) along unit `v`,
+// with the sun along unit `s`, starts in the atmosphere: (r, mu, mu_s, nu) there and its distance
+// t0 from the camera (0 inside the atmosphere; from space, where the ray enters it). False when
+// the ray misses the atmosphere.
+bool atmosphere_ray_start(Number alt, vec3 v, vec3 s, OUT(Number) r, OUT(Number) mu, OUT(Number) mu_s,
+                          OUT(Number) nu, OUT(Number) t0) {
+  Number top = u_atmo.top_radius_m;
+  r = u_atmo.bottom_radius_m + clamp(alt, 0.0, 1e9);
+  mu = clamp(v.y, -1.0, 1.0);
+  mu_s = clamp(s.y, -1.0, 1.0);
+  nu = clamp(dot(v, s), -1.0, 1.0);
+  t0 = 0.0;
+  if (r <= top) return true;
+  Number rmu = r * mu;
+  Number disc = rmu * rmu - r * r + top * top;
+  if (disc < 0.0 || rmu > 0.0) return false;
+  t0 = -rmu - sqrt(disc);
+  mu = clamp((r * mu + t0) / top, -1.0, 1.0);
+  mu_s = clamp((r * mu_s + t0 * nu) / top, -1.0, 1.0);
+  r = top;
+  return true;
+}
+
+// Sunlit ground at the end of a ray that reaches it, (r, mu_s, nu) at the ray's start and d_end
+// its length there: albedo / pi * (direct sun + the sky's irradiance), for solar irradiance `solar`.
+vec3 atmosphere_ground_radiance(Number r, Number mu_s, Number nu, Number d_end, vec3 solar) {
+  Number bottom = u_atmo.bottom_radius_m;
+  Number mu_s_g = clamp((r * mu_s + d_end * nu) / bottom, -1.0, 1.0);
+  return u_atmo.ground_albedo / CV_PI * solar *
+         (transmittance_to_sun(bottom, mu_s_g) * max(mu_s_g, 0.0) + ground_sky_irradiance(mu_s_g));
+}
+
+// Radiance of the sky seen from altitude `alt` (planet centre straight below, zenith +y) along unit
+// `v`, with the sun along unit `s` and `solar` its irradiance at the top of the atmosphere: single
+// Rayleigh + Mie scattering plus the orders 2..N, up to the top, the ground or t_max.
+// `transmittance` receives the view ray's transmittance over that segment (0 when it ends on the
+// ground), `t_end` its length from the camera (CV_NO_HIT when the ray misses the atmosphere) and
+// `ground` the ground radiance there (albedo / pi * (direct sun + the sky's irradiance); 0 when the
+// ray does not end on the ground). Two ways to the same integrals:
+//  - `from_lut` false: ray-marched per pixel (scattering_sums: CV_SKY_SAMPLES samples, each
+//    reading the transmittance LUT and the multiple-scattering LUT);
+//  - `from_lut` true: read from the 4D scattering LUT. Up to the boundary the ray ends on it is one
+//    lookup; a segment that ends sooner, at p (aerial perspective), is Bruneton's
+//    S(x) - T(x, p) S(p) (GetSkyRadianceToPoint), with p's lookup in the same half of the mu axis
+//    as x's (a ray and its continuation from p reach the same boundary).
+vec3 atmosphere_sky(Number alt, vec3 v, vec3 s, vec3 solar, Number t_max, bool from_lut, OUT(vec3) transmittance,
+                    OUT(Number) t_end, OUT(vec3) ground) {
+  transmittance = vec3(1.0);
+  ground = vec3(0.0);
+  t_end = CV_NO_HIT;
+  Number r = 0.0;
+  Number mu = 0.0;
+  Number mu_s = 0.0;
+  Number nu = 0.0;
+  Number t0 = 0.0;
+  if (!atmosphere_ray_start(alt, v, s, r, mu, mu_s, nu, t0)) return vec3(0.0);
+  bool hits_ground = ray_intersects_ground(r, mu);
+  Number d_atmo = hits_ground ? distance_to_bottom_boundary(r, mu) : distance_to_top_boundary(r, mu);
+  Number d_end = clamp(t_max - t0, 0.0, d_atmo);
+  t_end = t0 + d_end;
+  transmittance = transmittance_along(r, mu, d_end, hits_ground);
+  // Single Rayleigh and single Mie before their phase functions, and the orders 2..N.
   vec3 rayleigh = vec3(0.0);
   vec3 mie = vec3(0.0);
   vec3 multiple = vec3(0.0);
-  scattering_lookup(r, mu, mu_s, nu, ray_intersects_ground(r, mu), rayleigh, mie, multiple);
+  if (from_lut) {
+    scattering_lookup(r, mu, mu_s, nu, hits_ground, rayleigh, mie, multiple);
+    if (d_end < d_atmo) {
+      Number bottom = u_atmo.bottom_radius_m, top = u_atmo.top_radius_m;
+      Number r_p = clamp(sqrt(d_end * d_end + 2.0 * r * mu * d_end + r * r), bottom, top);
+      Number mu_p = clamp((r * mu + d_end) / r_p, -1.0, 1.0);
+      Number mu_s_p = clamp((r * mu_s + d_end * nu) / r_p, -1.0, 1.0);
+      vec3 rayleigh_p = vec3(0.0);
+      vec3 mie_p = vec3(0.0);
+      vec3 multiple_p = vec3(0.0);
+      scattering_lookup(r_p, mu_p, mu_s_p, nu, hits_ground, rayleigh_p, mie_p, multiple_p);
+      rayleigh = max(rayleigh - transmittance * rayleigh_p, vec3(0.0));
+      mie = max(mie - transmittance * mie_p, vec3(0.0));
+      multiple = max(multiple - transmittance * multiple_p, vec3(0.0));
+    }
+  } else {
+    scattering_sums(r, mu, mu_s, nu, d_end, hits_ground, u_atmo.scattering_orders > 1.5, rayleigh, mie, multiple);
+    Number dx = d_end / Number(CV_SKY_SAMPLES);
+    rayleigh *= dx * u_atmo.rayleigh_scattering_per_m;
+    mie *= dx * u_atmo.mie_scattering_per_m;
+    multiple *= dx;
+  }
+  if (hits_ground && d_end >= d_atmo) ground = atmosphere_ground_radiance(r, mu_s, nu, d_end, solar);
   return solar * (rayleigh * rayleigh_phase(nu) + mie * mie_phase(u_atmo.mie_g, nu) + multiple);
+}
+
+// The sky marched per pixel, and read from the 4D scattering LUT (render.sky_lut).
+vec3 atmosphere_scattering(Number alt, vec3 v, vec3 s, vec3 solar, Number t_max, OUT(vec3) transmittance,
+                           OUT(Number) t_end, OUT(vec3) ground) {
+  return atmosphere_sky(alt, v, s, solar, t_max, false, transmittance, t_end, ground);
+}
+vec3 atmosphere_scattering_lut(Number alt, vec3 v, vec3 s, vec3 solar, Number t_max, OUT(vec3) transmittance,
+                               OUT(Number) t_end, OUT(vec3) ground) {
+  return atmosphere_sky(alt, v, s, solar, t_max, true, transmittance, t_end, ground);
+}
+
+// ------------------------------------------------------------------------------ ground irradiance
+// The sky's irradiance on the horizontal ground (Bruneton's indirect irradiance, here of all the
+// orders the sky holds) for unit solar irradiance, as a function of the sun's cosine mu_s:
+// E(mu_s) = int_hemisphere L_sky(w) cos(theta) dw, from atmosphere_scattering (whose rays from the
+// ground upwards never read this LUT). The direct sunlight stays analytic.
+vec3 compute_irradiance_texel(int texel) {
+  Number x = texcoord_to_unit((Number(texel) + 0.5) / Number(CV_IRRADIANCE_W), CV_IRRADIANCE_W);
+  Number mu_s = clamp(2.0 * x - 1.0, -1.0, 1.0);
+  vec3 s = vec3(sqrt(max(1.0 - mu_s * mu_s, 0.0)), mu_s, 0.0);
+  vec3 e = vec3(0.0);
+  for (int i = 0; i < CV_IRRADIANCE_BANDS; ++i) {
+    Number mu = (Number(i) + 0.5) / Number(CV_IRRADIANCE_BANDS);
+    Number sin_t = sqrt(max(1.0 - mu * mu, 0.0));
+    for (int j = 0; j < CV_IRRADIANCE_SECTORS; ++j) {
+      Number phi = CV_PI * (Number(j) + 0.5) / Number(CV_IRRADIANCE_SECTORS);
+      vec3 v = vec3(sin_t * cos(phi), mu, sin_t * sin(phi));
+      vec3 t = vec3(1.0);
+      vec3 g = vec3(0.0);
+      Number t_end = 0.0;
+      e += atmosphere_scattering(0.0, v, s, vec3(1.0), CV_NO_HIT, t, t_end, g) * mu;
+    }
+  }
+  return e * (2.0 * CV_PI / Number(CV_IRRADIANCE_BANDS * CV_IRRADIANCE_SECTORS));  // d(mu) d(phi), phi over 2 pi
+}
+
+// The sun's disc along unit `v` (radiance relative to `disc_radiance`): limb darkening
+// 1 - 0.6 (1 - cos theta) across the disc (theta: the angle at the sun's surface), an anti-aliased
+// rim, and the transmittance to the top (0 where the line of sight hits the ground: a partial set).
+vec3 atmosphere_sun_disc(Number alt, vec3 v, vec3 s, vec3 disc_radiance) {
+  Number r = u_atmo.bottom_radius_m + clamp(alt, 0.0, 1e9);
+  Number alpha = u_atmo.sun_angular_radius;
+  Number angle = acos(clamp(dot(v, s), -1.0, 1.0));
+  if (angle >= alpha * 1.2) return vec3(0.0);
+  Number x = min(angle / alpha, 1.0);
+  Number limb = 1.0 - 0.6 * (1.0 - sqrt(max(1.0 - x * x, 0.0)));
+  Number rim = 1.0 - smoothstep(0.9, 1.2, angle / alpha);
+  Number mu = clamp(v.y, -1.0, 1.0);
+  if (ray_intersects_ground(r, mu)) return vec3(0.0);
+  Number top = u_atmo.top_radius_m;
+  if (r > top) {  // from space: through the atmosphere from where the line of sight enters it
+    Number rmu = r * mu;
+    Number disc = rmu * rmu - r * r + top * top;
+    if (disc < 0.0 || rmu > 0.0) return disc_radiance * (limb * rim);
+    mu = clamp(-sqrt(disc) / top, -1.0, 1.0);  // (r mu + t0) / top at the entry t0 = -r mu - sqrt(disc)
+    r = top;
+  }
+  return disc_radiance * transmittance_to_top(r, mu) * (limb * rim);
 }

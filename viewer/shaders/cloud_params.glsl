@@ -54,7 +54,7 @@ struct CloudParams {
   Number transmittance_cutoff;  // stop the primary march below this transmittance
   Number density_step;      // small steps per step after a sample below density_step_below (1: off)
   Number density_step_below;
-  Number speed_unused;      // (keeps the 16-byte group)
+  Number sky_lut;           // 1: the sky and the aerial perspective from the 4D scattering LUT (render.sky_lut)
   // Ground and sky.
   Number ground_y_m;        // ground height relative to the camera
   Number ground_albedo;

@@ -15,6 +15,13 @@ vec3 sun_color_at(vec3 p) {
   return u_cloud.sun_color * transmittance_to_sun(r, mu_s);
 }
 
+// The air's light along camera ray rd up to t_max (atmosphere_scattering's arguments and outputs),
+// marched per pixel or read from the 4D scattering LUT (render.sky_lut).
+vec3 sky_scattering(vec3 rd, vec3 solar, Number t_max, OUT(vec3) transmittance, OUT(Number) t_end, OUT(vec3) ground) {
+  return atmosphere_sky(u_cloud.sky_altitude_m, rd, u_cloud.sun_dir, solar, t_max, u_cloud.sky_lut > 0.5, transmittance,
+                        t_end, ground);
+}
+
 // Background radiance along camera ray rd: single scattering, the ground beyond the ground pass's
 // mesh (sunlit, albedo atmosphere.ground_albedo) seen through the air, and the sun's disc.
 // precomputed_sky_air is the smooth part (scattering and the far ground), precomputed_sun_disc the
@@ -24,8 +31,7 @@ vec3 precomputed_sky_air(vec3 rd) {
   vec3 transmittance = vec3(1.0);
   vec3 ground = vec3(0.0);
   Number t_end = 0.0;
-  vec3 sky = atmosphere_scattering(u_cloud.sky_altitude_m, rd, u_cloud.sun_dir, solar, CV_NO_HIT, transmittance,
-                                   t_end, ground);
+  vec3 sky = sky_scattering(rd, solar, CV_NO_HIT, transmittance, t_end, ground);
   return sky + transmittance * ground;
 }
 vec3 precomputed_sun_disc(vec3 rd) {
@@ -40,8 +46,7 @@ void air_segment(vec3 rd, Number t, OUT(vec3) inscattered, OUT(vec3) transmittan
   vec3 solar = u_cloud.sun_color * u_cloud.sun_radiance;
   vec3 ground = vec3(0.0);
   Number t_end = 0.0;
-  inscattered = atmosphere_scattering(u_cloud.sky_altitude_m, rd, u_cloud.sun_dir, solar, t, transmittance, t_end,
-                                      ground);
+  inscattered = sky_scattering(rd, solar, t, transmittance, t_end, ground);
 }
 
 // A surface at distance t along rd (the ground pass's ground) seen through the air.

@@ -312,10 +312,7 @@ template <int MuS, int Mu, int R>
 struct ScatteringShader {
   CV_GLSL_DOUBLE_TYPES;
 
-  struct Table {
-    std::mutex mutex;
-    std::unordered_map<int64_t, std::array<glm::dvec3, 3>> texels;
-  };
+  using Table = ScatteringTexels;
   const ref::AtmosphereParams& u_atmo;
   const AtmosphereLuts& base;
   Table& table;
@@ -364,7 +361,12 @@ std::vector<glm::dvec3> sized_scattering_lookups(const AtmosphereLuts& base, con
   typename S::Table table;
   S sh{base.params, base, table};
   std::vector<glm::dvec3> out;
-  for (const SkyQuery& q : queries) out.push_back(sh.atmosphere_scattering_lut(q.altitude, q.view, q.sun, glm::dvec3(1.0)));
+  for (const SkyQuery& q : queries) {
+    glm::dvec3 transmittance(1.0), ground(0.0);
+    double t_end = 0;
+    out.push_back(sh.atmosphere_scattering_lut(q.altitude, q.view, q.sun, glm::dvec3(1.0), q.t_max, transmittance,
+                                               t_end, ground));
+  }
   size = glm::ivec3(S::NX, S::NY, S::NZ);
   if (texels_computed) *texels_computed = table.texels.size();
   return out;
@@ -488,11 +490,11 @@ glm::dvec3 AtmosphereLuts::ground_irradiance(double mu_s) const {
   return sh.ground_sky_irradiance(mu_s);
 }
 
-glm::dvec3 AtmosphereLuts::sky_radiance(double alt, const glm::dvec3& v, const glm::dvec3& s) const {
+glm::dvec3 AtmosphereLuts::sky_radiance(double alt, const glm::dvec3& v, const glm::dvec3& s, double t_max) const {
   AtmosphereShader sh{params, &transmittance, &multiple_scattering, &irradiance};
   glm::dvec3 t, g;
   double t_end = 0;
-  return sh.atmosphere_scattering(alt, v, s, glm::dvec3(1.0), CV_NO_HIT, t, t_end, g);
+  return sh.atmosphere_scattering(alt, v, s, glm::dvec3(1.0), t_max, t, t_end, g);
 }
 
 std::shared_ptr<const AtmosphereLuts> shared_atmosphere_luts(const AtmosphereSettings& s) {

@@ -51,9 +51,24 @@ struct CpuShader {
     return lut.multiple_scattering[size_t(t.y) * CV_MS_LUT_SIZE + size_t(t.x)];
   }
   vec3 irradiance_texel(int t) const { return lut.irradiance[size_t(t)]; }
-  vec3 scattering_texel(ivec3) const { return vec3(0.0); }  // the 4D LUT is not rendered from yet
-  vec3 single_mie_texel(ivec3) const { return vec3(0.0); }
-  vec3 scattering_multiple_texel(ivec3) const { return vec3(0.0); }
+  // The 4D scattering LUT (render.sky_lut): each texel computed by atmosphere.glsl's
+  // compute_scattering_texel the first time a pixel reads it, shared by the threads and the frames.
+  const std::array<dvec3, 3>& lut_texel(ivec3 t) {
+    const int64_t key = (int64_t(t.z) * CV_SCATTERING_MU + t.y) * (CV_SCATTERING_NU * CV_SCATTERING_MU_S) + t.x;
+    ScatteringTexels& table = *lut.scattering;
+    {
+      std::lock_guard<std::mutex> lock(table.mutex);
+      auto it = table.texels.find(key);
+      if (it != table.texels.end()) return it->second;
+    }
+    std::array<dvec3, 3> v;
+    compute_scattering_texel(t, v[0], v[1], v[2]);
+    std::lock_guard<std::mutex> lock(table.mutex);
+    return table.texels.emplace(key, v).first->second;  // unordered_map: references stay valid
+  }
+  vec3 scattering_texel(ivec3 t) { return lut_texel(t)[0]; }
+  vec3 single_mie_texel(ivec3 t) { return lut_texel(t)[1]; }
+  vec3 scattering_multiple_texel(ivec3 t) { return lut_texel(t)[2]; }
 
   vec4 volume_texel(ivec3 t) {
     if (vol.nano) return nanovdb_texel(t);

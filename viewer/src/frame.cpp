@@ -208,6 +208,7 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   p.earth_radius_m = s.earth_radius;
   p.sky_mode = s.sky == SkyMode::Precomputed ? CV_SKY_PRECOMPUTED : CV_SKY_ANALYTIC;
   p.sky_altitude_m = cam.eye.y - gh;
+  p.sky_lut = s.sky == SkyMode::Precomputed && s.sky_lut ? 1 : 0;
   if (s.sky == SkyMode::Precomputed) {
     // The atmosphere colours the sunlight: white at the top of the atmosphere, and the ambient
     // sky light from the atmosphere's irradiance at the camera from above and from below (sky_ambient).

@@ -78,8 +78,9 @@ struct Target {
   bool round_up = false;       // ceil(viewport / divisor): every pixel has its block (temporal)
   int fixed_w = 0, fixed_h = 0;  // > 0: a fixed size (LUTs), independent of the viewport
   bool history = false;        // keep the previous frame's copy ("NAME@prev")
-  // A 3D target sized by the frame (the light volume: f.params.light_volume_dims), one colour
-  // attachment; its passes draw once per layer. (Re)created by render() when the size changes.
+  // A 3D target sized by the frame (the light volume: f.params.light_volume_dims) or fixed (the 4D
+  // scattering LUT), one 3D texture per colour attachment; its passes draw once per layer, into
+  // that layer of every attachment. (Re)created by render() when the size changes.
   std::function<glm::ivec3(const FrameSetup&)> volume_size;
   int d = 0;
   // GL objects: [0] the current frame, [1] the previous one when `history`.
@@ -102,7 +103,9 @@ struct Pass {
   std::function<bool(const FrameSetup&)> enabled;    // null = always
   std::function<void(GLuint program)> uniforms;      // per-pass uniforms, null = none
   bool precompute = false;                           // an atmosphere LUT: runs only when atmosphere.* changed
-  int lut_unit = -1;                                 // precompute: the unit its LUT is bound to for later passes
+  std::vector<int> lut_units;                        // precompute: the unit of each attachment, for later passes
+  bool lut_valid = false;                            // precompute: its target holds the current atmosphere's LUT
+  int runs = 0;                                      // precompute: how many times it has run
   bool light_volume = false;                         // runs only when the light volume's inputs changed
   GLuint program = 0;
 };
@@ -135,6 +138,12 @@ std::vector<Target> make_targets() {
   light.name = "light_volume", light.colors = {GL_R32F};
   light.volume_size = [](const FrameSetup& f) { return glm::ivec3(f.params.light_volume_dims); };
   t.push_back(light);
+  Target scattering;  // atmosphere LUT S(r, mu, mu_s, nu): single Rayleigh, single Mie, orders 2..N
+  scattering.name = "scattering", scattering.colors = {GL_RGBA32F, GL_RGBA32F, GL_RGBA32F};
+  scattering.volume_size = [](const FrameSetup&) {
+    return glm::ivec3(CV_SCATTERING_NU * CV_SCATTERING_MU_S, CV_SCATTERING_MU, CV_SCATTERING_R);
+  };
+  t.push_back(scattering);
   return t;
 }
 
@@ -150,20 +159,29 @@ std::vector<Pass> make_passes() {
   transmittance.name = "atmosphere_transmittance", transmittance.vs = "fullscreen.vert";
   transmittance.fs = "atmosphere_transmittance.frag", transmittance.target = "transmittance";
   transmittance.group = Group::Atmosphere, transmittance.precompute = true;
-  transmittance.lut_unit = CV_UNIT_TRANSMITTANCE;
+  transmittance.lut_units = {CV_UNIT_TRANSMITTANCE};
   p.push_back(transmittance);
   Pass multiple;  // reads the transmittance LUT
   multiple.name = "atmosphere_multiple_scattering", multiple.vs = "fullscreen.vert";
   multiple.fs = "atmosphere_multiple_scattering.frag", multiple.target = "multiple_scattering";
   multiple.group = Group::Atmosphere, multiple.precompute = true;
-  multiple.lut_unit = CV_UNIT_MULTIPLE_SCATTERING;
+  multiple.lut_units = {CV_UNIT_MULTIPLE_SCATTERING};
   p.push_back(multiple);
   Pass irradiance;  // reads both LUTs before it
   irradiance.name = "atmosphere_irradiance", irradiance.vs = "fullscreen.vert";
   irradiance.fs = "atmosphere_irradiance.frag", irradiance.target = "irradiance";
   irradiance.group = Group::Atmosphere, irradiance.precompute = true;
-  irradiance.lut_unit = CV_UNIT_IRRADIANCE;
+  irradiance.lut_units = {CV_UNIT_IRRADIANCE};
   p.push_back(irradiance);
+  // Bruneton's 4D scattering LUT (reads the transmittance and multiple-scattering LUTs), only for
+  // render.sky_lut: it is 96 MiB and seconds of llvmpipe time.
+  Pass scattering;
+  scattering.name = "atmosphere_scattering", scattering.vs = "fullscreen.vert";
+  scattering.fs = "atmosphere_scattering.frag", scattering.target = "scattering";
+  scattering.group = Group::Atmosphere, scattering.precompute = true;
+  scattering.lut_units = {CV_UNIT_SCATTERING, CV_UNIT_SINGLE_MIE, CV_UNIT_SCATTERING_MULTIPLE};
+  scattering.enabled = [](const FrameSetup& f) { return f.params.sky_lut > 0.5; };
+  p.push_back(scattering);
   Pass ground;
   ground.name = "ground", ground.vs = "ground.vert", ground.fs = "ground.frag", ground.target = "scene";
   ground.group = Group::Ground, ground.mesh = true;
@@ -304,25 +322,28 @@ struct GlRenderer::Impl {
       for (auto& b : built)
         if (b.first == std::make_pair(p.vs, p.fs)) p.program = b.second;
   }
-  // All targets, or (a viewport resize) only those the viewport sizes.
+  // All targets, or (a viewport resize) only those the viewport sizes: the LUTs and the 3D
+  // targets keep their contents (a window resize recomputes nothing).
   void delete_targets(bool viewport_only = false) {
     for (Target& t : targets)
-      for (int c = 0; c < 2 && !(viewport_only && t.volume_size); ++c) {
+      for (int c = 0; c < 2 && !(viewport_only && (t.volume_size || t.fixed_w > 0)); ++c) {
         if (t.fbo[c]) glDeleteFramebuffers(1, &t.fbo[c]);
         for (GLuint x : t.tex[c]) glDeleteTextures(1, &x);
         if (t.depth_tex[c]) glDeleteTextures(1, &t.depth_tex[c]);
         t.fbo[c] = t.depth_tex[c] = 0;
         t.tex[c].clear();
       }
+    if (viewport_only) return;
     atmo_valid = false;
-    if (!viewport_only) light_key.clear();
+    light_key.clear();
   }
   void resize(int width, int height) {
     if (width == w && height == h) return;
     delete_targets(true);
     w = width, h = height;
     for (Target& t : targets) {
-      if (t.volume_size) continue;  // ensure_volume_target
+      if (t.volume_size) continue;           // ensure_volume_target
+      if (t.fixed_w > 0 && t.fbo[0]) continue;  // a LUT: kept
       int up = t.round_up ? t.divisor - 1 : 0;
       t.w = t.fixed_w > 0 ? t.fixed_w : std::max(1, (w + up) / t.divisor);
       t.h = t.fixed_h > 0 ? t.fixed_h : std::max(1, (h + up) / t.divisor);
@@ -343,26 +364,30 @@ struct GlRenderer::Impl {
       }
     }
   }
-  // A frame-sized 3D target: recreated when the frame asks for another size.
-  void ensure_volume_target(Target& t, const FrameSetup& f) {
+  // A 3D target: (re)created when the frame asks for another size; true when it was.
+  bool ensure_volume_target(Target& t, const FrameSetup& f) {
     glm::ivec3 n = glm::max(t.volume_size(f), glm::ivec3(1));
-    if (t.fbo[0] && n == glm::ivec3(t.w, t.h, t.d)) return;
+    if (t.fbo[0] && n == glm::ivec3(t.w, t.h, t.d)) return false;
     if (t.fbo[0]) glDeleteFramebuffers(1, &t.fbo[0]);
     for (GLuint x : t.tex[0]) glDeleteTextures(1, &x);
     t.tex[0].clear();
     t.w = n.x, t.h = n.y, t.d = n.z;
-    GLuint tex;
-    glCreateTextures(GL_TEXTURE_3D, 1, &tex);
-    glTextureStorage3D(tex, 1, t.colors[0], n.x, n.y, n.z);
-    glTextureParameteri(tex, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTextureParameteri(tex, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    t.tex[0].push_back(tex);
     glCreateFramebuffers(1, &t.fbo[0]);
-    glNamedFramebufferTextureLayer(t.fbo[0], GL_COLOR_ATTACHMENT0, tex, 0, 0);
-    const GLenum draw = GL_COLOR_ATTACHMENT0;
-    glNamedFramebufferDrawBuffers(t.fbo[0], 1, &draw);
+    std::vector<GLenum> draw;
+    for (size_t i = 0; i < t.colors.size(); ++i) {
+      GLuint tex;
+      glCreateTextures(GL_TEXTURE_3D, 1, &tex);
+      glTextureStorage3D(tex, 1, t.colors[i], n.x, n.y, n.z);
+      glTextureParameteri(tex, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+      glTextureParameteri(tex, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+      t.tex[0].push_back(tex);
+      glNamedFramebufferTextureLayer(t.fbo[0], GLenum(GL_COLOR_ATTACHMENT0 + i), tex, 0, 0);
+      draw.push_back(GLenum(GL_COLOR_ATTACHMENT0 + i));
+    }
+    glNamedFramebufferDrawBuffers(t.fbo[0], GLsizei(draw.size()), draw.data());
     check_fbo(t.fbo[0], t.name.c_str());
-    light_key.clear();
+    if (glGetError() != GL_NO_ERROR) throw GlError("creating the 3D target '" + t.name + "' failed (out of GPU memory?)");
+    return true;
   }
   // The curl field (cloudgen/curl_distortion.glsl reads it with texelFetch and filters by hand, as
   // the CPU reference does), built and uploaded the first time a frame distorts the detail: it is
@@ -437,7 +462,8 @@ struct GlRenderer::Impl {
       glViewport(0, 0, t.w, t.h);
       glBindVertexArray(vao_empty);
       for (int z = 0; z < t.d; ++z) {
-        glNamedFramebufferTextureLayer(t.fbo[0], GL_COLOR_ATTACHMENT0, t.tex[0][0], 0, z);
+        for (size_t i = 0; i < t.tex[0].size(); ++i)
+          glNamedFramebufferTextureLayer(t.fbo[0], GLenum(GL_COLOR_ATTACHMENT0 + i), t.tex[0][i], 0, z);
         glBindFramebuffer(GL_FRAMEBUFFER, t.fbo[0]);
         glProgramUniform1i(p.program, 0, z);
         glDrawArrays(GL_TRIANGLES, 0, 3);
@@ -485,12 +511,24 @@ struct GlRenderer::Impl {
     atmo_valid = true, atmo_done = a;
     return dirty;
   }
-  // An atmosphere LUT pass (run when `dirty`), its output then bound to its unit for the passes
-  // after it: each LUT pass reads the LUTs before it, and none samples its own target.
-  void run_lut(Pass& p, const FrameSetup& f, bool dirty) {
-    glBindTextureUnit(GLuint(p.lut_unit), 0);
-    if (dirty) run(p, f);
-    glBindTextureUnit(GLuint(p.lut_unit), target(p.target).tex[0][0]);
+  // An atmosphere LUT pass, run when `dirty` (an atmosphere.* key changed, or the LUT targets were
+  // recreated) or when it was skipped since (a pass the frame may disable, the 4D scattering LUT),
+  // its output then bound to its units for the passes after it: each LUT pass reads the LUTs
+  // before it, and none samples its own target. `needed`: false for a frame that reads no LUT
+  // (the analytic sky), which then computes none.
+  void run_lut(Pass& p, const FrameSetup& f, bool dirty, bool needed = true) {
+    for (int u : p.lut_units) glBindTextureUnit(GLuint(u), 0);
+    if (dirty) p.lut_valid = false;
+    const bool on = needed && (!p.enabled || p.enabled(f));
+    Target& t = target(p.target);
+    if (on && t.volume_size && ensure_volume_target(t, f)) p.lut_valid = false;
+    if (on && !p.lut_valid) {
+      run(p, f);
+      p.lut_valid = true;
+      p.runs += 1;
+    }
+    for (size_t i = 0; i < p.lut_units.size() && i < t.tex[0].size(); ++i)
+      glBindTextureUnit(GLuint(p.lut_units[i]), p.lut_valid ? t.tex[0][i] : 0);
   }
   void swap_history() {
     for (Target& t : targets)
@@ -748,7 +786,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   Target& light = m.target("light_volume");
   bool light_dirty = false;
   if (f.params.light_volume_on > 0.5) {
-    m.ensure_volume_target(light, f);
+    if (m.ensure_volume_target(light, f)) m.light_key.clear();
     std::vector<double> lkey = m.light_volume_key(f);
     light_dirty = lkey != m.light_key;
     m.light_key = lkey;
@@ -764,7 +802,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glQueryCounter(m.queries[0], GL_TIMESTAMP);
   for (size_t i = 0; i < m.passes.size(); ++i) {
     if (m.passes[i].precompute) {
-      m.run_lut(m.passes[i], f, atmo_dirty);
+      m.run_lut(m.passes[i], f, atmo_dirty, f.settings.sky == SkyMode::Precomputed);
     } else if (m.passes[i].light_volume) {
       if (light_dirty) {
         m.run(m.passes[i], f);
@@ -871,6 +909,8 @@ std::vector<glm::vec3> GlRenderer::transmittance_dump(const AtmosphereSettings& 
 }
 
 int GlRenderer::light_volume_builds() const { return impl_->light_builds; }
+
+int GlRenderer::lut_computations(const std::string& pass) const { return impl_->pass(pass).runs; }
 
 std::vector<std::string> GlRenderer::pass_names() const {
   std::vector<std::string> names;

@@ -109,6 +109,7 @@ std::vector<ParamDef> build() {
   t.push_back(real("sun_intensity", &RenderSettings::sun_intensity, 0, 1e6, "sun radiance scale"));
   t.push_back(real("ambient", &RenderSettings::ambient, 0, 1e6, "ambient sky radiance scale"));
   t.push_back(enumeration("sky", &RenderSettings::sky, {"analytic", "precomputed"}, "sky and sky light: analytic gradient and constant ambient (the thesis), or the precomputed atmosphere after Bruneton (atmosphere.* keys; transmittance LUT, marched single scattering, Hillaire's multiple-scattering LUT; docs/sky.md)"));
+  t.push_back(boolean("sky_lut", &RenderSettings::sky_lut, "render.sky=precomputed: read the sky and the aerial perspective from Bruneton's 4D scattering LUT (512x128x32 texels x 3 parts, 96 MiB, computed when an atmosphere.* key changes) instead of marching 32 samples per pixel; docs/sky.md has its cost and error"));
   t.push_back(boolean("ground", &RenderSettings::ground, "draw the ground pass"));
   t.push_back({"ground_height", "float", "[-1e+07, 1e+07] or auto", "ground plane height, m (auto = min(0, volume bottom); 0 in layer mode)",
                [](RenderSettings& s, const std::string& v) {

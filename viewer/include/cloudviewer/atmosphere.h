@@ -5,8 +5,11 @@
 #pragma once
 #include <array>
 #include <functional>
+#include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -84,6 +87,14 @@ gpu::AtmosphereParams to_gpu(const ref::AtmosphereParams& d);
 /// The double parameters the GPU sees (each value rounded to float).
 ref::AtmosphereParams rounded_to_float(const ref::AtmosphereParams& d);
 
+/// Texels of Bruneton's 4D scattering LUT on the CPU (three RGB parts each, keyed by their linear
+/// index), computed the first time a lookup reads them and kept: a 160x90 sky reads a few percent
+/// of the 2 M texels. Thread-safe.
+struct ScatteringTexels {
+  std::mutex mutex;
+  std::unordered_map<int64_t, std::array<glm::dvec3, 3>> texels;
+};
+
 /// The atmosphere LUTs as the CPU reference computes them, and the shaders' lookups over them:
 /// the transmittance (CV_TRANSMITTANCE_W x CV_TRANSMITTANCE_H), the multiple scattering
 /// (CV_MS_LUT_SIZE^2) and the sky's irradiance on the ground (CV_IRRADIANCE_W), RGB, row-major
@@ -96,6 +107,8 @@ struct AtmosphereLuts {
   /// Wall time of each LUT's computation on the CPU (transmittance, multiple scattering, ground
   /// irradiance), seconds (cloudviewer --stats).
   std::array<double, 3> seconds{{0, 0, 0}};
+  /// The 4D scattering LUT (render.sky_lut) at the shipped size, filled as the CPU renderer reads it.
+  std::shared_ptr<ScatteringTexels> scattering = std::make_shared<ScatteringTexels>();
   /// ground_sky_irradiance(mu_s) of atmosphere.glsl: the sky's irradiance on the ground for unit
   /// solar irradiance.
   glm::dvec3 ground_irradiance(double mu_s) const;
@@ -107,8 +120,9 @@ struct AtmosphereLuts {
   /// multiple_scattering_at(r, mu_s) of atmosphere.glsl: Psi_ms for unit solar irradiance.
   glm::dvec3 psi_ms(double r, double mu_s) const;
   /// atmosphere_scattering() of atmosphere.glsl: the sky's radiance from altitude `alt` along unit
-  /// `v` (zenith +y) with the sun along unit `s` and unit solar irradiance, to the top or the ground.
-  glm::dvec3 sky_radiance(double alt, const glm::dvec3& v, const glm::dvec3& s) const;
+  /// `v` (zenith +y) with the sun along unit `s` and unit solar irradiance, to the top or the ground
+  /// or over the first `t_max` metres (aerial perspective), marched per pixel.
+  glm::dvec3 sky_radiance(double alt, const glm::dvec3& v, const glm::dvec3& s, double t_max = CV_NO_HIT) const;
 };
 AtmosphereLuts compute_atmosphere_luts(const ref::AtmosphereParams& p);
 
@@ -123,10 +137,12 @@ std::vector<glm::dvec3> multiple_scattering_lookups_at_size(const ref::Atmospher
                                                             const std::vector<glm::dvec2>& r_mu_s, int& size);
 
 /// A sky ray for the scattering-LUT study: from `altitude` (m above the ground) along unit `view`
-/// (zenith +y) with the sun along unit `sun`.
+/// (zenith +y) with the sun along unit `sun`, over the first `t_max` metres (CV_NO_HIT: to the top
+/// of the atmosphere or the ground).
 struct SkyQuery {
   double altitude = 0;
   glm::dvec3 view{0, 1, 0}, sun{0, 1, 0};
+  double t_max = CV_NO_HIT;
 };
 /// Bruneton's 4D scattering LUT (atmosphere.glsl, atmosphere_scattering_lut) on the CPU at half
 /// Bruneton's 256 x 128 x 32 (size_index 0: 128 x 64 x 16), his size (1), the shipped size (2: his

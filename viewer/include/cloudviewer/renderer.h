@@ -82,6 +82,10 @@ class GlRenderer {
   /// How many times the light volume has been built (render.light_volume): once per change of the
   /// sun, the volume or a lighting key, never for a camera move alone.
   int light_volume_builds() const;
+  /// How many times the atmosphere LUT pass `pass` ("atmosphere_scattering", ...) has run: once per
+  /// change of an atmosphere.* key while a frame needs it (the 4D scattering LUT: with
+  /// render.sky_lut), never for a sun, camera or viewport change.
+  int lut_computations(const std::string& pass) const;
   /// The passes in execution order (their names label GpuTimings::passes).
   std::vector<std::string> pass_names() const;
   /// The driver's std140 layout of the cloud block: its size in bytes, and a member's byte offset
