@@ -59,8 +59,18 @@ Number light_optical_depth(vec3 p) {
   Number s = 0.0;
   Number tau = 0.0;
   Number empty_until = -1.0;  // distance field: samples before this distance along the ray are empty
+  // Box mode: the march ends where the ray leaves the (marched) box. A tiling texture repeats
+  // beyond it, but the scene holds one box of cloud: the path tracer, the ground's cloud shadows
+  // and the primary march see nothing outside it, so the sun's light must not either (marching the
+  // repeats darkened a tiling cloud's sunlit side: 5% of the thesis cloud's light at sunset).
+  Number t_exit = CV_NO_HIT;
+  if (!layer_mode()) {
+    vec3 bmin = u_cloud.march_min_m - p;
+    t_exit = ray_box(sun, bmin, bmin + u_cloud.march_size_m).y;
+  }
   for (int i = 0; i < samples; ++i) {
     Number at = s + 0.5 * step_len;
+    if (at > t_exit) break;
     vec3 q = p + sun * at;
     // The same coarse grid also spares the light march its texture reads in empty cells, where
     // the density is exactly 0 (an addition to the thesis, `render.occupancy_light`); the distance
