@@ -4,7 +4,7 @@
 For the thesis, cumulus and cumulonimbus presets, each at its default view, back-lit (the sun
 opposite its default azimuth, 20 degrees up) and at sunset (the sun to the side, 3 degrees up):
 the path tracer (two seeds of SPP paths per pixel; their mean is the reference, half their RMSE its
-noise) against the marcher's CPU reference with single scattering, + powder, 2-4 octaves and
+noise) against the marcher's CPU reference with single scattering, + powder, 2-4 octaves, the diffusion volume and
 without the sky ambient (reference: the path tracer with the default settings), and with each
 phase function (reference: the path tracer with the Mie phase, the physical one). Scores: the mean display luminance of the
 cloud pixels (transmittance below 0.95) relative to the path tracer's, the RMSE of the display
@@ -34,6 +34,8 @@ OPTIONS = [
     ("2 octaves", ["render.ms_octaves=2"], "default"),
     ("3 octaves", ["render.ms_octaves=3"], "default"),
     ("**4 octaves (default)**", [], "default"),
+    ("diffusion volume (render.ms_volume), no powder", ["render.ms_volume=true", "render.powder=0"], "default"),
+    ("diffusion volume, powder 0.3", ["render.ms_volume=true"], "default"),
     ("default without the sky ambient", ["render.ambient=0"], "default"),
     ("phase: HG g 0.3 (default)", [], "mie"),
     ("phase: HG g 0.864 (Mie's g)", ["render.g=0.864"], "mie"),

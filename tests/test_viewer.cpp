@@ -768,6 +768,8 @@ TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
   CV_EXPECT_OFFSET(curl_shift);
   CV_EXPECT_OFFSET(curl_repeats);
   CV_EXPECT_OFFSET(curl_amplitude_m);
+  CV_EXPECT_OFFSET(ms_volume_dims);
+  CV_EXPECT_OFFSET(ms_volume_on);
   CV_EXPECT_OFFSET(ms_octaves);
   CV_EXPECT_OFFSET(ambient_below_color);
   CV_EXPECT_OFFSET(ambient_pad);
@@ -777,6 +779,8 @@ TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
   EXPECT_EQ(r.pass_names().at(2), "atmosphere_irradiance");
   EXPECT_EQ(r.pass_names().at(3), "atmosphere_scattering");
   EXPECT_EQ(r.pass_names().at(4), "ground");
+  EXPECT_EQ(r.pass_names().at(5), "light_volume");
+  EXPECT_EQ(r.pass_names().at(6), "ms_volume");  // reads the light volume
   EXPECT_EQ(r.pass_names().back(), "tonemap");
 }
 

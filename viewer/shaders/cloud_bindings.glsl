@@ -128,3 +128,6 @@ layout(binding = CV_UNIT_LIGHT_VOLUME) uniform sampler3D s_light_volume;  // R32
 int distance_texel(ivec3 cell) { return int(texelFetch(s_distance, cell, 0).r); }
 Number light_volume_texel(ivec3 texel) { return texelFetch(s_light_volume, texel, 0).r; }
 Number light_volume_filtered(vec3 uvw) { return texture(s_light_volume, uvw).r; }
+layout(binding = CV_UNIT_MS_VOLUME) uniform sampler3D s_ms_volume;  // RGBA32F: fluence, 3 g x flux per unit sun irradiance
+vec4 ms_volume_texel(ivec3 texel) { return texelFetch(s_ms_volume, texel, 0); }
+vec4 ms_volume_filtered(vec3 uvw) { return texture(s_ms_volume, uvw); }

@@ -116,4 +116,6 @@ struct CloudParams {
   Number phase_pad1;
   // Curl-noise distortion of the detail lookup (motion.curl_*; cloudgen/curl_distortion.glsl).
   vec3 curl_repeats;        Number curl_amplitude_m;  // whole tiles of the field per volume axis; 0 = off
+  // Multiple scattering from the flux-limited diffusion solve (render.ms_volume, lighting.glsl).
+  vec3 ms_volume_dims;      Number ms_volume_on;      // cells of the fluence volume; 1: orders >= 2 from it
 };

@@ -96,6 +96,12 @@
 #define CV_UNIT_SCATTERING 18         // RGBA32F 3D: the scattering LUT's single Rayleigh part
 #define CV_UNIT_SINGLE_MIE 19         // RGBA32F 3D: its single Mie part
 #define CV_UNIT_SCATTERING_MULTIPLE 20  // RGBA32F 3D: its orders 2..N
+#define CV_UNIT_MS_VOLUME 21          // RGBA32F 3D: the clouds' multiply scattered fluence and flux (render.ms_volume)
+
+// The multiple-scattering volume (render.ms_volume, lighting.glsl): each cell's extinction and
+// first-scattering source are means over CV_MS_SUBSAMPLES^3 stratified points of the cell (2: as
+// accurate against the path tracer as 4, docs/accuracy.md, at an eighth of the cost).
+#define CV_MS_SUBSAMPLES 2
 
 // Marching.
 #define CV_TRANSMITTANCE_EPSILON 1e-3  // default render.transmittance_cutoff: stop marching below this

@@ -100,22 +100,68 @@ vec3 light_volume_position(ivec3 texel) {
 }
 
 // Trilinear from texel fetches, wrapped in x/z for tiling volumes, clamped otherwise (the texture
-// unit's GL_LINEAR with the light volume's wrap modes; exact_filter and the CPU reference).
-Number light_volume_trilinear(vec3 uvw) {
-  ivec3 n = ivec3(u_cloud.light_volume_dims);
-  bool tiles = u_cloud.tiles_xz > 0.5;
+// unit's GL_LINEAR with the light volume's wrap modes; exact_filter and the CPU reference), of the
+// light volume (ms = false: its value in x) or the multiple-scattering volume (ms = true).
+vec4 grid_trilinear(bool ms, vec3 uvw) {
+  ivec3 n = ivec3(ms ? u_cloud.ms_volume_dims : u_cloud.light_volume_dims);
+  bool tiles = !ms && u_cloud.tiles_xz > 0.5;  // the diffusion volume never wraps (see ms_volume_source)
   vec3 x = uvw * vec3(n) - 0.5;
   vec3 fl = floor(x);
   vec3 f = x - fl;
   ivec3 i0 = ivec3(fl);
-  Number acc = 0.0;
-  for (int k = 0; k < 8; ++k) acc += trilinear_weight(f, k) * light_volume_texel(trilinear_corner(i0, k, n, tiles));
+  vec4 acc = vec4(0.0);
+  for (int k = 0; k < 8; ++k) {
+    ivec3 c = trilinear_corner(i0, k, n, tiles);
+    acc += trilinear_weight(f, k) * (ms ? ms_volume_texel(c) : vec4(light_volume_texel(c), 0.0, 0.0, 0.0));
+  }
   return acc;
 }
 
 Number light_volume_tau(vec3 p) {
   vec3 uvw = volume_uvw(p);
-  return u_cloud.exact_filter > 0.5 ? light_volume_trilinear(uvw) : light_volume_filtered(uvw);
+  return u_cloud.exact_filter > 0.5 ? grid_trilinear(false, uvw).x : light_volume_filtered(uvw);
+}
+
+// The optical depth toward the sun from p as the lighting uses it: 0 without the light march, the
+// light volume's lookup or the march itself.
+Number sun_optical_depth(vec3 p) {
+  if (int(u_cloud.light_mode) == CV_LIGHT_OFF) return 0.0;
+  return u_cloud.light_volume_on > 0.5 ? light_volume_tau(p) : light_optical_depth(p);
+}
+
+// Multiple scattering by flux-limited diffusion (render.ms_volume; Koerner et al., "Flux-Limited
+// Diffusion for Multiple Scattering in Participating Media", CGF 2014; docs/accuracy.md): the
+// fluence phi of the light that has scattered at least once, solved on a coarse ms_volume_dims grid
+// over the box (ms_diffusion.cpp, the same C++ solver for both renderers) from each cell's mean
+// extinction and first-scattering source, which this pass computes. Per unit sun irradiance:
+//   x: the cell's mean sigma_t (1/m), y: its mean sigma_t * exp(-tau_sun) (1/m; times the albedo
+//   it is the source of scattered light),
+// over CV_MS_SUBSAMPLES^3 stratified points (a cell is optically thick: its centre alone would
+// misjudge how much sunlight it catches). The box is lit as one cloud even when its texture tiles:
+// light that leaves it sideways is gone, as in the path tracer, so the solve sees vacuum there.
+vec3 ms_volume_position(vec3 cell_coord) {
+  return u_cloud.volume_min_m + cell_coord / u_cloud.ms_volume_dims * u_cloud.volume_size_m;
+}
+vec2 ms_volume_source(ivec3 cell) {
+  vec2 acc = vec2(0.0);
+  const int m = CV_MS_SUBSAMPLES;
+  for (int k = 0; k < m * m * m; ++k) {
+    vec3 o = (vec3(Number(k % m), Number((k / m) % m), Number(k / (m * m))) + 0.5) / Number(m);
+    vec3 p = ms_volume_position(vec3(cell) + o);
+    Number sigma = cloud_density(p) * u_cloud.sigma_t_per_m;
+    if (sigma > 0.0) acc += vec2(sigma, sigma * beer_lambert(sun_optical_depth(p)));
+  }
+  return acc / Number(m * m * m);
+}
+
+// The multiply scattered radiance at p toward `to_eye` per unit sun irradiance and unit sigma_s:
+// the P1 (diffusion) radiance phi / 4 pi + 3 F . w / 4 pi through the phase function, whose first
+// moment is g: (phi + 3 g F . to_eye) / 4 pi. The flux term brightens the light leaving a surface
+// toward the viewer (at a face to vacuum F is phi / 2 outward: +45% at g 0.3).
+Number ms_volume_radiance(vec3 p, vec3 to_eye) {
+  vec3 uvw = volume_uvw(p);
+  vec4 t = u_cloud.exact_filter > 0.5 ? grid_trilinear(true, uvw) : ms_volume_filtered(uvw);
+  return max(t.x + dot(vec3(t.y, t.z, t.w), to_eye), 0.0) / (4.0 * CV_PI);
 }
 
 // Multiple scattering by octaves (Wrenninge et al., "Oz: The Great and Volumetric", SIGGRAPH 2013
@@ -141,16 +187,17 @@ vec3 ambient_radiance(vec3 p) {
 }
 
 // Radiance scattered toward the viewer at p per unit sigma_s: sun irradiance * (phase *
-// Beer(tau), summed over the octaves) * powder mix + ambient sky radiance. phase0: the phase
-// function per channel (phase_function_rgb); phases: octaves 1..3's (octave_phases).
-vec3 inscattered_radiance(vec3 p, vec3 phase0, vec3 phases) {
-  Number tau = 0.0;
-  if (int(u_cloud.light_mode) != CV_LIGHT_OFF)
-    tau = u_cloud.light_volume_on > 0.5 ? light_volume_tau(p) : light_optical_depth(p);
+// Beer(tau), plus orders >= 2 from the octaves or the diffusion volume) * powder mix + ambient sky radiance. phase0: the phase
+// function per channel (phase_function_rgb); phases: octaves 1..3's (octave_phases); rd: the
+// view ray's direction.
+vec3 inscattered_radiance(vec3 p, vec3 rd, vec3 phase0, vec3 phases) {
+  Number tau = sun_optical_depth(p);
   Number powder = mix(1.0, powder_term(tau, u_cloud.powder_c), u_cloud.powder_strength);
   Number higher = 0.0;
   int octaves = int(u_cloud.ms_octaves);
-  if (octaves > 1) {
+  if (u_cloud.ms_volume_on > 0.5) {
+    higher = ms_volume_radiance(p, -rd);  // orders >= 2 from the diffusion solve, instead of the octaves
+  } else if (octaves > 1) {
     Number a = u_cloud.ms_attenuation, b = u_cloud.ms_extinction;
     higher += a * phases.x * beer_lambert(tau * b);
     if (octaves > 2) higher += a * a * phases.y * beer_lambert(tau * b * b);

@@ -22,6 +22,8 @@
 //   int    distance_texel(ivec3 cell)    L-infinity cells to the nearest cell holding density (0: it does)
 //   Number light_volume_texel(ivec3 t)   optical depth toward the sun at a light-volume texel
 //   Number light_volume_filtered(vec3 uvw)  its filtered lookup (exact on the CPU)
+//   vec4 ms_volume_texel(ivec3 t)        multiply scattered fluence and 3 g x flux at a cell (render.ms_volume)
+//   vec4 ms_volume_filtered(vec3 uvw)    its filtered lookup (exact on the CPU)
 //   vec3 mie_table_value(int i)          i-th entry of the Mie phase table over theta in [0, pi], RGB
 //   vec2   coverage_texel(ivec2 texel)   layer coverage map: R coverage, G cloud type, in [0, 1]
 //   ivec2  coverage_size()               size of the coverage map in texels
@@ -116,7 +118,7 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, O
     Number density = cloud_density(p);
     if (density > 0.0) {
       Number sigma_t = density * sigma_scale;
-      vec3 source = inscattered_radiance(p, phase0, phases);
+      vec3 source = inscattered_radiance(p, rd, phase0, phases);
       radiance += transmittance * integrate_step(source, albedo * sigma_t, sigma_t, seg);
       Number step_transmittance = exp(-sigma_t * seg);
       t_weighted += transmittance * (1.0 - step_transmittance) * (t + jitter * seg);

@@ -329,6 +329,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   }
   RenderSettings s = o.settings;
   Image standard_error;  // --backend pathtrace: written beside each image
+  int ms_builds = 0;  // the diffusion volume's solves so far (--stats reports a new one)
   for (int i = 0; i < o.frames; ++i) {
     // Frame i: the clouds' time advances 1/fps per frame, the jitter (and temporal) pattern by one.
     s.time = o.settings.time + (o.fps > 0 ? double(i) / o.fps : 0.0);
@@ -373,6 +374,14 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
         for (const auto& p : t.passes) out << " " << p.first << " " << p.second << " ms;";
         out << "\n";
       }
+      if (o.stats && frame.params.ms_volume_on > 0.5 && renderer->ms_volume_builds() > ms_builds) {
+        const MsDiffusionResult ms = renderer->last_ms_solve();
+        out << label << "ms volume: " << frame.params.ms_volume_dims.x << "x" << frame.params.ms_volume_dims.y << "x"
+            << frame.params.ms_volume_dims.z << " cells, " << ms.iterations << " iterations (+" << ms.coarse_iterations
+            << " on coarser grids), " << (ms.converged ? "converged" : "NOT converged") << ", solved in "
+            << ms.seconds * 1e3 << " ms on the CPU (inside the ms_volume pass's time)\n";
+      }
+      ms_builds = renderer->ms_volume_builds();
     }
     if (o.stats && i == 0 && s.sky == SkyMode::Precomputed) {
       const std::shared_ptr<const AtmosphereLuts> luts = shared_atmosphere_luts(s.atmosphere);

@@ -148,7 +148,13 @@ struct CpuShader {
     const ivec3 n = ivec3(u_cloud.light_volume_dims);
     return (*light_volume)[(size_t(t.z) * n.y + t.y) * n.x + t.x];
   }
-  Number light_volume_filtered(vec3 uvw) { return light_volume_trilinear(uvw); }
+  Number light_volume_filtered(vec3 uvw) { return grid_trilinear(false, uvw).x; }
+  const std::vector<dvec4>* ms_volume = nullptr;  ///< ms_volume_dims cells (ms_volume_texels), x fastest
+  vec4 ms_volume_texel(ivec3 t) const {
+    const ivec3 n = ivec3(u_cloud.ms_volume_dims);
+    return (*ms_volume)[(size_t(t.z) * n.y + t.y) * n.x + t.x];
+  }
+  vec4 ms_volume_filtered(vec3 uvw) { return grid_trilinear(true, uvw); }
   vec3 mie_table_value(int i) const {
     if (!mie) mie = &mie_phase_table();
     return vec3(mie->at(i, 0), mie->at(i, 1), mie->at(i, 2));
@@ -232,6 +238,46 @@ std::vector<double> build_light_volume_cpu(const PreparedVolume& vol, const ref:
         tau[(size_t(z) * n.y + y) * n.x + x] = sh.light_optical_depth(sh.light_volume_position(ivec3(x, y, z)));
   });
   return tau;
+}
+
+MsDiffusionGrid build_ms_source_cpu(const PreparedVolume& vol, const ref::CloudParams& params,
+                                    const std::vector<double>* light_volume) {
+  MsDiffusionGrid g;
+  g.dims = glm::ivec3(params.ms_volume_dims);
+  g.cell_m = params.volume_size_m / glm::dvec3(g.dims);
+  g.tiles_xz = false;  // one box of cloud: vacuum beyond every face (lighting.glsl ms_volume_source)
+  const size_t cells = size_t(g.dims.x) * g.dims.y * g.dims.z;
+  g.sigma_t.assign(cells, 0.0);
+  g.source.assign(cells, 0.0);
+  tbb::parallel_for(0, g.dims.z, [&](int z) {
+    CpuShader sh(params, vol, no_lut());
+    sh.light_volume = light_volume;
+    for (int y = 0; y < g.dims.y; ++y)
+      for (int x = 0; x < g.dims.x; ++x) {
+        const dvec2 s = sh.ms_volume_source(ivec3(x, y, z));
+        const size_t i = (size_t(z) * g.dims.y + y) * g.dims.x + x;
+        g.sigma_t[i] = s.x;
+        g.source[i] = s.y;
+      }
+  });
+  return g;
+}
+
+double phase_asymmetry(const ref::CloudParams& params) {
+  // cloudgen's table angles: fine steps near the forward peak (the Mie table's is ~10^6 times its side value).
+  const std::vector<double> angle = cloudgen::phase::table_angles();
+  std::vector<double> value;
+  PreparedVolume empty;
+  CpuShader sh(params, empty, no_lut());
+  for (double a : angle) value.push_back(sh.phase_function_rgb(std::cos(glm::radians(a))).y);
+  return cloudgen::phase::asymmetry(angle, value);
+}
+
+MsDiffusionOptions ms_diffusion_options(const ref::CloudParams& params) {
+  MsDiffusionOptions o;
+  o.albedo = params.albedo;
+  o.asymmetry = std::clamp(phase_asymmetry(params), -0.99, 0.99);
+  return o;
 }
 
 double reference_light_optical_depth(const PreparedVolume& vol, const ref::CloudParams& params, glm::dvec3 p,
@@ -365,9 +411,18 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
   // The light volume, when on: the same texels the light_volume pass computes, in double precision.
   std::vector<double> light_volume;
   if (P.light_volume_on > 0.5) light_volume = build_light_volume_cpu(vol, P);
+  // The diffusion volume, when on: the same cells the ms_source pass computes, the same solver.
+  std::vector<dvec4> ms_volume;
+  if (P.ms_volume_on > 0.5) {
+    const MsDiffusionOptions o = ms_diffusion_options(P);
+    ms_volume = ms_volume_texels(
+        solve_ms_diffusion(build_ms_source_cpu(vol, P, P.light_volume_on > 0.5 ? &light_volume : nullptr), o),
+        o.asymmetry);
+  }
   tbb::parallel_for(0, h, [&](int y) {
     CpuShader sh(P, vol, look.lut, &frame.motion_table);
     sh.light_volume = &light_volume;
+    sh.ms_volume = &ms_volume;
     for (int x = 0; x < w; ++x) {
       dvec3 rd = sh.pixel_ray(frame.inv_view_proj, dvec2(x + 0.5, y + 0.5), dvec2(w, h));
       double t_scene;

@@ -44,6 +44,7 @@ void apply_motion(const RenderSettings& s, bool baked, double height, ref::Cloud
   p.skip_distance = 0;
   p.df_light = 0;
   p.light_volume_on = 0;
+  p.ms_volume_on = 0;  // the diffusion solve is per still volume too: the octaves light moving clouds
   // D over the height fraction h in [0, 1], sampled finely: its range (the box grows by it) and its
   // steepest slope G = max |dD/dh| (metres per unit h), both padded by a quarter for what falls
   // between samples.
@@ -181,6 +182,11 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   while (lv_texels(lv_scale) > double(kMaxLightVolumeTexels)) lv_scale *= 2;
   for (int i = 0; i < 3; ++i)
     p.light_volume_dims[i] = std::max(1, (vol.dims[size_t(i)] + lv_scale - 1) / lv_scale);
+  // The diffusion volume (box mode too): its cells the same way, at most kMaxMsVolumeCells.
+  p.ms_volume_on = s.ms_volume && !layer ? 1 : 0;
+  int ms_scale = s.ms_volume_scale;
+  while (lv_texels(ms_scale) > double(kMaxMsVolumeCells)) ms_scale *= 2;
+  for (int i = 0; i < 3; ++i) p.ms_volume_dims[i] = std::max(1, (vol.dims[size_t(i)] + ms_scale - 1) / ms_scale);
   p.light_samples = s.light_samples;
   p.light_step_m = s.light_step > 0 ? s.light_step : 2.5 * min_voxel;
   p.light_growth = s.light_growth;

@@ -107,6 +107,7 @@ struct Pass {
   bool lut_valid = false;                            // precompute: its target holds the current atmosphere's LUT
   int runs = 0;                                      // precompute: how many times it has run
   bool light_volume = false;                         // runs only when the light volume's inputs changed
+  bool ms_volume = false;                            // runs only when the diffusion volume's inputs changed
   GLuint program = 0;
 };
 
@@ -138,6 +139,10 @@ std::vector<Target> make_targets() {
   light.name = "light_volume", light.colors = {GL_R32F};
   light.volume_size = [](const FrameSetup& f) { return glm::ivec3(f.params.light_volume_dims); };
   t.push_back(light);
+  Target ms_source;  // the diffusion volume's inputs per cell: mean sigma_t, mean sigma_t * T_sun
+  ms_source.name = "ms_source", ms_source.colors = {GL_RG32F};
+  ms_source.volume_size = [](const FrameSetup& f) { return glm::ivec3(f.params.ms_volume_dims); };
+  t.push_back(ms_source);
   Target scattering;  // atmosphere LUT S(r, mu, mu_s, nu): single Rayleigh, single Mie, orders 2..N
   scattering.name = "scattering", scattering.colors = {GL_RGBA32F, GL_RGBA32F, GL_RGBA32F};
   scattering.volume_size = [](const FrameSetup&) {
@@ -194,6 +199,13 @@ std::vector<Pass> make_passes() {
   light.target = "light_volume", light.group = Group::Light, light.light_volume = true;
   light.enabled = [](const FrameSetup& f) { return f.params.light_volume_on > 0.5; };
   p.push_back(light);
+  // The diffusion volume's inputs (after the light volume, which they read); the renderer solves
+  // the diffusion on the CPU from them and uploads the fluence (render.ms_volume).
+  Pass ms;
+  ms.name = "ms_volume", ms.vs = "fullscreen.vert", ms.fs = "ms_source.frag";
+  ms.target = "ms_source", ms.group = Group::Light, ms.ms_volume = true;
+  ms.enabled = [](const FrameSetup& f) { return f.params.ms_volume_on > 0.5; };
+  p.push_back(ms);
   auto temporal = [](const FrameSetup& f) { return temporal_on(f); };
   Pass clouds;
   clouds.name = "clouds", clouds.vs = "fullscreen.vert", clouds.fs = "cloud.frag", clouds.target = "hdr";
@@ -263,6 +275,10 @@ struct GlRenderer::Impl {
   int volume_serial = 0;              // counts set_volume calls (part of the light volume's key)
   std::vector<double> light_key;      // what the light volume was built from; empty = not built
   int light_builds = 0;
+  GLuint tex_ms = 0;                  // render.ms_volume: the solved fluence and flux (RGBA32F, ms_volume_dims)
+  std::vector<double> ms_key;         // what it was solved from; empty = not built
+  int ms_builds = 0;
+  MsDiffusionResult ms_last;          // the last solve (its fluence moved into tex_ms)
   GLuint ubo_cloud = 0, ubo_frame = 0, ubo_atmo = 0;
   GLuint buf_nano = 0, tex_nano = 0;  // render.volume=nanovdb: the grids and their buffer texture (else 32 bytes)
   int nvdb_on = 0, nvdb_detail = 0, nvdb_shared = 0, nvdb_table = 0, nvdb_ssbo = 0;
@@ -336,6 +352,7 @@ struct GlRenderer::Impl {
     if (viewport_only) return;
     atmo_valid = false;
     light_key.clear();
+    ms_key.clear();
   }
   void resize(int width, int height) {
     if (width == w && height == h) return;
@@ -427,6 +444,44 @@ struct GlRenderer::Impl {
             p.exact_filter, p.light_mode, p.light_samples, p.light_step_m, p.light_growth, p.df_light,
             p.light_volume_dims.x, p.light_volume_dims.y, p.light_volume_dims.z, p.curl_amplitude_m,
             p.curl_repeats.x, p.curl_repeats.y, p.curl_repeats.z, p.curl_shift};
+  }
+  // The diffusion volume's key: the light volume's, its grid, the albedo and the phase function.
+  std::vector<double> ms_volume_key(const FrameSetup& f) const {
+    const ref::CloudParams& p = f.params;
+    std::vector<double> k = light_volume_key(f);
+    k.insert(k.end(), {p.light_volume_on, p.ms_volume_dims.x, p.ms_volume_dims.y, p.ms_volume_dims.z, p.albedo,
+                       p.phase_mode, p.hg_g, p.hg_g2, p.lobe_weight, p.draine_g_hg, p.draine_g_d, p.draine_alpha,
+                       p.draine_w_d, double(p.phase_mode == CV_PHASE_MIE ? mie_table_generation() : 0)});
+    return k;
+  }
+  // After the ms_volume pass: its cells read back, the diffusion solved, the fluence uploaded.
+  void solve_ms_volume(const FrameSetup& f) {
+    const Target& t = target("ms_source");
+    const size_t cells = size_t(t.w) * size_t(t.h) * size_t(t.d);
+    std::vector<glm::vec2> px(cells);
+    glGetTextureImage(t.tex[0][0], 0, GL_RG, GL_FLOAT, GLsizei(cells * sizeof(glm::vec2)), px.data());
+    MsDiffusionGrid g;
+    g.dims = glm::ivec3(t.w, t.h, t.d);
+    g.cell_m = f.params.volume_size_m / glm::dvec3(g.dims);
+    g.tiles_xz = false;  // one box of cloud: vacuum beyond every face (lighting.glsl ms_volume_source)
+    g.sigma_t.resize(cells), g.source.resize(cells);
+    for (size_t i = 0; i < cells; ++i) g.sigma_t[i] = px[i].x, g.source[i] = px[i].y;
+    const MsDiffusionOptions o = ms_diffusion_options(f.params);
+    ms_last = solve_ms_diffusion(g, o);
+    const std::vector<glm::dvec4> texels = ms_volume_texels(ms_last, o.asymmetry);
+    std::vector<glm::vec4> data(texels.begin(), texels.end());
+    if (tex_ms) glDeleteTextures(1, &tex_ms);
+    glCreateTextures(GL_TEXTURE_3D, 1, &tex_ms);
+    glTextureStorage3D(tex_ms, 1, GL_RGBA32F, t.w, t.h, t.d);
+    glTextureSubImage3D(tex_ms, 0, 0, 0, 0, t.w, t.h, t.d, GL_RGBA, GL_FLOAT, data.data());
+    glTextureParameteri(tex_ms, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTextureParameteri(tex_ms, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTextureParameteri(tex_ms, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(tex_ms, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(tex_ms, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
+    ms_last.fluence.clear();
+    ms_last.flux.clear();
+    ms_builds += 1;
   }
   // nanovdb_storage.glsl's switches: rebuilds the programs when they change.
   int storage = 0;  // 0 dense, 1 nanovdb from a storage buffer, 2 nanovdb from a buffer texture
@@ -578,7 +633,7 @@ GlRenderer::~GlRenderer() {
   Impl& m = *impl_;
   m.delete_programs();
   m.delete_targets();
-  GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_dist, m.tex_mie, m.tex_coverage, m.tex_motion, m.tex_curl};
+  GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_dist, m.tex_mie, m.tex_coverage, m.tex_motion, m.tex_curl, m.tex_ms};
   for (GLuint t : texs)
     if (t) glDeleteTextures(1, &t);
   if (m.tex_nano) glDeleteTextures(1, &m.tex_nano);
@@ -707,6 +762,7 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
   glTextureParameteri(m.tex_dist, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   m.volume_serial += 1;
   m.light_key.clear();
+  m.ms_key.clear();
   m.have_volume = true;
   m.history_valid = false;
   if (glGetError() != GL_NO_ERROR) throw GlError("uploading the volume textures failed (out of GPU memory?)");
@@ -798,6 +854,15 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   }
   // Never sample the light volume while its pass writes it.
   glBindTextureUnit(CV_UNIT_LIGHT_VOLUME, light_dirty || light.tex[0].empty() ? 0 : light.tex[0][0]);
+  // The diffusion volume: solved again when its key changes.
+  bool ms_dirty = false;
+  if (f.params.ms_volume_on > 0.5) {
+    if (m.ensure_volume_target(m.target("ms_source"), f)) m.ms_key.clear();
+    std::vector<double> mkey = m.ms_volume_key(f);
+    ms_dirty = mkey != m.ms_key;
+    m.ms_key = mkey;
+  }
+  glBindTextureUnit(CV_UNIT_MS_VOLUME, ms_dirty ? 0 : m.tex_ms);
 
   glQueryCounter(m.queries[0], GL_TIMESTAMP);
   for (size_t i = 0; i < m.passes.size(); ++i) {
@@ -808,6 +873,12 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
         m.run(m.passes[i], f);
         m.light_builds += 1;
         glBindTextureUnit(CV_UNIT_LIGHT_VOLUME, light.tex[0][0]);
+      }
+    } else if (m.passes[i].ms_volume) {
+      if (ms_dirty) {  // its timing includes the read-back, the CPU solve and the upload
+        m.run(m.passes[i], f);
+        m.solve_ms_volume(f);
+        glBindTextureUnit(CV_UNIT_MS_VOLUME, m.tex_ms);
       }
     } else {
       m.run(m.passes[i], f);
@@ -909,6 +980,10 @@ std::vector<glm::vec3> GlRenderer::transmittance_dump(const AtmosphereSettings& 
 }
 
 int GlRenderer::light_volume_builds() const { return impl_->light_builds; }
+
+int GlRenderer::ms_volume_builds() const { return impl_->ms_builds; }
+
+MsDiffusionResult GlRenderer::last_ms_solve() const { return impl_->ms_last; }
 
 int GlRenderer::lut_computations(const std::string& pass) const { return impl_->pass(pass).runs; }
 

@@ -106,6 +106,8 @@ std::vector<ParamDef> build() {
   t.push_back(real("ms_attenuation", &RenderSettings::ms_attenuation, 0, 1, "octaves: a, the weight factor (keep a <= ms_extinction for energy conservation)"));
   t.push_back(real("ms_extinction", &RenderSettings::ms_extinction, 0, 1, "octaves: b, the optical depth factor"));
   t.push_back(real("ms_eccentricity", &RenderSettings::ms_eccentricity, 0, 1, "octaves: c, the phase eccentricity factor"));
+  t.push_back(boolean("ms_volume", &RenderSettings::ms_volume, "box mode, still clouds: multiple scattering (orders >= 2) from a flux-limited diffusion solve on a coarse grid instead of the octaves, closer to the path tracer (use it with render.powder=0); solved on the CPU (0.1-0.3 s) when the sun, the volume or a lighting key changes, then one lookup per sample (docs/accuracy.md)"));
+  t.push_back(integer("ms_volume_scale", &RenderSettings::ms_volume_scale, 1, 64, "diffusion cells: the volume's voxels divided by this on each axis (doubled until at most 64^3 cells)"));
   t.push_back(real("sun_intensity", &RenderSettings::sun_intensity, 0, 1e6, "sun radiance scale"));
   t.push_back(real("ambient", &RenderSettings::ambient, 0, 1e6, "ambient sky radiance scale"));
   t.push_back(enumeration("sky", &RenderSettings::sky, {"analytic", "precomputed"}, "sky and sky light: analytic gradient and constant ambient (the thesis), or the precomputed atmosphere after Bruneton (atmosphere.* keys; transmittance LUT, marched single scattering, Hillaire's multiple-scattering LUT; docs/sky.md)"));

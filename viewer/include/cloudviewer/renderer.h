@@ -53,6 +53,38 @@ std::vector<std::string> embedded_shader_names();
 /// through the #line directives) for the first error. Needs a current GL context.
 unsigned compile_shader_stage(unsigned stage, const ShaderSource& src, const std::string& name);
 
+/// Multiple scattering by flux-limited diffusion (render.ms_volume, src/ms_diffusion.cpp): the
+/// inputs on a coarse grid over the box, x fastest, per unit sun irradiance.
+struct MsDiffusionGrid {
+  glm::ivec3 dims{0};
+  glm::dvec3 cell_m{0.0};          ///< cell edge per axis, metres
+  bool tiles_xz = false;           ///< x and z wrap (else every face of the box sees vacuum)
+  std::vector<double> sigma_t;     ///< each cell's mean extinction, 1/m
+  std::vector<double> source;      ///< each cell's mean sigma_t * T_sun, 1/m (times the albedo: the source)
+};
+struct MsDiffusionOptions {
+  double albedo = 1;               ///< sigma_s / sigma_t
+  double asymmetry = 0;            ///< the phase function's mean cosine (similarity: sigma_tr = sigma_a + sigma_s (1 - g))
+  int max_iterations = 3000;
+  double tolerance = 1e-5;         ///< stop when an iteration changes no cell by more than this x the largest fluence
+  double relaxation = 1.8;         ///< successive over-relaxation factor, in (0, 2)
+};
+struct MsDiffusionResult {
+  std::vector<double> fluence;     ///< phi per cell: fluence of the light scattered at least once, per unit sun irradiance
+  std::vector<glm::dvec3> flux;    ///< its net flux F = -D grad phi per cell (|F| <= phi)
+  int iterations = 0;               ///< on this grid
+  int coarse_iterations = 0;        ///< on the coarser grids that gave its starting point (nested iteration)
+  bool converged = false;
+  double change = 0;               ///< the last iteration's largest relative change
+  double source_power = 0, absorbed_power = 0, leaked_power = 0;  ///< energy balance, per unit irradiance (m^2)
+  double seconds = 0;              ///< wall time of the solve, coarser grids included
+};
+MsDiffusionResult solve_ms_diffusion(const MsDiffusionGrid& grid, const MsDiffusionOptions& options);
+/// The texels both renderers look up (lighting.glsl ms_volume_radiance): phi and 3 g F per cell,
+/// g the phase function's asymmetry, so the in-scattered diffuse radiance toward w is
+/// (phi + 3 g F . w) / 4 pi (the P1 radiance phi / 4 pi + 3 F . w' / 4 pi through the phase function).
+std::vector<glm::dvec4> ms_volume_texels(const MsDiffusionResult& solve, double asymmetry);
+
 /// OpenGL 4.5 renderer; needs a current context (EGL headless or a GLFW window).
 class GlRenderer {
  public:
@@ -82,6 +114,10 @@ class GlRenderer {
   /// How many times the light volume has been built (render.light_volume): once per change of the
   /// sun, the volume or a lighting key, never for a camera move alone.
   int light_volume_builds() const;
+  /// How many times the diffusion volume has been solved (render.ms_volume), and the last solve's
+  /// iterations, convergence and energy balance (its fluence is on the GPU: empty here).
+  int ms_volume_builds() const;
+  MsDiffusionResult last_ms_solve() const;
   /// How many times the atmosphere LUT pass `pass` ("atmosphere_scattering", ...) has run: once per
   /// change of an atmosphere.* key while a frame needs it (the 4D scattering LUT: with
   /// render.sky_lut), never for a sun, camera or viewport change.
@@ -128,6 +164,15 @@ std::vector<double> build_light_volume_cpu(const PreparedVolume& vol, const ref:
 /// `light_volume` (from build_light_volume_cpu) its trilinear lookup. For tests and measurements.
 double reference_light_optical_depth(const PreparedVolume& vol, const ref::CloudParams& params, glm::dvec3 p,
                                      const std::vector<double>* light_volume = nullptr);
+
+/// The diffusion volume as both renderers build it: ms_volume_source (lighting.glsl) per cell in
+/// double precision (`light_volume`: the light volume's texels when params.light_volume_on), then
+/// solve_ms_diffusion with the frame's albedo and its phase function's asymmetry.
+MsDiffusionGrid build_ms_source_cpu(const PreparedVolume& vol, const ref::CloudParams& params,
+                                    const std::vector<double>* light_volume);
+MsDiffusionOptions ms_diffusion_options(const ref::CloudParams& params);
+/// The asymmetry parameter <cos theta> of the frame's phase function (green channel), integrated numerically.
+double phase_asymmetry(const ref::CloudParams& params);
 
 /// The shared header's phase function (1/sr) evaluated in double precision (for tests and docs).
 double reference_phase(PhaseMode mode, double g, double cos_theta);

@@ -165,6 +165,9 @@ glm::dmat4 view_projection(const Camera& cam, int width, int height);
 /// The light volume (render.light_volume) never has more texels than this: make_frame doubles
 /// render.light_volume_scale until it fits.
 constexpr int kMaxLightVolumeTexels = 1 << 22;
+/// The diffusion volume (render.ms_volume) never has more cells than this (64^3): make_frame
+/// doubles render.ms_volume_scale until it fits.
+constexpr int kMaxMsVolumeCells = 1 << 18;
 
 struct FrameSetup {
   int width = 0, height = 0;

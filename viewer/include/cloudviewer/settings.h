@@ -81,6 +81,8 @@ struct RenderSettings {
   double ms_attenuation = 0.5;     ///< a
   double ms_extinction = 0.5;      ///< b
   double ms_eccentricity = 0.5;    ///< c
+  bool ms_volume = false;          ///< box mode: orders >= 2 from a flux-limited diffusion solve (docs/accuracy.md)
+  int ms_volume_scale = 4;         ///< its cells: the volume's voxels divided by this per axis
   double sun_intensity = 30;       ///< sun radiance scale
   double ambient = 0.8;            ///< ambient sky radiance scale
   // background
