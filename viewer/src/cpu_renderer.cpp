@@ -240,8 +240,7 @@ std::vector<double> build_light_volume_cpu(const PreparedVolume& vol, const ref:
   return tau;
 }
 
-MsDiffusionGrid build_ms_source_cpu(const PreparedVolume& vol, const ref::CloudParams& params,
-                                    const std::vector<double>* light_volume) {
+MsDiffusionGrid ms_diffusion_grid(const ref::CloudParams& params) {
   MsDiffusionGrid g;
   g.dims = glm::ivec3(params.ms_volume_dims);
   g.cell_m = params.volume_size_m / glm::dvec3(g.dims);
@@ -249,6 +248,12 @@ MsDiffusionGrid build_ms_source_cpu(const PreparedVolume& vol, const ref::CloudP
   const size_t cells = size_t(g.dims.x) * g.dims.y * g.dims.z;
   g.sigma_t.assign(cells, 0.0);
   g.source.assign(cells, 0.0);
+  return g;
+}
+
+MsDiffusionGrid build_ms_source_cpu(const PreparedVolume& vol, const ref::CloudParams& params,
+                                    const std::vector<double>* light_volume) {
+  MsDiffusionGrid g = ms_diffusion_grid(params);
   tbb::parallel_for(0, g.dims.z, [&](int z) {
     CpuShader sh(params, vol, no_lut());
     sh.light_volume = light_volume;

@@ -460,11 +460,7 @@ struct GlRenderer::Impl {
     const size_t cells = size_t(t.w) * size_t(t.h) * size_t(t.d);
     std::vector<glm::vec2> px(cells);
     glGetTextureImage(t.tex[0][0], 0, GL_RG, GL_FLOAT, GLsizei(cells * sizeof(glm::vec2)), px.data());
-    MsDiffusionGrid g;
-    g.dims = glm::ivec3(t.w, t.h, t.d);
-    g.cell_m = f.params.volume_size_m / glm::dvec3(g.dims);
-    g.tiles_xz = false;  // one box of cloud: vacuum beyond every face (lighting.glsl ms_volume_source)
-    g.sigma_t.resize(cells), g.source.resize(cells);
+    MsDiffusionGrid g = ms_diffusion_grid(f.params);  // its dims are the target's (ms_volume_dims)
     for (size_t i = 0; i < cells; ++i) g.sigma_t[i] = px[i].x, g.source[i] = px[i].y;
     const MsDiffusionOptions o = ms_diffusion_options(f.params);
     ms_last = solve_ms_diffusion(g, o);

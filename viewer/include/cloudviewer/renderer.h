@@ -165,6 +165,8 @@ std::vector<double> build_light_volume_cpu(const PreparedVolume& vol, const ref:
 double reference_light_optical_depth(const PreparedVolume& vol, const ref::CloudParams& params, glm::dvec3 p,
                                      const std::vector<double>* light_volume = nullptr);
 
+/// The frame's diffusion grid (params.ms_volume_dims over the box, vacuum beyond it), arrays zeroed.
+MsDiffusionGrid ms_diffusion_grid(const ref::CloudParams& params);
 /// The diffusion volume as both renderers build it: ms_volume_source (lighting.glsl) per cell in
 /// double precision (`light_volume`: the light volume's texels when params.light_volume_on), then
 /// solve_ms_diffusion with the frame's albedo and its phase function's asymmetry.
