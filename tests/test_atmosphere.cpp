@@ -1033,3 +1033,204 @@ TEST(Atmosphere, StatsReportThePrecomputeTimeOfEachLut) {
                            "cpu: atmosphere LUTs: transmittance ", "gpu passes: atmosphere_transmittance "})
     EXPECT_NE(out.find(want), std::string::npos) << want << "\n" << out;
 }
+
+// ------------------------------------------------------------------ atmosphere.density_orders
+namespace {
+
+// Rotation taking unit `from` onto unit `to` (Rodrigues), for moving a direction into the frame of
+// a point whose zenith is `from`.
+glm::dmat3 rotation_onto(const glm::dvec3& from, const glm::dvec3& to) {
+  const glm::dvec3 k = glm::cross(from, to);
+  const double c = glm::dot(from, to), s = glm::length(k);
+  if (s < 1e-12) return c > 0 ? glm::dmat3(1.0) : glm::dmat3(glm::dvec3(1, 0, 0), glm::dvec3(0, -1, 0), glm::dvec3(0, 0, -1));
+  const glm::dvec3 u = k / s;
+  const glm::dmat3 kx(glm::dvec3(0, u.z, -u.y), glm::dvec3(-u.z, 0, u.x), glm::dvec3(u.y, -u.x, 0));
+  return glm::dmat3(1.0) + s * kx + (1 - c) * kx * kx;
+}
+
+// The light scattered exactly twice reaching altitude `alt` along unit v with the sun along s, unit
+// solar irradiance, for the density orders' check. Independent of the orders table: along the view
+// ray 24 samples (t = D x^2) with the view transmittance from a Simpson march of brute_extinction;
+// at each, the scattering density of order 2 by a quadrature with its pole on the view direction
+// (the phase function depends on that angle alone, so the Mie peak is resolved: 40 bands gathered
+// forward, theta = pi u^2, times 32 sectors), each direction's once-scattered light from the
+// header's single-scattering march (luts: scattering_orders=1; checked against a brute force by
+// SingleScatteringMatchesABruteForceIntegration) plus, for directions to the ground, the ground's
+// reflection of the direct sun (albedo / pi T_sun mu_s, transmittance by brute_extinction).
+glm::dvec3 brute_second_order_along(const AtmosphereSettings& a, const AtmosphereLuts& luts, double alt,
+                                    const glm::dvec3& v, const glm::dvec3& s) {
+  const double bottom = a.bottom_radius, top = a.top_radius, g = a.mie_g;
+  auto segment_depth = [&](const glm::dvec3& p, const glm::dvec3& d, double t, int n) {
+    glm::dvec3 sum(0.0);
+    const double dt = t / n;
+    for (int i = 0; i <= n; ++i)
+      sum += brute_extinction(a, glm::length(p + i * dt * d) - bottom) * ((i == 0 || i == n) ? 1.0 : (i % 2 ? 4.0 : 2.0));
+    return sum * (dt / 3);
+  };
+  auto exit_distance = [&](const glm::dvec3& p, const glm::dvec3& d, bool& ground) {
+    const double b = glm::dot(p, d), c_bot = glm::dot(p, p) - bottom * bottom, c_top = glm::dot(p, p) - top * top;
+    ground = b < 0 && b * b - c_bot >= 0;
+    return ground ? -b - std::sqrt(b * b - c_bot) : -b + std::sqrt(std::max(0.0, b * b - c_top));
+  };
+  auto p_r = [](double nu) { return 3 / (16 * M_PI) * (1 + nu * nu); };
+  auto p_m = [&](double nu) {
+    return 3 / (8 * M_PI) * (1 - g * g) / (2 + g * g) * (1 + nu * nu) / std::pow(1 + g * g - 2 * g * nu, 1.5);
+  };
+  const glm::dvec3 o(0, bottom + alt, 0);
+  bool view_ground = false;
+  const double d_view = exit_distance(o, v, view_ground);
+  const glm::dvec3 e1 = glm::normalize(std::abs(v.y) < 0.9 ? glm::cross(v, glm::dvec3(0, 1, 0)) : glm::cross(v, glm::dvec3(1, 0, 0)));
+  const glm::dvec3 e2 = glm::cross(v, e1);
+  const int n_view = 24, n_theta = 40, n_phi = 32;
+  glm::dvec3 total(0.0);
+  for (int k = 0; k < n_view; ++k) {
+    const double x = (k + 0.5) / n_view, t = d_view * x * x, dt = 2 * x * d_view / n_view;
+    const glm::dvec3 y = o + t * v;
+    const double r_y = glm::length(y), h = r_y - bottom;
+    const glm::dvec3 t_view = glm::exp(-segment_depth(o, v, t, 64));
+    const glm::dmat3 to_local = rotation_onto(y / r_y, glm::dvec3(0, 1, 0));
+    const glm::dvec3 s_local = to_local * s;
+    const glm::dvec3 beta_r = a.rayleigh_scattering * std::exp(-h / a.rayleigh_height);
+    const double beta_m = a.mie_scattering * std::exp(-h / a.mie_height);
+    glm::dvec3 j(0.0);
+    for (int i = 0; i < n_theta; ++i) {
+      const double u = (i + 0.5) / n_theta, theta = M_PI * u * u, dtheta = 2 * M_PI * u / n_theta;
+      const double ct = std::cos(theta), st = std::sin(theta);
+      const glm::dvec3 phase = beta_r * p_r(ct) + glm::dvec3(beta_m * p_m(ct));
+      for (int m = 0; m < n_phi; ++m) {
+        const double phi = 2 * M_PI * (m + 0.5) / n_phi;
+        const glm::dvec3 w = ct * v + st * (std::cos(phi) * e1 + std::sin(phi) * e2);
+        glm::dvec3 light = luts.sky_radiance(std::max(h, 0.0), to_local * w, s_local);
+        bool ground = false;
+        const double d = exit_distance(y, w, ground);
+        if (ground) {
+          const glm::dvec3 q = y + d * w, n = q / glm::length(q);
+          const double mu_s = glm::dot(n, s);
+          light += glm::exp(-segment_depth(y, w, d, 32)) * (a.ground_albedo / M_PI) *
+                   luts.sun_transmittance(bottom, mu_s) * std::max(mu_s, 0.0);
+        }
+        j += light * phase * (st * dtheta * (2 * M_PI / n_phi));
+      }
+    }
+    total += t_view * j * dt;
+  }
+  return total;
+}
+
+}  // namespace
+
+// atmosphere.density_orders, the second order: the 4D LUT's orders part (scattering_orders=2 minus
+// 1, the single parts being the same) against brute_second_order_along on 12 rays (the ground, 2 and
+// 8 km; zenith, 5 degrees up, 30 degrees up, and down from 8 km; the sun at 60, 15 and 3 degrees).
+// What is tested: the density's sphere quadrature, the ground bounce, the integral along the ray
+// and both tables' interpolation. Bound: RMS 5%, worst 12% (measured below).
+TEST(Atmosphere, DensityOrdersSecondOrderMatchesABruteForceIntegral) {
+  const AtmosphereSettings a1 = with({"atmosphere.scattering_orders=1", "atmosphere.density_orders=true"});
+  const AtmosphereSettings a2 = with({"atmosphere.scattering_orders=2", "atmosphere.density_orders=true"});
+  const AtmosphereLuts luts1 = compute_atmosphere_luts(make_atmosphere_params(a1));
+  const AtmosphereLuts luts2 = compute_atmosphere_luts(make_atmosphere_params(a2));
+  std::vector<SkyQuery> q;
+  const double alts[] = {0, 2000, 8000};
+  const glm::dvec3 views[] = {{0, 1, 0}, glm::normalize(glm::dvec3(1, 0.0875, 0.3)), glm::normalize(glm::dvec3(-0.5, 0.5, 0.7)),
+                              glm::normalize(glm::dvec3(0.2, -0.6, -0.7))};
+  const double suns[] = {60, 15, 3};
+  for (int i = 0; i < 12; ++i) {
+    SkyQuery k;
+    k.altitude = views[i % 4].y < 0 ? 8000 : alts[i % 3];
+    k.view = views[i % 4];
+    k.sun = Sun{40.0 * i, suns[(i / 4) % 3]}.direction();
+    q.push_back(k);
+  }
+  glm::ivec3 dims(0);
+  const std::vector<glm::dvec3> l1 = scattering_lookups_at_size(luts1, 2, q, dims);
+  const std::vector<glm::dvec3> l2 = scattering_lookups_at_size(luts2, 2, q, dims);
+  std::vector<glm::dvec3> got, want;
+  for (size_t i = 0; i < q.size(); ++i) {
+    got.push_back(l2[i] - l1[i]);
+    want.push_back(brute_second_order_along(a1, luts1, q[i].altitude, q[i].view, q[i].sun));
+    std::cout << "ray " << i << " alt " << q[i].altitude << " mu " << q[i].view.y << ": order 2 table " << got.back().x
+              << " " << got.back().y << " " << got.back().z << ", brute " << want.back().x << " " << want.back().y << " "
+              << want.back().z << "\n";
+  }
+  const RelativeError e = relative_error(got, want);
+  std::cout << "density orders, second order vs brute force: RMS " << e.rms << ", worst " << e.worst << " over " << e.n
+            << " values (" << luts2.orders->seconds << " s for the orders table)\n";
+  EXPECT_GT(e.n, 30);
+  EXPECT_LT(e.rms, 0.05);
+  EXPECT_LT(e.worst, 0.12);
+}
+
+// atmosphere.density_orders: each order adds light, less than the one before, at every texel of
+// the orders table where order 2 carries more than 1e-5 of the solar irradiance (day light is
+// 1e-3 to 1e-2; deep in the Earth's shadow, near 2e-6, light must go round and order 3 can outweigh
+// order 2: counted and printed, not asserted), and the four orders stay near Hillaire's Psi_ms series
+// (another method: isotropic orders from a 2D LUT) over 200 random sky rays from 200 m up. Bound:
+// the two within 5% RMS (measured below).
+TEST(Atmosphere, DensityOrdersAddLessEachOrderAndAgreeWithPsiMs) {
+  const AtmosphereLuts luts = compute_atmosphere_luts(make_atmosphere_params(with({"atmosphere.density_orders=true"})));
+  const std::vector<glm::dvec3>& sum = luts.orders_sum();
+  const std::vector<std::vector<glm::dvec3>>& light = luts.orders->order_light;
+  ASSERT_EQ(light.size(), 3u);  // orders 2, 3, 4
+  int checked = 0, not_less = 0, twilight_not_less = 0;
+  double ratio_sum = 0;
+  for (size_t i = 0; i < sum.size(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      const double l2 = light[0][i][c], l3 = light[1][i][c], l4 = light[2][i][c];
+      ASSERT_GE(l2, 0.0);
+      ASSERT_GE(l3, 0.0);
+      EXPECT_NEAR(sum[i][c], l2 + l3 + l4, 1e-12);
+      if (l2 < 1e-5) {
+        twilight_not_less += !(l3 < l2 && l4 < l3);
+        continue;
+      }
+      ++checked;
+      not_less += !(l3 < l2 && l4 < l3);
+      ratio_sum += l3 / l2;
+    }
+  std::cout << "density orders: " << checked << " texel values, order 3 / order 2 " << ratio_sum / checked << " on average, "
+            << not_less << " not decreasing (below 1e-5: " << twilight_not_less << ")\n";
+  EXPECT_GT(checked, 100000);
+  EXPECT_EQ(not_less, 0);
+  std::vector<SkyQuery> q;
+  for (const SkyQuery& k : random_sky_queries(260, 29)) {
+    const double r = 6360e3 + k.altitude, mu = k.view.y, b = 6360e3;
+    if (k.altitude < 200 && mu < 0 && r * r * (mu * mu - 1) + b * b >= 0) continue;
+    if (q.size() < 200) q.push_back(k);
+  }
+  glm::ivec3 dims(0);
+  const std::vector<glm::dvec3> lut = scattering_lookups_at_size(luts, 2, q, dims);
+  const AtmosphereLuts psi = compute_atmosphere_luts(make_atmosphere_params(with({})));
+  std::vector<glm::dvec3> march;
+  for (const SkyQuery& k : q) march.push_back(psi.sky_radiance(k.altitude, k.view, k.sun));
+  const RelativeError e = relative_error(lut, march);
+  std::cout << "density orders (4) vs the Psi_ms march: RMS relative " << e.rms << ", worst " << e.worst << " over " << e.n
+            << " values (orders table " << luts.orders->seconds << " s)\n";
+  EXPECT_LT(e.rms, 0.05);
+}
+
+// The GL orders passes against the CPU reference's orders table (the same header in double), on
+// the sky read from the 4D LUT with atmosphere.density_orders: noon, sunset, from space. Bound: 45
+// dB (the issue's). The orders passes run once for the three views, and again when an
+// atmosphere.* key changes.
+TEST(AtmosphereSky, DensityOrdersGlMatchesTheCpuReference) {
+  gl_context();
+  GlRenderer r{ShaderSource()};
+  r.set_volume(blob());
+  for (const SkyView& v : {SkyView{"noon", 0, 60, {}, {}, 60}, SkyView{"sunset", 0, 2, {}, {}, 60},
+                           SkyView{"space", 0, 20, {0, 1e6, 0}, {0, 0, -3e6}, 70}}) {
+    FrameSetup f = sky_frame(160, 90, v.az, v.el, v.eye, v.target, v.fov, {"render.sky_lut=true", "atmosphere.density_orders=true"});
+    r.render(f);
+    FrameImages gl = r.read_back();
+    FrameImages cpu = render_cpu(blob(), f);
+    EXPECT_EQ(image_stats(gl.linear).nonfinite, 0) << v.name;
+    EXPECT_GE(image_stats(gl.linear).min, 0.0) << v.name;
+    const double p = psnr(gl.display, cpu.display);
+    std::cout << v.name << ": density orders, PSNR GL vs CPU " << p << " dB\n";
+    EXPECT_GT(p, 45.0) << v.name;
+  }
+  EXPECT_EQ(r.lut_computations("atmosphere_orders"), 1);
+  r.render(sky_frame(64, 36, 0, 30, {}, {}, 60, {"render.sky_lut=true", "atmosphere.density_orders=true", "atmosphere.mie_g=0.7"}));
+  EXPECT_EQ(r.lut_computations("atmosphere_orders"), 2);
+  r.render(sky_frame(64, 36, 0, 30, {}, {}, 60, {"render.sky_lut=true"}));
+  EXPECT_EQ(r.lut_computations("atmosphere_orders"), 2);
+}

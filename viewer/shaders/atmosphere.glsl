@@ -250,12 +250,15 @@ vec3 multiple_scattering_at(Number r, Number mu_s) {
 // The ground irradiance LUT's lookup (compute_irradiance_texel below fills it): linear between
 // the two nearest texels.
 Number irradiance_u(Number mu_s) { return unit_to_texcoord(clamp(mu_s * 0.5 + 0.5, 0.0, 1.0), CV_IRRADIANCE_W); }
-vec3 ground_sky_irradiance(Number mu_s) {
+// `orders`: the same lookup in the orders passes' irradiance of the last order (orders_irradiance_texel).
+vec3 irradiance_lookup(bool orders, Number mu_s) {
   Number p = irradiance_u(mu_s) * Number(CV_IRRADIANCE_W) - 0.5;
   int i0 = int(clamp(floor(p), 0.0, Number(CV_IRRADIANCE_W - 2)));
   Number w = clamp(p - Number(i0), 0.0, 1.0);
+  if (orders) return mix(orders_irradiance_texel(i0), orders_irradiance_texel(i0 + 1), w);
   return mix(irradiance_texel(i0), irradiance_texel(i0 + 1), w);
 }
+vec3 ground_sky_irradiance(Number mu_s) { return irradiance_lookup(false, mu_s); }
 
 // The single-scattering integrals along (r, mu) over [0, d_end] with the sun at mu_s and nu = v.s,
 // for unit solar irradiance, before the phase functions and the scattering coefficients: the sums
@@ -300,13 +303,14 @@ void scattering_sums(Number r, Number mu, Number mu_s, Number nu, Number d_end, 
 // Rayleigh phase; interpolated linearly in nu over 8 slices, 1 / (1 + nu^2) is then 2% off
 // between slices, so here it keeps its own part.
 
-// (u_nu, u_mu_s, u_mu, u_r) in [0, 1] of (r, mu, mu_s, nu); hits_ground: the ray (r, mu) ends on
+// (u_nu, u_mu_s, u_mu, u_r) in [0, 1] of (r, mu, mu_s, nu) in a table of n = (mu_s, mu, r) texels
+// per nu slice (the 4D LUT's, or the smaller orders table's); hits_ground: the ray (r, mu) ends on
 // the ground.
-vec4 scattering_uvwz(Number r, Number mu, Number mu_s, Number nu, bool hits_ground) {
+vec4 lut4d_uvwz(Number r, Number mu, Number mu_s, Number nu, bool hits_ground, ivec3 n) {
   Number bottom = u_atmo.bottom_radius_m, top = u_atmo.top_radius_m;
   Number H = sqrt(top * top - bottom * bottom);
   Number rho = atmo_safe_sqrt(r * r - bottom * bottom);
-  Number u_r = unit_to_texcoord(clamp(rho / H, 0.0, 1.0), CV_SCATTERING_R);
+  Number u_r = unit_to_texcoord(clamp(rho / H, 0.0, 1.0), n.z);
   Number r_mu = r * mu;
   Number disc = r_mu * r_mu - r * r + bottom * bottom;
   Number u_mu = 0.0;
@@ -315,52 +319,57 @@ vec4 scattering_uvwz(Number r, Number mu, Number mu_s, Number nu, bool hits_grou
     Number d_min = r - bottom;
     Number d_max = rho;
     Number x = d_max > d_min ? (d - d_min) / (d_max - d_min) : 0.0;
-    u_mu = 0.5 - 0.5 * unit_to_texcoord(clamp(x, 0.0, 1.0), CV_SCATTERING_MU / 2);
+    u_mu = 0.5 - 0.5 * unit_to_texcoord(clamp(x, 0.0, 1.0), n.y / 2);
   } else {
     Number d = -r_mu + atmo_safe_sqrt(disc + H * H);
     Number d_min = top - r;
     Number d_max = rho + H;
     Number x = d_max > d_min ? (d - d_min) / (d_max - d_min) : 0.0;
-    u_mu = 0.5 + 0.5 * unit_to_texcoord(clamp(x, 0.0, 1.0), CV_SCATTERING_MU / 2);
+    u_mu = 0.5 + 0.5 * unit_to_texcoord(clamp(x, 0.0, 1.0), n.y / 2);
   }
   Number d_s = distance_to_top_boundary(bottom, mu_s);
   Number d_min_s = top - bottom;
   Number d_max_s = H;
   Number a = (d_s - d_min_s) / (d_max_s - d_min_s);
   Number A = (distance_to_top_boundary(bottom, CV_SCATTERING_MU_S_MIN) - d_min_s) / (d_max_s - d_min_s);
-  Number u_mu_s = unit_to_texcoord(clamp(max(1.0 - a / A, 0.0) / (1.0 + a), 0.0, 1.0), CV_SCATTERING_MU_S);
+  Number u_mu_s = unit_to_texcoord(clamp(max(1.0 - a / A, 0.0) / (1.0 + a), 0.0, 1.0), n.x);
   return vec4(clamp((nu + 1.0) / 2.0, 0.0, 1.0), u_mu_s, u_mu, u_r);
+}
+ivec3 scattering_dims() { return ivec3(CV_SCATTERING_MU_S, CV_SCATTERING_MU, CV_SCATTERING_R); }
+ivec3 orders_dims() { return ivec3(CV_ORDERS_MU_S, CV_ORDERS_MU, CV_ORDERS_R); }
+vec4 scattering_uvwz(Number r, Number mu, Number mu_s, Number nu, bool hits_ground) {
+  return lut4d_uvwz(r, mu, mu_s, nu, hits_ground, scattering_dims());
 }
 
 // The inverse at the centre of texel `texel` (x = nu slice * CV_SCATTERING_MU_S + mu_s index):
 // (r, mu, mu_s, nu) and whether the ray hits the ground (the half of the mu axis it is in). A nu
 // slice sits at u_nu = slice / (CV_SCATTERING_NU - 1), so the first and last slices are nu = -1
 // and 1; nu is then clamped to what (mu, mu_s) allow.
-void scattering_texel_geometry(ivec3 texel, OUT(Number) r, OUT(Number) mu, OUT(Number) mu_s, OUT(Number) nu,
-                               OUT(bool) hits_ground) {
+void lut4d_texel_geometry(ivec3 texel, ivec3 n, OUT(Number) r, OUT(Number) mu, OUT(Number) mu_s, OUT(Number) nu,
+                          OUT(bool) hits_ground) {
   Number bottom = u_atmo.bottom_radius_m, top = u_atmo.top_radius_m;
-  int slice = texel.x / CV_SCATTERING_MU_S;
-  int i_mu_s = texel.x - slice * CV_SCATTERING_MU_S;
+  int slice = texel.x / n.x;
+  int i_mu_s = texel.x - slice * n.x;
   Number u_nu = Number(slice) / Number(CV_SCATTERING_NU - 1);
-  Number u_mu_s = (Number(i_mu_s) + 0.5) / Number(CV_SCATTERING_MU_S);
-  Number u_mu = (Number(texel.y) + 0.5) / Number(CV_SCATTERING_MU);
-  Number u_r = (Number(texel.z) + 0.5) / Number(CV_SCATTERING_R);
+  Number u_mu_s = (Number(i_mu_s) + 0.5) / Number(n.x);
+  Number u_mu = (Number(texel.y) + 0.5) / Number(n.y);
+  Number u_r = (Number(texel.z) + 0.5) / Number(n.z);
   Number H = sqrt(top * top - bottom * bottom);
-  Number rho = H * texcoord_to_unit(u_r, CV_SCATTERING_R);
+  Number rho = H * texcoord_to_unit(u_r, n.z);
   r = sqrt(rho * rho + bottom * bottom);
   hits_ground = u_mu < 0.5;
   if (hits_ground) {
     Number d_min = r - bottom;
     Number d_max = rho;
-    Number d = d_min + (d_max - d_min) * texcoord_to_unit(1.0 - 2.0 * u_mu, CV_SCATTERING_MU / 2);
+    Number d = d_min + (d_max - d_min) * texcoord_to_unit(1.0 - 2.0 * u_mu, n.y / 2);
     mu = d == 0.0 ? -1.0 : clamp(-(rho * rho + d * d) / (2.0 * r * d), -1.0, 1.0);
   } else {
     Number d_min = top - r;
     Number d_max = rho + H;
-    Number d = d_min + (d_max - d_min) * texcoord_to_unit(2.0 * u_mu - 1.0, CV_SCATTERING_MU / 2);
+    Number d = d_min + (d_max - d_min) * texcoord_to_unit(2.0 * u_mu - 1.0, n.y / 2);
     mu = d == 0.0 ? 1.0 : clamp((H * H - rho * rho - d * d) / (2.0 * r * d), -1.0, 1.0);
   }
-  Number x_mu_s = texcoord_to_unit(u_mu_s, CV_SCATTERING_MU_S);
+  Number x_mu_s = texcoord_to_unit(u_mu_s, n.x);
   Number d_min_s = top - bottom;
   Number d_max_s = H;
   Number A = (distance_to_top_boundary(bottom, CV_SCATTERING_MU_S_MIN) - d_min_s) / (d_max_s - d_min_s);
@@ -370,10 +379,254 @@ void scattering_texel_geometry(ivec3 texel, OUT(Number) r, OUT(Number) mu, OUT(N
   Number spread = atmo_safe_sqrt((1.0 - mu * mu) * (1.0 - mu_s * mu_s));
   nu = clamp(2.0 * u_nu - 1.0, mu * mu_s - spread, mu * mu_s + spread);
 }
+void scattering_texel_geometry(ivec3 texel, OUT(Number) r, OUT(Number) mu, OUT(Number) mu_s, OUT(Number) nu,
+                               OUT(bool) hits_ground) {
+  lut4d_texel_geometry(texel, scattering_dims(), r, mu, mu_s, nu, hits_ground);
+}
 
-// The precompute: texel `texel`'s three parts (single Rayleigh, single Mie, orders 2..N), from the
-// same integrals as the per-pixel march (scattering_sums) along the whole ray to the boundary the
-// texel's half of the mu axis names.
+// One part of the table at (u_mu_s, u_mu, u_r) in nu slice `slice`: trilinear between the eight
+// nearest texel centres, by hand (GL and the CPU reference filter alike); the mu axis never
+// crosses the middle (the two halves' margins keep u_mu within its own half's texel centres).
+// Parts 0..2: the 4D LUT's (scattering_dims); 10..15: the orders table's parts 0..5 (orders_dims).
+vec3 lut4d_slice(int part, int slice, vec3 uvw, ivec3 n) {
+  vec3 p = uvw * vec3(n) - 0.5;
+  int half_mu = n.y / 2;
+  int lo_mu = p.y < Number(half_mu) - 0.5 ? 0 : half_mu;
+  ivec3 i0 = ivec3(clamp(floor(p.x), 0.0, Number(n.x - 2)),
+                   clamp(floor(p.y), Number(lo_mu), Number(lo_mu + half_mu - 2)),
+                   clamp(floor(p.z), 0.0, Number(n.z - 2)));
+  vec3 f = clamp(p - vec3(i0), 0.0, 1.0);
+  vec3 acc = vec3(0.0);
+  for (int k = 0; k < 8; ++k) {
+    ivec3 o = ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
+    ivec3 t = i0 + o;
+    t.x += slice * n.x;
+    Number w = (o.x == 1 ? f.x : 1.0 - f.x) * (o.y == 1 ? f.y : 1.0 - f.y) * (o.z == 1 ? f.z : 1.0 - f.z);
+    acc += w * (part >= 10   ? orders_texel(part - 10, t)
+                : part == 0 ? scattering_texel(t)
+                : part == 1 ? single_mie_texel(t)
+                            : scattering_multiple_texel(t));
+  }
+  return acc;
+}
+vec3 scattering_slice(int part, int slice, vec3 uvw) { return lut4d_slice(part, slice, uvw, scattering_dims()); }
+
+// One part of the orders table (0..5, orders_texel) at (r, mu, mu_s, nu): linear between the two
+// nearest nu slices, as scattering_lookup.
+vec3 orders_lookup(int part, Number r, Number mu, Number mu_s, Number nu, bool hits_ground) {
+  ivec3 n = orders_dims();
+  vec4 uvwz = lut4d_uvwz(r, mu, mu_s, nu, hits_ground, n);
+  Number x = uvwz.x * Number(CV_SCATTERING_NU - 1);
+  int slice = int(clamp(floor(x), 0.0, Number(CV_SCATTERING_NU - 2)));
+  Number w = clamp(x - Number(slice), 0.0, 1.0);
+  vec3 uvw = vec3(uvwz.y, uvwz.z, uvwz.w);
+  return mix(lut4d_slice(10 + part, slice, uvw, n), lut4d_slice(10 + part, slice + 1, uvw, n), w);
+}
+
+// The single-scattering parts of the texel at (r, mu, mu_s, nu) (ray to the boundary its half of
+// the mu axis names), and with `multiple` the Psi_ms orders along it, from the integrals of the
+// per-pixel march (scattering_sums).
+void lut4d_single(Number r, Number mu, Number mu_s, Number nu, bool hits_ground, bool multiple, OUT(vec3) rayleigh,
+                  OUT(vec3) mie, OUT(vec3) ms) {
+  Number d_end = hits_ground ? distance_to_bottom_boundary(r, mu) : distance_to_top_boundary(r, mu);
+  vec3 sum_r = vec3(0.0);
+  vec3 sum_m = vec3(0.0);
+  vec3 sum_ms = vec3(0.0);
+  scattering_sums(r, mu, mu_s, nu, d_end, hits_ground, multiple, sum_r, sum_m, sum_ms);
+  Number dx = d_end / Number(CV_SKY_SAMPLES);
+  rayleigh = dx * sum_r * u_atmo.rayleigh_scattering_per_m;
+  mie = dx * sum_m * u_atmo.mie_scattering_per_m;
+  ms = dx * sum_ms;
+}
+
+// ------------------------------------------- orders 2..N from scattering densities (Bruneton 2008)
+// atmosphere.density_orders: Bruneton's own multiple scattering, in the orders table (orders_dims,
+// the 4D LUT's parametrisation at a smaller size). For order n = 2..N, with unit solar irradiance:
+//  - the density J_n(r, mu, mu_s, nu) = int_sphere L_{n-1}(w_i) (sigma_R P_R(w.w_i) + sigma_M P_M(w.w_i)) dw_i,
+//    L_{n-1} the light of order n-1 arriving from w_i (order 1: the single parts with their phase
+//    functions; then the last order's light), plus for w_i that hit the ground the ground's
+//    reflection, T albedo / pi E_{n-2} (E_0 the direct sun, then the last order's irradiance);
+//  - the ground irradiance E_{n-1}(mu_s) of the light of order n-1 (for J_{n+1});
+//  - the light L_n = int_0^d T(x, y) J_n(y) dt along the texel's ray; the table's sum adds it.
+// Unlike Psi_ms (isotropic orders, Hillaire 2020) each order keeps its angular shape.
+
+// The single parts (before their phase functions) at a texel of the orders table.
+void compute_orders_single_texel(ivec3 texel, OUT(vec3) rayleigh, OUT(vec3) mie) {
+  Number r = 0.0;
+  Number mu = 0.0;
+  Number mu_s = 0.0;
+  Number nu = 0.0;
+  bool hits_ground = false;
+  lut4d_texel_geometry(texel, orders_dims(), r, mu, mu_s, nu, hits_ground);
+  vec3 ms = vec3(0.0);
+  lut4d_single(r, mu, mu_s, nu, hits_ground, false, rayleigh, mie, ms);
+}
+
+// Light of order `order` (1: single scattering; more: the last order's, orders part 2) arriving at
+// radius r from the direction (mu, nu = w.s) with the sun at mu_s, for unit solar irradiance.
+vec3 orders_incident(int order, Number r, Number mu, Number mu_s, Number nu) {
+  bool g = ray_intersects_ground(r, mu);
+  if (order > 1) return orders_lookup(2, r, mu, mu_s, nu, g);
+  return orders_lookup(0, r, mu, mu_s, nu, g) * rayleigh_phase(nu) +
+         orders_lookup(1, r, mu, mu_s, nu, g) * mie_phase(u_atmo.mie_g, nu);
+}
+
+// Irradiance on the ground of order `order` at the sun's cosine mu_s: 0 the direct sun, more the
+// orders passes' irradiance texture (compute_orders_irradiance_texel).
+vec3 orders_ground_irradiance(int order, Number mu_s) {
+  if (order == 0) return transmittance_to_sun(u_atmo.bottom_radius_m, mu_s) * max(mu_s, 0.0);
+  return irradiance_lookup(true, mu_s);
+}
+
+// J_order at a texel of the orders table, as its angular integrals A_R and A_M (J = sigma_R A_R +
+// sigma_M A_M: the scattering coefficients' steep altitude profiles stay out of the table and its
+// interpolation; the Mie profile falls 2.4x between the table's first altitudes). CV_DENSITY_THETA bands of theta x 2 CV_DENSITY_THETA
+// sectors of phi (midpoints; Bruneton's ComputeScatteringDensity), zenith +y, the view in the x-y
+// plane. Within a band (one mu of the incoming light) the table's texels are the same for every
+// phi but for the nu slice, so each band reads the 8 slices once and each phi mixes two of them.
+void compute_density_texel(ivec3 texel, int order, OUT(vec3) density_r, OUT(vec3) density_m) {
+  Number r = 0.0;
+  Number mu = 0.0;
+  Number mu_s = 0.0;
+  Number nu = 0.0;
+  bool hits_ground = false;
+  ivec3 n = orders_dims();
+  lut4d_texel_geometry(texel, n, r, mu, mu_s, nu, hits_ground);
+  Number sin_mu = atmo_safe_sqrt(1.0 - mu * mu);
+  vec3 omega = vec3(sin_mu, mu, 0.0);
+  Number sun_x = sin_mu > 1e-9 ? clamp((nu - mu * mu_s) / sin_mu, -1.0, 1.0) : 0.0;
+  vec3 omega_s = vec3(sun_x, mu_s, atmo_safe_sqrt(1.0 - sun_x * sun_x - mu_s * mu_s));
+  Number dphi = CV_PI / Number(CV_DENSITY_THETA);
+  Number mu_h = -atmo_safe_sqrt(1.0 - (u_atmo.bottom_radius_m / r) * (u_atmo.bottom_radius_m / r));
+  vec3 slice_a[CV_SCATTERING_NU];  // order 2: single Rayleigh; later: the last order's light
+  vec3 slice_b[CV_SCATTERING_NU];  // order 2: single Mie
+  // Accumulated apart: [incoming light but the Mie part of order 1] and [that Mie part], each
+  // times the Rayleigh and the Mie phase toward the view; and each phase lobe's own quadrature
+  // sum, toward the view (w_r, w_m) and around the sun (w_s).
+  vec3 j_ra = vec3(0.0);
+  vec3 j_rb = vec3(0.0);
+  vec3 j_ma = vec3(0.0);
+  vec3 j_mb = vec3(0.0);
+  Number w_r = 0.0;
+  Number w_m = 0.0;
+  Number w_s = 0.0;
+  for (int l = 0; l < CV_DENSITY_THETA; ++l) {
+    // Bands gathered at the horizon (cosine mu_h), where the light changes fastest (bright grazing
+    // sky over the dark ground): 10 over the sky and 6 over the ground at the midpoints of u,
+    // mu = mu_h + (1 - mu_h) u^3 above and mu_h - (1 + mu_h) u^3 below (compute_multiple_scattering_texel's).
+    int sky_bands = CV_DENSITY_THETA * 5 / 8;
+    bool below = l >= sky_bands;
+    int bands = below ? CV_DENSITY_THETA - sky_bands : sky_bands;
+    Number u = (Number(below ? l - sky_bands : l) + 0.5) / Number(bands);
+    Number span = below ? 1.0 + mu_h : 1.0 - mu_h;
+    Number ct = clamp(below ? mu_h - span * u * u * u : mu_h + span * u * u * u, -1.0, 1.0);
+    Number st = atmo_safe_sqrt(1.0 - ct * ct);
+    Number dmu = span * 3.0 * u * u / Number(bands);  // d(mu) of the band: d(omega) = d(mu) d(phi)
+    bool ground = below && ray_intersects_ground(r, ct);
+    vec4 uvwz = lut4d_uvwz(r, ct, mu_s, 0.0, ground, n);
+    vec3 uvw = vec3(uvwz.y, uvwz.z, uvwz.w);
+    for (int k = 0; k < CV_SCATTERING_NU; ++k) {
+      slice_a[k] = lut4d_slice(order == 2 ? 10 : 12, k, uvw, n);
+      slice_b[k] = order == 2 ? lut4d_slice(11, k, uvw, n) : vec3(0.0);
+    }
+    Number d_ground = 0.0;
+    vec3 t_ground = vec3(0.0);
+    if (ground) {
+      d_ground = distance_to_bottom_boundary(r, ct);
+      t_ground = transmittance_along(r, ct, d_ground, true);
+    }
+    for (int m = 0; m < 2 * CV_DENSITY_THETA; ++m) {
+      Number phi = (Number(m) + 0.5) * dphi;
+      vec3 omega_i = vec3(cos(phi) * st, ct, sin(phi) * st);
+      Number nu_i = clamp(dot(omega_s, omega_i), -1.0, 1.0);
+      Number x = (nu_i + 1.0) / 2.0 * Number(CV_SCATTERING_NU - 1);
+      int k0 = int(clamp(floor(x), 0.0, Number(CV_SCATTERING_NU - 2)));
+      Number w = clamp(x - Number(k0), 0.0, 1.0);
+      vec3 light = mix(slice_a[k0], slice_a[k0 + 1], w);
+      vec3 light_mie = vec3(0.0);
+      if (order == 2) {
+        Number p_sun = mie_phase(u_atmo.mie_g, nu_i);
+        light = light * rayleigh_phase(nu_i);
+        light_mie = mix(slice_b[k0], slice_b[k0 + 1], w) * p_sun;
+        w_s += p_sun * dmu;
+      }
+      if (ground) {
+        vec3 normal = normalize(vec3(0.0, r, 0.0) + omega_i * d_ground);
+        light += t_ground * u_atmo.ground_albedo / CV_PI *
+                 orders_ground_irradiance(order - 2, clamp(dot(normal, omega_s), -1.0, 1.0));
+      }
+      Number nu_v = clamp(dot(omega, omega_i), -1.0, 1.0);
+      Number p_r = rayleigh_phase(nu_v) * dmu;
+      Number p_m = mie_phase(u_atmo.mie_g, nu_v) * dmu;
+      j_ra += light * p_r;
+      j_rb += light_mie * p_r;
+      j_ma += light * p_m;
+      j_mb += light_mie * p_m;
+      w_r += p_r;
+      w_m += p_m;
+    }
+  }
+  // Energy-conserving quadrature: each phase lobe's weights normalised to integrate to one over the
+  // grid. The Mie lobes (g = 0.8: most of their weight within 20 degrees) fall between the grid's
+  // 11-degree directions, and their sums are off by up to tens of percent from 1 otherwise.
+  Number dw = dphi;
+  Number n_s = order == 2 && w_s > 0.0 ? 1.0 / (w_s * dw) : 1.0;
+  density_r = (j_ra + j_rb * n_s) / max(w_r, 1e-30);
+  density_m = (j_ma + j_mb * n_s) / max(w_m, 1e-30);
+}
+
+// E_order(mu_s) on the ground: the light of order `order` over the upper hemisphere times cos
+// theta, on the ground irradiance LUT's texels and quadrature (compute_irradiance_texel).
+vec3 compute_orders_irradiance_texel(int texel, int order) {
+  Number x = texcoord_to_unit((Number(texel) + 0.5) / Number(CV_IRRADIANCE_W), CV_IRRADIANCE_W);
+  Number mu_s = clamp(2.0 * x - 1.0, -1.0, 1.0);
+  vec3 s = vec3(sqrt(max(1.0 - mu_s * mu_s, 0.0)), mu_s, 0.0);
+  vec3 e = vec3(0.0);
+  for (int i = 0; i < CV_IRRADIANCE_BANDS; ++i) {
+    Number mu = (Number(i) + 0.5) / Number(CV_IRRADIANCE_BANDS);
+    Number sin_t = sqrt(max(1.0 - mu * mu, 0.0));
+    for (int k = 0; k < CV_IRRADIANCE_SECTORS; ++k) {
+      Number phi = CV_PI * (Number(k) + 0.5) / Number(CV_IRRADIANCE_SECTORS);
+      vec3 v = vec3(sin_t * cos(phi), mu, sin_t * sin(phi));
+      e += orders_incident(order, u_atmo.bottom_radius_m, mu, mu_s, clamp(dot(v, s), -1.0, 1.0)) * mu;
+    }
+  }
+  return e * (2.0 * CV_PI / Number(CV_IRRADIANCE_BANDS * CV_IRRADIANCE_SECTORS));
+}
+
+// L_order at a texel of the orders table: the density (orders parts 3 and 5) integrated along the
+// texel's ray, on the per-pixel march's samples (d = d_end x^2).
+vec3 compute_orders_multiple_texel(ivec3 texel) {
+  Number r = 0.0;
+  Number mu = 0.0;
+  Number mu_s = 0.0;
+  Number nu = 0.0;
+  bool hits_ground = false;
+  lut4d_texel_geometry(texel, orders_dims(), r, mu, mu_s, nu, hits_ground);
+  Number bottom = u_atmo.bottom_radius_m, top = u_atmo.top_radius_m;
+  Number d_end = hits_ground ? distance_to_bottom_boundary(r, mu) : distance_to_top_boundary(r, mu);
+  vec3 sum = vec3(0.0);
+  int n = CV_SKY_SAMPLES;
+  for (int i = 0; i < n; ++i) {
+    Number x = (Number(i) + 0.5) / Number(n);
+    Number d = d_end * x * x;
+    Number r_d = clamp(sqrt(d * d + 2.0 * r * mu * d + r * r), bottom, top);
+    Number mu_d = clamp((r * mu + d) / r_d, -1.0, 1.0);
+    Number mu_s_d = clamp((r * mu_s + d * nu) / r_d, -1.0, 1.0);
+    // J = sigma_R(h) A_R + sigma_M(h) A_M: the table holds the A (smooth in altitude), the
+    // density profiles are applied here, at the sample's own altitude.
+    vec3 j = u_atmo.rayleigh_scattering_per_m * rayleigh_density(r_d - bottom) *
+                 orders_lookup(3, r_d, mu_d, mu_s_d, nu, hits_ground) +
+             u_atmo.mie_scattering_per_m * mie_density(r_d - bottom) * orders_lookup(5, r_d, mu_d, mu_s_d, nu, hits_ground);
+    sum += transmittance_along(r, mu, d, hits_ground) * j * (2.0 * x);
+  }
+  return sum * (d_end / Number(n));
+}
+
+// The 4D LUT's precompute: texel `texel`'s three parts (single Rayleigh, single Mie, orders 2..N),
+// the single parts from the per-pixel march's integrals along the whole ray to the boundary the
+// texel's half of the mu axis names; the orders from the same march of Psi_ms or, with
+// atmosphere.density_orders, read from the orders table's sum.
 void compute_scattering_texel(ivec3 texel, OUT(vec3) rayleigh, OUT(vec3) mie, OUT(vec3) multiple) {
   Number r = 0.0;
   Number mu = 0.0;
@@ -381,37 +634,9 @@ void compute_scattering_texel(ivec3 texel, OUT(vec3) rayleigh, OUT(vec3) mie, OU
   Number nu = 0.0;
   bool hits_ground = false;
   scattering_texel_geometry(texel, r, mu, mu_s, nu, hits_ground);
-  Number d_end = hits_ground ? distance_to_bottom_boundary(r, mu) : distance_to_top_boundary(r, mu);
-  vec3 sum_r = vec3(0.0);
-  vec3 sum_m = vec3(0.0);
-  vec3 sum_ms = vec3(0.0);
-  scattering_sums(r, mu, mu_s, nu, d_end, hits_ground, u_atmo.scattering_orders > 1.5, sum_r, sum_m, sum_ms);
-  Number dx = d_end / Number(CV_SKY_SAMPLES);
-  rayleigh = dx * sum_r * u_atmo.rayleigh_scattering_per_m;
-  mie = dx * sum_m * u_atmo.mie_scattering_per_m;
-  multiple = dx * sum_ms;
-}
-
-// One part of the table at (u_mu_s, u_mu, u_r) in nu slice `slice`: trilinear between the eight
-// nearest texel centres, by hand (GL and the CPU reference filter alike); the mu axis never
-// crosses the middle (the two halves' margins keep u_mu within its own half's texel centres).
-vec3 scattering_slice(int part, int slice, vec3 uvw) {
-  vec3 p = uvw * vec3(CV_SCATTERING_MU_S, CV_SCATTERING_MU, CV_SCATTERING_R) - 0.5;
-  int half_mu = CV_SCATTERING_MU / 2;
-  int lo_mu = p.y < Number(half_mu) - 0.5 ? 0 : half_mu;
-  ivec3 i0 = ivec3(clamp(floor(p.x), 0.0, Number(CV_SCATTERING_MU_S - 2)),
-                   clamp(floor(p.y), Number(lo_mu), Number(lo_mu + half_mu - 2)),
-                   clamp(floor(p.z), 0.0, Number(CV_SCATTERING_R - 2)));
-  vec3 f = clamp(p - vec3(i0), 0.0, 1.0);
-  vec3 acc = vec3(0.0);
-  for (int k = 0; k < 8; ++k) {
-    ivec3 o = ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
-    ivec3 t = i0 + o;
-    t.x += slice * CV_SCATTERING_MU_S;
-    Number w = (o.x == 1 ? f.x : 1.0 - f.x) * (o.y == 1 ? f.y : 1.0 - f.y) * (o.z == 1 ? f.z : 1.0 - f.z);
-    acc += w * (part == 0 ? scattering_texel(t) : part == 1 ? single_mie_texel(t) : scattering_multiple_texel(t));
-  }
-  return acc;
+  bool density = u_atmo.density_orders > 0.5;
+  lut4d_single(r, mu, mu_s, nu, hits_ground, u_atmo.scattering_orders > 1.5 && !density, rayleigh, mie, multiple);
+  if (density && u_atmo.scattering_orders > 1.5) multiple = orders_lookup(4, r, mu, mu_s, nu, hits_ground);
 }
 
 // The lookup: the three parts at (r, mu, mu_s, nu), linear between the two nearest nu slices.

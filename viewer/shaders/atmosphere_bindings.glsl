@@ -15,3 +15,27 @@ vec3 irradiance_texel(int texel) { return texelFetch(s_irradiance, ivec2(texel, 
 vec3 scattering_texel(ivec3 texel) { return texelFetch(s_scattering, texel, 0).rgb; }
 vec3 single_mie_texel(ivec3 texel) { return texelFetch(s_single_mie, texel, 0).rgb; }
 vec3 scattering_multiple_texel(ivec3 texel) { return texelFetch(s_scattering_multiple, texel, 0).rgb; }
+layout(binding = CV_UNIT_ORDERS_SUM) uniform sampler3D s_orders_sum;  // RGBA32F, the orders table
+// The orders table (atmosphere.density_orders), parts 0..5: single Rayleigh, single Mie, the last
+// order's light, the density's Rayleigh and (5) Mie angular integrals, the sum. Only the orders passes (CV_ATMOSPHERE_ORDERS) read the
+// first four and the last order's ground irradiance.
+#ifdef CV_ATMOSPHERE_ORDERS
+layout(binding = CV_UNIT_ORDERS_SINGLE_R) uniform sampler3D s_orders_single_r;
+layout(binding = CV_UNIT_ORDERS_SINGLE_M) uniform sampler3D s_orders_single_m;
+layout(binding = CV_UNIT_ORDERS_DELTA) uniform sampler3D s_orders_delta;
+layout(binding = CV_UNIT_ORDERS_DENSITY) uniform sampler3D s_orders_density;
+layout(binding = CV_UNIT_ORDERS_DENSITY_M) uniform sampler3D s_orders_density_m;
+layout(binding = CV_UNIT_ORDERS_IRRADIANCE) uniform sampler2D s_orders_irradiance;
+vec3 orders_texel(int part, ivec3 t) {
+  if (part == 0) return texelFetch(s_orders_single_r, t, 0).rgb;
+  if (part == 1) return texelFetch(s_orders_single_m, t, 0).rgb;
+  if (part == 2) return texelFetch(s_orders_delta, t, 0).rgb;
+  if (part == 3) return texelFetch(s_orders_density, t, 0).rgb;
+  if (part == 5) return texelFetch(s_orders_density_m, t, 0).rgb;
+  return texelFetch(s_orders_sum, t, 0).rgb;
+}
+vec3 orders_irradiance_texel(int t) { return texelFetch(s_orders_irradiance, ivec2(t, 0), 0).rgb; }
+#else
+vec3 orders_texel(int part, ivec3 t) { return part == 4 ? texelFetch(s_orders_sum, t, 0).rgb : vec3(0.0); }
+vec3 orders_irradiance_texel(int t) { return vec3(0.0); }
+#endif

@@ -15,7 +15,7 @@ struct AtmosphereParams {
   Number ozone_top_m;
   Number sun_angular_radius;      // radians
   Number scattering_orders;       // 1 = single scattering only; N > 1 adds orders 2..N (Psi_ms series)
-  Number reserved0;               // std140 padding of the last group
+  Number density_orders;          // 1: with the 4D LUT, orders 2..N from Bruneton's scattering-density passes
   Number reserved1;
   Number reserved2;
 };

@@ -97,6 +97,22 @@
 #define CV_UNIT_SINGLE_MIE 19         // RGBA32F 3D: its single Mie part
 #define CV_UNIT_SCATTERING_MULTIPLE 20  // RGBA32F 3D: its orders 2..N
 #define CV_UNIT_MS_VOLUME 21          // RGBA32F 3D: the clouds' multiply scattered fluence and flux (render.ms_volume)
+// atmosphere.density_orders: Bruneton's orders 2..N from scattering-density passes, in a smaller
+// table of the same 4D parametrisation (the light scattered twice or more is smooth), 8 nu slices
+// of CV_ORDERS_MU_S x CV_ORDERS_MU x CV_ORDERS_R texels; each density texel integrates the previous
+// order's light over CV_DENSITY_THETA x 2 CV_DENSITY_THETA directions (Bruneton's 16 x 32), and
+// each order is one CV_SKY_SAMPLES integral of the density along the texel's ray.
+#define CV_ORDERS_MU_S 32
+#define CV_ORDERS_MU 32
+#define CV_ORDERS_R 16
+#define CV_DENSITY_THETA 16
+#define CV_UNIT_ORDERS_SINGLE_R 22    // RGBA32F 3D, orders table: single Rayleigh (the orders passes only)
+#define CV_UNIT_ORDERS_SINGLE_M 23    // single Mie
+#define CV_UNIT_ORDERS_DELTA 24       // the last order's scattered light
+#define CV_UNIT_ORDERS_DENSITY 25     // the order's scattering density J (its Rayleigh part)
+#define CV_UNIT_ORDERS_IRRADIANCE 26  // RGBA32F CV_IRRADIANCE_W x 1: the last order's irradiance on the ground
+#define CV_UNIT_ORDERS_SUM 27         // RGBA32F 3D, orders table: the orders 2..N summed (read by the 4D LUT's pass)
+#define CV_UNIT_ORDERS_DENSITY_M 28   // the density's Mie part
 
 // The multiple-scattering volume (render.ms_volume, lighting.glsl): each cell's extinction and
 // first-scattering source are means over CV_MS_SUBSAMPLES^3 stratified points of the cell (2: as

@@ -366,7 +366,9 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
       if (t.atmosphere_ms > 0) {  // the LUTs were recomputed this frame: each one's time
         out << label << "gpu: atmosphere LUTs:";
         for (const auto& p : t.passes)
-          if (p.first.rfind("atmosphere_", 0) == 0) out << " " << p.first.substr(11) << " " << p.second << " ms";
+          // (the orders loop's passes are timed inside atmosphere_orders)
+          if (p.first.rfind("atmosphere_", 0) == 0 && p.first.rfind("atmosphere_orders_", 0) != 0)
+            out << " " << p.first.substr(11) << " " << p.second << " ms";
         out << "\n";
       }
       if (o.stats) {

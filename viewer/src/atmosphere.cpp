@@ -36,7 +36,7 @@ double* real_member(AtmosphereSettings& s, int i) {
   return m[i];
 }
 bool* bool_member(AtmosphereSettings& s, int i) {
-  bool* m[] = {&s.rayleigh, &s.mie, &s.ozone};
+  bool* m[] = {&s.rayleigh, &s.mie, &s.ozone, &s.density_orders};
   return m[i];
 }
 
@@ -99,6 +99,10 @@ std::vector<AtmosphereParamDef> build() {
   t.push_back(integer("scattering_orders", &AtmosphereSettings::scattering_orders, 1, 64,
                       "scattering orders of the sky: 1 = single scattering; N adds orders 2..N from the "
                       "multiple-scattering LUT (Hillaire 2020; large N tends to its infinite series L2 / (1 - f))"));
+  t.push_back(boolean("density_orders", 3,
+                      "with render.sky_lut=true: the orders 2..N by Bruneton's scattering-density passes (each order's "
+                      "light from the last one's, with the true phase functions, in an 8x32x32x16 table; seconds of "
+                      "precompute) instead of the Psi_ms series; the per-pixel march always uses Psi_ms"));
   return t;
 }
 
@@ -108,7 +112,8 @@ bool AtmosphereSettings::operator==(const AtmosphereSettings& o) const {
   for (int i = 0; i < 18; ++i)
     if (*real_member(const_cast<AtmosphereSettings&>(*this), i) != *real_member(const_cast<AtmosphereSettings&>(o), i))
       return false;
-  return rayleigh == o.rayleigh && mie == o.mie && ozone == o.ozone && scattering_orders == o.scattering_orders;
+  return rayleigh == o.rayleigh && mie == o.mie && ozone == o.ozone && scattering_orders == o.scattering_orders &&
+         density_orders == o.density_orders;
 }
 
 const std::vector<AtmosphereParamDef>& atmosphere_params() {
@@ -180,6 +185,7 @@ ref::AtmosphereParams make_atmosphere_params(const AtmosphereSettings& s) {
   p.ozone_top_m = s.ozone_top;
   p.sun_angular_radius = s.sun_angular_radius_deg * M_PI / 180.0;
   p.scattering_orders = s.scattering_orders;
+  p.density_orders = s.density_orders ? 1.0 : 0.0;
   return p;
 }
 
@@ -219,6 +225,8 @@ struct AtmosphereShader {
   vec3 scattering_texel(ivec3) const { return vec3(0.0); }  // the 4D LUT: ScatteringShader below
   vec3 single_mie_texel(ivec3) const { return vec3(0.0); }
   vec3 scattering_multiple_texel(ivec3) const { return vec3(0.0); }
+  vec3 orders_texel(int, ivec3) const { return vec3(0.0); }
+  vec3 orders_irradiance_texel(int) const { return vec3(0.0); }
 
 #include "../shaders/atmosphere.glsl"
 };
@@ -244,6 +252,8 @@ struct SizedAtmosphereShader {
   vec3 scattering_texel(ivec3) const { return vec3(0.0); }
   vec3 single_mie_texel(ivec3) const { return vec3(0.0); }
   vec3 scattering_multiple_texel(ivec3) const { return vec3(0.0); }
+  vec3 orders_texel(int, ivec3) const { return vec3(0.0); }
+  vec3 orders_irradiance_texel(int) const { return vec3(0.0); }
 #include "../shaders/atmosphere.glsl"
 #pragma pop_macro("CV_TRANSMITTANCE_W")
 #pragma pop_macro("CV_TRANSMITTANCE_H")
@@ -284,6 +294,8 @@ struct SizedMsShader {
   vec3 scattering_texel(ivec3) const { return vec3(0.0); }
   vec3 single_mie_texel(ivec3) const { return vec3(0.0); }
   vec3 scattering_multiple_texel(ivec3) const { return vec3(0.0); }
+  vec3 orders_texel(int, ivec3) const { return vec3(0.0); }
+  vec3 orders_irradiance_texel(int) const { return vec3(0.0); }
 #include "../shaders/atmosphere.glsl"
 #pragma pop_macro("CV_MS_LUT_SIZE")
 };
@@ -302,6 +314,59 @@ std::vector<glm::dvec3> sized_ms_lookups(const ref::AtmosphereParams& p, const s
   for (const glm::dvec2& q : r_mu_s) out.push_back(sh.multiple_scattering_at(q.x, q.y));
   size = N;
   return out;
+}
+
+// The orders passes of atmosphere.density_orders on the CPU: the header over the orders table's
+// six parts (single Rayleigh, single Mie, the last order, the density's Rayleigh part, the sum, its Mie part) and the last
+// order's ground irradiance, as the GL passes read them.
+struct OrdersShader {
+  CV_GLSL_DOUBLE_TYPES;
+
+  const ref::AtmosphereParams& u_atmo;
+  const AtmosphereLuts& base;
+  std::array<const std::vector<glm::dvec3>*, 6> part;
+  const std::vector<glm::dvec3>* irr_orders;
+
+  vec3 transmittance_texel(ivec2 t) const { return base.transmittance[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
+  vec3 multiple_scattering_texel(ivec2 t) const {
+    return base.multiple_scattering[size_t(t.y) * CV_MS_LUT_SIZE + size_t(t.x)];
+  }
+  vec3 irradiance_texel(int t) const { return base.irradiance[size_t(t)]; }
+  vec3 scattering_texel(ivec3) const { return vec3(0.0); }
+  vec3 single_mie_texel(ivec3) const { return vec3(0.0); }
+  vec3 scattering_multiple_texel(ivec3) const { return vec3(0.0); }
+  vec3 orders_texel(int p, ivec3 t) const { return (*part[size_t(p)])[orders_index(t)]; }
+  vec3 orders_irradiance_texel(int t) const { return (*irr_orders)[size_t(t)]; }
+#include "../shaders/atmosphere.glsl"
+};
+
+void compute_orders_table(const AtmosphereLuts& base, OrdersTable& out) {
+  auto t0 = std::chrono::steady_clock::now();
+  const size_t n = size_t(kOrdersNX) * kOrdersNY * kOrdersNZ;
+  std::vector<glm::dvec3> single_r(n), single_m(n), delta(n), density_r(n), density_m(n), sum(n, glm::dvec3(0.0));
+  std::vector<glm::dvec3> irr(CV_IRRADIANCE_W, glm::dvec3(0.0));
+  OrdersShader sh{base.params, base, {{&single_r, &single_m, &delta, &density_r, &sum, &density_m}}, &irr};
+  auto each_texel = [&](const std::function<void(const glm::ivec3&, size_t)>& fn) {
+    tbb::parallel_for(0, kOrdersNZ * kOrdersNY, [&](int row) {
+      const int z = row / kOrdersNY, y = row % kOrdersNY;
+      for (int x = 0; x < kOrdersNX; ++x) fn(glm::ivec3(x, y, z), orders_index(glm::ivec3(x, y, z)));
+    });
+  };
+  each_texel([&](const glm::ivec3& t, size_t i) {
+    sh.compute_orders_single_texel(t, single_r[i], single_m[i]);
+  });
+  for (int order = 2; order <= int(base.params.scattering_orders + 0.5); ++order) {
+    each_texel([&](const glm::ivec3& t, size_t i) { sh.compute_density_texel(t, order, density_r[i], density_m[i]); });
+    // The density above read the irradiance of order - 2; now the one of order - 1 for the next.
+    std::vector<glm::dvec3> next(CV_IRRADIANCE_W);
+    tbb::parallel_for(0, CV_IRRADIANCE_W, [&](int i) { next[size_t(i)] = sh.compute_orders_irradiance_texel(i, order - 1); });
+    irr = next;
+    each_texel([&](const glm::ivec3& t, size_t i) { delta[i] = sh.compute_orders_multiple_texel(t); });
+    for (size_t i = 0; i < n; ++i) sum[i] += delta[i];
+    if (order <= OrdersTable::kKeptOrders) out.order_light.push_back(delta);
+  }
+  out.sum = std::move(sum);
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 // Bruneton's 4D scattering LUT on the CPU at MuS x Mu x R texels per nu slice (8 slices), over the
@@ -348,6 +413,8 @@ struct ScatteringShader {
   vec3 scattering_texel(ivec3 t) const { return lut_texel(t)[0]; }
   vec3 single_mie_texel(ivec3 t) const { return lut_texel(t)[1]; }
   vec3 scattering_multiple_texel(ivec3 t) const { return lut_texel(t)[2]; }
+  vec3 orders_texel(int part, ivec3 t) const { return part == 4 ? base.orders_sum()[orders_index(t)] : vec3(0.0); }
+  vec3 orders_irradiance_texel(int) const { return vec3(0.0); }
 #include "../shaders/atmosphere.glsl"
 #pragma pop_macro("CV_SCATTERING_MU_S")
 #pragma pop_macro("CV_SCATTERING_MU")
@@ -467,6 +534,11 @@ AtmosphereLuts compute_atmosphere_luts(const ref::AtmosphereParams& p) {
   });
   lap(2);
   return luts;
+}
+
+const std::vector<glm::dvec3>& AtmosphereLuts::orders_sum() const {
+  std::call_once(orders->once, [&] { compute_orders_table(*this, *orders); });
+  return orders->sum;
 }
 
 glm::dvec3 AtmosphereLuts::to_top(double r, double mu) const {

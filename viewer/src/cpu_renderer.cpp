@@ -69,6 +69,8 @@ struct CpuShader {
   vec3 scattering_texel(ivec3 t) { return lut_texel(t)[0]; }
   vec3 single_mie_texel(ivec3 t) { return lut_texel(t)[1]; }
   vec3 scattering_multiple_texel(ivec3 t) { return lut_texel(t)[2]; }
+  vec3 orders_texel(int part, ivec3 t) const { return part == 4 ? lut.orders_sum()[orders_index(t)] : vec3(0.0); }
+  vec3 orders_irradiance_texel(int) const { return vec3(0.0); }
 
   vec4 volume_texel(ivec3 t) {
     if (vol.nano) return nanovdb_texel(t);

@@ -108,6 +108,9 @@ struct Pass {
   int runs = 0;                                      // precompute: how many times it has run
   bool light_volume = false;                         // runs only when the light volume's inputs changed
   bool ms_volume = false;                            // runs only when the diffusion volume's inputs changed
+  bool orders_loop = false;                          // precompute: the density orders' loop follows it
+  bool driven = false;                               // run by the orders loop, not by the frame's walk
+  int blend_attachment = -1;                         // a 3D target's attachment this pass adds into
   GLuint program = 0;
 };
 
@@ -149,6 +152,21 @@ std::vector<Target> make_targets() {
     return glm::ivec3(CV_SCATTERING_NU * CV_SCATTERING_MU_S, CV_SCATTERING_MU, CV_SCATTERING_R);
   };
   t.push_back(scattering);
+  // atmosphere.density_orders: the orders table's parts (atmosphere.glsl, orders_dims).
+  auto orders_size = [](const FrameSetup&) { return glm::ivec3(kOrdersNX, kOrdersNY, kOrdersNZ); };
+  Target single;  // single Rayleigh, single Mie
+  single.name = "orders_single", single.colors = {GL_RGBA32F, GL_RGBA32F}, single.volume_size = orders_size;
+  t.push_back(single);
+  Target density;  // J of the order being computed: its Rayleigh and Mie angular integrals
+  density.name = "orders_density", density.colors = {GL_RGBA32F, GL_RGBA32F}, density.volume_size = orders_size;
+  t.push_back(density);
+  Target delta;  // the last order's light, and the orders 2..N summed
+  delta.name = "orders_delta", delta.colors = {GL_RGBA32F, GL_RGBA32F}, delta.volume_size = orders_size;
+  t.push_back(delta);
+  Target orders_irradiance;  // the last order's irradiance on the ground
+  orders_irradiance.name = "orders_irradiance", orders_irradiance.colors = {GL_RGBA32F};
+  orders_irradiance.fixed_w = CV_IRRADIANCE_W, orders_irradiance.fixed_h = 1;
+  t.push_back(orders_irradiance);
   return t;
 }
 
@@ -178,6 +196,28 @@ std::vector<Pass> make_passes() {
   irradiance.group = Group::Atmosphere, irradiance.precompute = true;
   irradiance.lut_units = {CV_UNIT_IRRADIANCE};
   p.push_back(irradiance);
+  // atmosphere.density_orders (with render.sky_lut): the orders table's single parts, then the
+  // loop of orders 2..N (run_orders: density, ground irradiance, light of each order, summed),
+  // which the 4D LUT's pass reads.
+  auto density_on = [](const FrameSetup& f) {
+    return f.params.sky_lut > 0.5 && f.settings.atmosphere.density_orders && f.settings.atmosphere.scattering_orders > 1;
+  };
+  Pass orders;
+  orders.name = "atmosphere_orders", orders.vs = "fullscreen.vert", orders.fs = "atmosphere_orders_single.frag";
+  orders.target = "orders_single", orders.group = Group::Atmosphere, orders.precompute = true;
+  orders.lut_units = {CV_UNIT_ORDERS_SINGLE_R, CV_UNIT_ORDERS_SINGLE_M};
+  orders.enabled = density_on, orders.orders_loop = true;
+  p.push_back(orders);
+  const char* order_passes[][3] = {{"atmosphere_orders_density", "atmosphere_orders_density.frag", "orders_density"},
+                                   {"atmosphere_orders_irradiance", "atmosphere_orders_irradiance.frag", "orders_irradiance"},
+                                   {"atmosphere_orders_multiple", "atmosphere_orders_multiple.frag", "orders_delta"}};
+  for (auto& o : order_passes) {
+    Pass d;
+    d.name = o[0], d.vs = "fullscreen.vert", d.fs = o[1], d.target = o[2];
+    d.group = Group::Atmosphere, d.driven = true;
+    if (d.target == "orders_delta") d.blend_attachment = 1;
+    p.push_back(d);
+  }
   // Bruneton's 4D scattering LUT (reads the transmittance and multiple-scattering LUTs), only for
   // render.sky_lut: it is 96 MiB and seconds of llvmpipe time.
   Pass scattering;
@@ -512,6 +552,12 @@ struct GlRenderer::Impl {
       set_volume_uniforms(p.program);
       glViewport(0, 0, t.w, t.h);
       glBindVertexArray(vao_empty);
+      if (p.uniforms) p.uniforms(p.program);
+      if (p.blend_attachment >= 0) {
+        glEnablei(GL_BLEND, GLuint(p.blend_attachment));
+        glBlendEquationi(GLuint(p.blend_attachment), GL_FUNC_ADD);
+        glBlendFunci(GLuint(p.blend_attachment), GL_ONE, GL_ONE);
+      }
       for (int z = 0; z < t.d; ++z) {
         for (size_t i = 0; i < t.tex[0].size(); ++i)
           glNamedFramebufferTextureLayer(t.fbo[0], GLenum(GL_COLOR_ATTACHMENT0 + i), t.tex[0][i], 0, z);
@@ -519,6 +565,7 @@ struct GlRenderer::Impl {
         glProgramUniform1i(p.program, 0, z);
         glDrawArrays(GL_TRIANGLES, 0, 3);
       }
+      if (p.blend_attachment >= 0) glDisablei(GL_BLEND, GLuint(p.blend_attachment));
       return;
     }
     for (size_t i = 0; i < p.inputs.size(); ++i) {
@@ -573,13 +620,60 @@ struct GlRenderer::Impl {
     const bool on = needed && (!p.enabled || p.enabled(f));
     Target& t = target(p.target);
     if (on && t.volume_size && ensure_volume_target(t, f)) p.lut_valid = false;
+    if (p.orders_loop) glBindTextureUnit(CV_UNIT_ORDERS_SUM, 0);
+    bool ran = false;
     if (on && !p.lut_valid) {
       run(p, f);
       p.lut_valid = true;
       p.runs += 1;
+      ran = true;
     }
     for (size_t i = 0; i < p.lut_units.size() && i < t.tex[0].size(); ++i)
       glBindTextureUnit(GLuint(p.lut_units[i]), p.lut_valid ? t.tex[0][i] : 0);
+    if (p.orders_loop && on) {
+      if (ran) run_orders(f);
+      glBindTextureUnit(CV_UNIT_ORDERS_SUM, target("orders_delta").tex[0][1]);
+    }
+  }
+  // The orders 2..N of atmosphere.density_orders after the orders table's single parts: per order,
+  // the density (reading the last order's light and the ground irradiance of the order before
+  // it), the ground irradiance of the last order, then the order's light along each texel's ray,
+  // added into the sum. A pass never samples the texture it writes.
+  Pass& pass_named(const std::string& name) {
+    for (Pass& p : passes)
+      if (p.name == name) return p;
+    throw GlError("no render pass '" + name + "'");
+  }
+  void run_orders(const FrameSetup& f) {
+    Target& density = target("orders_density");
+    Target& delta = target("orders_delta");
+    Target& irr = target("orders_irradiance");
+    ensure_volume_target(density, f);
+    ensure_volume_target(delta, f);
+    const float zero[4] = {0.f, 0.f, 0.f, 0.f};
+    glClearTexImage(delta.tex[0][0], 0, GL_RGBA, GL_FLOAT, zero);
+    glClearTexImage(delta.tex[0][1], 0, GL_RGBA, GL_FLOAT, zero);
+    glClearTexImage(irr.tex[0][0], 0, GL_RGBA, GL_FLOAT, zero);
+    Pass& pd = pass_named("atmosphere_orders_density");
+    Pass& pi = pass_named("atmosphere_orders_irradiance");
+    Pass& pm = pass_named("atmosphere_orders_multiple");
+    for (int order = 2; order <= f.settings.atmosphere.scattering_orders; ++order) {
+      glBindTextureUnit(CV_UNIT_ORDERS_DENSITY, 0);
+      glBindTextureUnit(CV_UNIT_ORDERS_DENSITY_M, 0);
+      glBindTextureUnit(CV_UNIT_ORDERS_DELTA, delta.tex[0][0]);
+      glBindTextureUnit(CV_UNIT_ORDERS_IRRADIANCE, irr.tex[0][0]);
+      glProgramUniform1i(pd.program, 1, order);
+      run(pd, f);
+      glBindTextureUnit(CV_UNIT_ORDERS_IRRADIANCE, 0);
+      glProgramUniform1i(pi.program, 1, order - 1);
+      run(pi, f);
+      glBindTextureUnit(CV_UNIT_ORDERS_DELTA, 0);
+      glBindTextureUnit(CV_UNIT_ORDERS_DENSITY, density.tex[0][0]);
+      glBindTextureUnit(CV_UNIT_ORDERS_DENSITY_M, density.tex[0][1]);
+      run(pm, f);
+    }
+    glBindTextureUnit(CV_UNIT_ORDERS_DENSITY, 0);
+    glBindTextureUnit(CV_UNIT_ORDERS_DENSITY_M, 0);
   }
   void swap_history() {
     for (Target& t : targets)
@@ -862,7 +956,9 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
 
   glQueryCounter(m.queries[0], GL_TIMESTAMP);
   for (size_t i = 0; i < m.passes.size(); ++i) {
-    if (m.passes[i].precompute) {
+    if (m.passes[i].driven) {
+      // run by the orders loop inside its parent pass
+    } else if (m.passes[i].precompute) {
       m.run_lut(m.passes[i], f, atmo_dirty, f.settings.sky == SkyMode::Precomputed);
     } else if (m.passes[i].light_volume) {
       if (light_dirty) {

@@ -39,6 +39,8 @@ struct AtmosphereSettings {
   double ground_albedo = 0.1;
   double sun_angular_radius_deg = 0.2678;
   int scattering_orders = 4;  ///< 1: single scattering; N: orders 2..N from the multiple-scattering LUT
+  /// render.sky_lut: the orders 2..N from Bruneton's scattering-density passes, not Psi_ms.
+  bool density_orders = false;
   bool operator==(const AtmosphereSettings& o) const;
   bool operator!=(const AtmosphereSettings& o) const { return !(*this == o); }
 };
@@ -95,6 +97,25 @@ struct ScatteringTexels {
   std::unordered_map<int64_t, std::array<glm::dvec3, 3>> texels;
 };
 
+/// The orders table's texture size (8 nu slices of CV_ORDERS_MU_S, CV_ORDERS_MU, CV_ORDERS_R) and a
+/// texel's index in it, x fastest.
+constexpr int kOrdersNX = CV_SCATTERING_NU * CV_ORDERS_MU_S, kOrdersNY = CV_ORDERS_MU, kOrdersNZ = CV_ORDERS_R;
+inline size_t orders_index(const glm::ivec3& t) {
+  return (size_t(t.z) * kOrdersNY + size_t(t.y)) * kOrdersNX + size_t(t.x);
+}
+
+/// The orders table of atmosphere.density_orders (atmosphere.glsl, orders_dims), computed whole the
+/// first time a lookup needs it: the orders 2..N summed, (8 CV_ORDERS_MU_S) x CV_ORDERS_MU x
+/// CV_ORDERS_R texels, x fastest, and the time it took.
+struct OrdersTable {
+  std::once_flag once;
+  std::vector<glm::dvec3> sum;
+  /// Each order's light on its own, orders 2..min(N, kKeptOrders) (for the tests' checks).
+  static constexpr int kKeptOrders = 8;
+  std::vector<std::vector<glm::dvec3>> order_light;
+  double seconds = 0;
+};
+
 /// The atmosphere LUTs as the CPU reference computes them, and the shaders' lookups over them:
 /// the transmittance (CV_TRANSMITTANCE_W x CV_TRANSMITTANCE_H), the multiple scattering
 /// (CV_MS_LUT_SIZE^2) and the sky's irradiance on the ground (CV_IRRADIANCE_W), RGB, row-major
@@ -109,6 +130,10 @@ struct AtmosphereLuts {
   std::array<double, 3> seconds{{0, 0, 0}};
   /// The 4D scattering LUT (render.sky_lut) at the shipped size, filled as the CPU renderer reads it.
   std::shared_ptr<ScatteringTexels> scattering = std::make_shared<ScatteringTexels>();
+  /// atmosphere.density_orders: the orders table, computed by orders_sum() on first use.
+  std::shared_ptr<OrdersTable> orders = std::make_shared<OrdersTable>();
+  /// The orders table's sum (computes it the first time; thread-safe).
+  const std::vector<glm::dvec3>& orders_sum() const;
   /// ground_sky_irradiance(mu_s) of atmosphere.glsl: the sky's irradiance on the ground for unit
   /// solar irradiance.
   glm::dvec3 ground_irradiance(double mu_s) const;
