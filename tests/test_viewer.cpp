@@ -777,10 +777,15 @@ TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
   EXPECT_EQ(r.pass_names().front(), "atmosphere_transmittance");  // the LUT precomputes come first
   EXPECT_EQ(r.pass_names().at(1), "atmosphere_multiple_scattering");
   EXPECT_EQ(r.pass_names().at(2), "atmosphere_irradiance");
-  EXPECT_EQ(r.pass_names().at(3), "atmosphere_scattering");
-  EXPECT_EQ(r.pass_names().at(4), "ground");
-  EXPECT_EQ(r.pass_names().at(5), "light_volume");
-  EXPECT_EQ(r.pass_names().at(6), "ms_volume");  // reads the light volume
+  // atmosphere.density_orders: the orders table, its loop's three passes, then the 4D LUT reading it
+  EXPECT_EQ(r.pass_names().at(3), "atmosphere_orders");
+  EXPECT_EQ(r.pass_names().at(4), "atmosphere_orders_density");
+  EXPECT_EQ(r.pass_names().at(5), "atmosphere_orders_irradiance");
+  EXPECT_EQ(r.pass_names().at(6), "atmosphere_orders_multiple");
+  EXPECT_EQ(r.pass_names().at(7), "atmosphere_scattering");
+  EXPECT_EQ(r.pass_names().at(8), "ground");
+  EXPECT_EQ(r.pass_names().at(9), "light_volume");
+  EXPECT_EQ(r.pass_names().at(10), "ms_volume");  // reads the light volume
   EXPECT_EQ(r.pass_names().back(), "tonemap");
 }
 
