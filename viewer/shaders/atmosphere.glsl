@@ -260,6 +260,23 @@ vec3 irradiance_lookup(bool orders, Number mu_s) {
 }
 vec3 ground_sky_irradiance(Number mu_s) { return irradiance_lookup(false, mu_s); }
 
+// The quadrature of both ground irradiance LUTs (compute_irradiance_texel, and the density
+// orders' compute_orders_irradiance_texel): texel `texel`'s sun cosine; the direction (zenith +y)
+// of band i of cos(theta) and sector k of phi in [0, pi] (counted twice: the light is symmetric
+// about the sun's vertical plane, the sun in the x-y plane); each direction's weight d(mu) d(phi)
+// times its cosine v.y.
+Number irradiance_texel_mu_s(int texel) {
+  Number x = texcoord_to_unit((Number(texel) + 0.5) / Number(CV_IRRADIANCE_W), CV_IRRADIANCE_W);
+  return clamp(2.0 * x - 1.0, -1.0, 1.0);
+}
+vec3 irradiance_direction(int i, int k) {
+  Number mu = (Number(i) + 0.5) / Number(CV_IRRADIANCE_BANDS);
+  Number sin_t = sqrt(max(1.0 - mu * mu, 0.0));
+  Number phi = CV_PI * (Number(k) + 0.5) / Number(CV_IRRADIANCE_SECTORS);
+  return vec3(sin_t * cos(phi), mu, sin_t * sin(phi));
+}
+Number irradiance_weight() { return 2.0 * CV_PI / Number(CV_IRRADIANCE_BANDS * CV_IRRADIANCE_SECTORS); }
+
 // The single-scattering integrals along (r, mu) over [0, d_end] with the sun at mu_s and nu = v.s,
 // for unit solar irradiance, before the phase functions and the scattering coefficients: the sums
 // of T(view) T(sun) rho_R and of T(view) T(sun) rho_M, and (with `multiple`) of T(view) sigma_s
@@ -578,20 +595,15 @@ void compute_density_texel(ivec3 texel, int order, OUT(vec3) density_r, OUT(vec3
 // E_order(mu_s) on the ground: the light of order `order` over the upper hemisphere times cos
 // theta, on the ground irradiance LUT's texels and quadrature (compute_irradiance_texel).
 vec3 compute_orders_irradiance_texel(int texel, int order) {
-  Number x = texcoord_to_unit((Number(texel) + 0.5) / Number(CV_IRRADIANCE_W), CV_IRRADIANCE_W);
-  Number mu_s = clamp(2.0 * x - 1.0, -1.0, 1.0);
+  Number mu_s = irradiance_texel_mu_s(texel);
   vec3 s = vec3(sqrt(max(1.0 - mu_s * mu_s, 0.0)), mu_s, 0.0);
   vec3 e = vec3(0.0);
-  for (int i = 0; i < CV_IRRADIANCE_BANDS; ++i) {
-    Number mu = (Number(i) + 0.5) / Number(CV_IRRADIANCE_BANDS);
-    Number sin_t = sqrt(max(1.0 - mu * mu, 0.0));
+  for (int i = 0; i < CV_IRRADIANCE_BANDS; ++i)
     for (int k = 0; k < CV_IRRADIANCE_SECTORS; ++k) {
-      Number phi = CV_PI * (Number(k) + 0.5) / Number(CV_IRRADIANCE_SECTORS);
-      vec3 v = vec3(sin_t * cos(phi), mu, sin_t * sin(phi));
-      e += orders_incident(order, u_atmo.bottom_radius_m, mu, mu_s, clamp(dot(v, s), -1.0, 1.0)) * mu;
+      vec3 v = irradiance_direction(i, k);
+      e += orders_incident(order, u_atmo.bottom_radius_m, v.y, mu_s, clamp(dot(v, s), -1.0, 1.0)) * v.y;
     }
-  }
-  return e * (2.0 * CV_PI / Number(CV_IRRADIANCE_BANDS * CV_IRRADIANCE_SECTORS));
+  return e * irradiance_weight();
 }
 
 // L_order at a texel of the orders table: the density (orders parts 3 and 5) integrated along the
@@ -760,23 +772,18 @@ vec3 atmosphere_scattering_lut(Number alt, vec3 v, vec3 s, vec3 solar, Number t_
 // E(mu_s) = int_hemisphere L_sky(w) cos(theta) dw, from atmosphere_scattering (whose rays from the
 // ground upwards never read this LUT). The direct sunlight stays analytic.
 vec3 compute_irradiance_texel(int texel) {
-  Number x = texcoord_to_unit((Number(texel) + 0.5) / Number(CV_IRRADIANCE_W), CV_IRRADIANCE_W);
-  Number mu_s = clamp(2.0 * x - 1.0, -1.0, 1.0);
+  Number mu_s = irradiance_texel_mu_s(texel);
   vec3 s = vec3(sqrt(max(1.0 - mu_s * mu_s, 0.0)), mu_s, 0.0);
   vec3 e = vec3(0.0);
-  for (int i = 0; i < CV_IRRADIANCE_BANDS; ++i) {
-    Number mu = (Number(i) + 0.5) / Number(CV_IRRADIANCE_BANDS);
-    Number sin_t = sqrt(max(1.0 - mu * mu, 0.0));
-    for (int j = 0; j < CV_IRRADIANCE_SECTORS; ++j) {
-      Number phi = CV_PI * (Number(j) + 0.5) / Number(CV_IRRADIANCE_SECTORS);
-      vec3 v = vec3(sin_t * cos(phi), mu, sin_t * sin(phi));
+  for (int i = 0; i < CV_IRRADIANCE_BANDS; ++i)
+    for (int k = 0; k < CV_IRRADIANCE_SECTORS; ++k) {
+      vec3 v = irradiance_direction(i, k);
       vec3 t = vec3(1.0);
       vec3 g = vec3(0.0);
       Number t_end = 0.0;
-      e += atmosphere_scattering(0.0, v, s, vec3(1.0), CV_NO_HIT, t, t_end, g) * mu;
+      e += atmosphere_scattering(0.0, v, s, vec3(1.0), CV_NO_HIT, t, t_end, g) * v.y;
     }
-  }
-  return e * (2.0 * CV_PI / Number(CV_IRRADIANCE_BANDS * CV_IRRADIANCE_SECTORS));  // d(mu) d(phi), phi over 2 pi
+  return e * irradiance_weight();  // d(mu) d(phi), phi over 2 pi
 }
 
 // The sun's disc along unit `v` (radiance relative to `disc_radiance`): limb darkening

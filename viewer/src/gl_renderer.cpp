@@ -552,7 +552,6 @@ struct GlRenderer::Impl {
       set_volume_uniforms(p.program);
       glViewport(0, 0, t.w, t.h);
       glBindVertexArray(vao_empty);
-      if (p.uniforms) p.uniforms(p.program);
       if (p.blend_attachment >= 0) {
         glEnablei(GL_BLEND, GLuint(p.blend_attachment));
         glBlendEquationi(GLuint(p.blend_attachment), GL_FUNC_ADD);
@@ -639,11 +638,7 @@ struct GlRenderer::Impl {
   // the density (reading the last order's light and the ground irradiance of the order before
   // it), the ground irradiance of the last order, then the order's light along each texel's ray,
   // added into the sum. A pass never samples the texture it writes.
-  Pass& pass_named(const std::string& name) {
-    for (Pass& p : passes)
-      if (p.name == name) return p;
-    throw GlError("no render pass '" + name + "'");
-  }
+  Pass& pass_named(const std::string& name) { return const_cast<Pass&>(pass(name)); }
   void run_orders(const FrameSetup& f) {
     Target& density = target("orders_density");
     Target& delta = target("orders_delta");
