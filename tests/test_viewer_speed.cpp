@@ -293,6 +293,65 @@ TEST(ViewerSpeed, LightVolumeRebuildsOnSunChangeNotOnCameraMove) {
 
 // A track key may carry its own settings (the view from below marches at most 2133 m); a bad one
 // is refused before OpenGL, naming the key's JSON pointer.
+// render.compiled_modes: the programs compiled for a frame's modes (modes.glsl's macros as
+// constants) render what the generic program, reading the modes from the uniform block, renders,
+// in each mode the switch bakes in; and a set of modes seen before is not compiled again.
+TEST(ViewerSpeed, CompiledModesKeepTheImage) {
+  gl_context();
+  PreparedVolume vol = prepare_volume(synthetic_volume("noise"), 8);
+  struct Case {
+    const char* name;
+    std::vector<const char*> sets;
+    double time;
+  };
+  // Each switch of modes.glsl takes a value other than its default in at least one case.
+  const std::vector<Case> cases = {
+      {"defaults", {}, 0},
+      {"layer mode, adaptive, exact filter, iterations output",
+       {"render.mode=layer", "render.adaptive=true", "render.steps=48", "render.exact_filter=true", "render.output=iterations"}, 0},
+      {"moving clouds, curl distortion, thesis skipping, light skipping",
+       {"motion.wind_speed=20", "motion.curl_amplitude=150", "render.skipping=thesis", "render.occupancy_light=true"}, 30},
+      {"no skipping, density step, diffusion volume, Mie phase",
+       {"render.skipping=none", "render.density_step=2", "render.ms_volume=true", "render.phase=mie"}, 0},
+      {"one octave, two lobes, analytic sky, transmittance output",
+       {"render.ms_octaves=1", "render.phase=two-lobe-hg", "render.sky=analytic", "render.output=transmittance"}, 0},
+      {"no light march, Draine, temporal", {"render.light_march=false", "render.phase=draine-hg", "render.temporal=true"}, 0},
+  };
+
+  GlRenderer r{ShaderSource()};
+  r.set_volume(vol);
+  auto frame = [&](const Case& c, bool compiled) {
+    RenderSettings s;
+    for (const char* a : c.sets) apply_setting(s, a);
+    s.time = c.time;
+    s.compiled_modes = compiled;
+    Camera cam = default_camera(vol, s, 60, 96.0 / 54);
+    return make_frame(vol, s, cam, Sun{200, 30}, 96, 54);
+  };
+  int after_first = 0;
+  FrameImages first;
+  for (const Case& c : cases) {
+    r.render(frame(c, true));
+    FrameImages a = r.read_back();
+    if (after_first == 0) first = a;
+    r.render(frame(c, false));
+    FrameImages b = r.read_back();
+    if (after_first == 0) after_first = r.program_count();
+    double scale = std::max(image_stats(b.linear).max, 1e-6);
+    double diff = max_abs_diff(a.linear, b.linear) / scale;
+    std::cout << c.name << ": compiled vs generic max |diff| / max " << diff << "\n";
+    EXPECT_GT(image_stats(b.display).stddev, 0.005) << c.name << ": a picture to compare";
+    EXPECT_LE(diff, 1e-6) << c.name;
+  }
+  // Every case above has its own set of modes: each compiled its own programs...
+  const int all = r.program_count();
+  EXPECT_GT(all, after_first + 3);
+  // ...and going back to the first links nothing new and renders the same picture, bit for bit.
+  r.render(frame(cases[0], true));
+  EXPECT_EQ(r.program_count(), all);
+  EXPECT_EQ(max_abs_diff(first.linear, r.read_back().linear), 0.0);
+}
+
 TEST(ViewerSpeed, TrackKeysCarryTheirOwnSettings) {
   std::filesystem::path dir = std::filesystem::temp_directory_path() / "cv_speed_track";
   std::filesystem::create_directories(dir);

@@ -3,6 +3,7 @@
 #include "prelude_glsl.glsl"
 #include "constants.glsl"
 #include "cloud_params.glsl"
+#include "modes.glsl"
 #include "frame_block.glsl"
 #include "cloud_bindings.glsl"
 #include "atmosphere_params.glsl"

@@ -19,7 +19,7 @@ vec4 cloud_layer(vec3 rd, ivec2 pixel, Number t_scene, OUT(Number) t_mean, OUT(i
 // (>= CV_NO_HIT_TEST: none) with radiance `scene_color` seen through the air. Linear HDR; the
 // transmittance output writes T instead.
 vec3 compose_over(vec4 m, vec3 rd, Number t_scene, vec3 scene_color) {
-  if (int(u_cloud.output_mode) == CV_OUTPUT_TRANSMITTANCE) return vec3(m.w, m.w, m.w);
+  if (int(CV_MODE_OUTPUT) == CV_OUTPUT_TRANSMITTANCE) return vec3(m.w, m.w, m.w);
   vec3 background = t_scene >= CV_NO_HIT_TEST ? sky_radiance(rd) : surface_through_air(scene_color, t_scene, rd);
   return vec3(m) + m.w * background;
 }
@@ -44,6 +44,6 @@ vec3 compose_pixel(vec3 rd, ivec2 pixel, Number t_scene, vec3 scene_color) {
   int iterations = 0;
   Number t_mean = 0.0;
   vec4 m = cloud_layer(rd, pixel, t_scene, t_mean, iterations);
-  if (int(u_cloud.output_mode) == CV_OUTPUT_ITERATIONS) return vec3(Number(iterations), m.w, 0.0);
+  if (int(CV_MODE_OUTPUT) == CV_OUTPUT_ITERATIONS) return vec3(Number(iterations), m.w, 0.0);
   return compose_over(m, rd, t_scene, scene_color);
 }

@@ -14,7 +14,7 @@ int empty_cells(vec3 p) {
   vec3 c = moving_uvw(p, motion_at(p)) * u_cloud.volume_dims / u_cloud.occ_cell_voxels;  // as occupied()
   ivec3 cell = ivec3(floor(c));
   ivec3 n = ivec3(u_cloud.occ_dims);
-  bool tiles = u_cloud.tiles_xz > 0.5;
+  bool tiles = CV_MODE_TILES > 0.5;
   cell.x = tiles ? wrap_index(cell.x, n.x) : clamp_index(cell.x, n.x);
   cell.y = clamp_index(cell.y, n.y);
   cell.z = tiles ? wrap_index(cell.z, n.z) : clamp_index(cell.z, n.z);
@@ -54,8 +54,8 @@ Number light_optical_depth(vec3 p) {
   int samples = int(u_cloud.light_samples);
   Number step_len = u_cloud.light_step_m;
   Number growth = u_cloud.light_growth;
-  bool skip_empty = int(u_cloud.light_mode) == CV_LIGHT_MARCH_SKIP_EMPTY;
-  bool by_distance = skip_empty && u_cloud.df_light > 0.5;
+  bool skip_empty = int(CV_MODE_LIGHT) == CV_LIGHT_MARCH_SKIP_EMPTY;
+  bool by_distance = skip_empty && CV_MODE_DF_LIGHT > 0.5;
   Number s = 0.0;
   Number tau = 0.0;
   Number empty_until = -1.0;  // distance field: samples before this distance along the ray are empty
@@ -104,7 +104,7 @@ vec3 light_volume_position(ivec3 texel) {
 // light volume (ms = false: its value in x) or the multiple-scattering volume (ms = true).
 vec4 grid_trilinear(bool ms, vec3 uvw) {
   ivec3 n = ivec3(ms ? u_cloud.ms_volume_dims : u_cloud.light_volume_dims);
-  bool tiles = !ms && u_cloud.tiles_xz > 0.5;  // the diffusion volume never wraps (see ms_volume_source)
+  bool tiles = !ms && CV_MODE_TILES > 0.5;  // the diffusion volume never wraps (see ms_volume_source)
   vec3 x = uvw * vec3(n) - 0.5;
   vec3 fl = floor(x);
   vec3 f = x - fl;
@@ -119,14 +119,14 @@ vec4 grid_trilinear(bool ms, vec3 uvw) {
 
 Number light_volume_tau(vec3 p) {
   vec3 uvw = volume_uvw(p);
-  return u_cloud.exact_filter > 0.5 ? grid_trilinear(false, uvw).x : light_volume_filtered(uvw);
+  return CV_MODE_EXACT_FILTER > 0.5 ? grid_trilinear(false, uvw).x : light_volume_filtered(uvw);
 }
 
 // The optical depth toward the sun from p as the lighting uses it: 0 without the light march, the
 // light volume's lookup or the march itself.
 Number sun_optical_depth(vec3 p) {
-  if (int(u_cloud.light_mode) == CV_LIGHT_OFF) return 0.0;
-  return u_cloud.light_volume_on > 0.5 ? light_volume_tau(p) : light_optical_depth(p);
+  if (int(CV_MODE_LIGHT) == CV_LIGHT_OFF) return 0.0;
+  return CV_MODE_LIGHT_VOLUME > 0.5 ? light_volume_tau(p) : light_optical_depth(p);
 }
 
 // Multiple scattering by flux-limited diffusion (render.ms_volume; Koerner et al., "Flux-Limited
@@ -160,7 +160,7 @@ vec2 ms_volume_source(ivec3 cell) {
 // toward the viewer (at a face to vacuum F is phi / 2 outward: +45% at g 0.3).
 Number ms_volume_radiance(vec3 p, vec3 to_eye) {
   vec3 uvw = volume_uvw(p);
-  vec4 t = u_cloud.exact_filter > 0.5 ? grid_trilinear(true, uvw) : ms_volume_filtered(uvw);
+  vec4 t = CV_MODE_EXACT_FILTER > 0.5 ? grid_trilinear(true, uvw) : ms_volume_filtered(uvw);
   return max(t.x + dot(vec3(t.y, t.z, t.w), to_eye), 0.0) / (4.0 * CV_PI);
 }
 
@@ -194,8 +194,8 @@ vec3 inscattered_radiance(vec3 p, vec3 rd, vec3 phase0, vec3 phases) {
   Number tau = sun_optical_depth(p);
   Number powder = mix(1.0, powder_term(tau, u_cloud.powder_c), u_cloud.powder_strength);
   Number higher = 0.0;
-  int octaves = int(u_cloud.ms_octaves);
-  if (u_cloud.ms_volume_on > 0.5) {
+  int octaves = int(CV_MODE_MS_OCTAVES);
+  if (CV_MODE_MS_VOLUME > 0.5) {
     higher = ms_volume_radiance(p, -rd);  // orders >= 2 from the diffusion solve, instead of the octaves
   } else if (octaves > 1) {
     Number a = u_cloud.ms_attenuation, b = u_cloud.ms_extinction;
@@ -219,7 +219,7 @@ Number sun_shadow_transmittance(vec3 p) {
   int samples = int(u_cloud.shadow_samples);
   Number seg = (tb.y - tb.x) / Number(samples);
   Number tau = 0.0;
-  bool by_distance = u_cloud.df_light > 0.5;
+  bool by_distance = CV_MODE_DF_LIGHT > 0.5;
   Number empty_until = -1.0;  // as in light_optical_depth: samples before this are provably empty
   for (int i = 0; i < samples; ++i) {
     Number at = tb.x + (Number(i) + 0.5) * seg;

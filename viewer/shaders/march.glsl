@@ -65,10 +65,10 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, O
   Number dt = u_cloud.step_m;
   int k = max(int(u_cloud.large_step_count), 1);
   Number large = Number(k) * dt;
-  bool adaptive = u_cloud.adaptive > 0.5;
-  bool skipping = u_cloud.occupancy_skip > 0.5;
-  bool distance = skipping && u_cloud.skip_distance > 0.5;
-  int sparse = max(int(u_cloud.density_step), 1);  // density-aware step: lattice steps per sparse step
+  bool adaptive = CV_MODE_ADAPTIVE > 0.5;
+  bool skipping = CV_MODE_SKIP > 0.5;
+  bool distance = skipping && CV_MODE_SKIP_DISTANCE > 0.5;
+  int sparse = max(int(CV_MODE_DENSITY_STEP), 1);  // density-aware step: lattice steps per sparse step
   bool sparse_next = false;                        // the last sample was below density_step_below
   Number sigma_scale = u_cloud.sigma_t_per_m;
   Number albedo = u_cloud.albedo;

@@ -11,7 +11,7 @@
 // wrapped for tileable volumes, clamped otherwise (GL_REPEAT / GL_CLAMP_TO_EDGE semantics).
 vec4 volume_trilinear(vec3 uvw) {
   ivec3 n = ivec3(u_cloud.volume_dims);
-  bool tiles = u_cloud.tiles_xz > 0.5;
+  bool tiles = CV_MODE_TILES > 0.5;
   vec3 x = uvw * vec3(n) - 0.5;
   vec3 fl = floor(x);
   vec3 f = x - fl;
@@ -21,7 +21,7 @@ vec4 volume_trilinear(vec3 uvw) {
   return acc;
 }
 
-bool layer_mode() { return u_cloud.layer_on > 0.5; }
+bool layer_mode() { return CV_MODE_LAYER > 0.5; }
 
 // Altitude above the ground sphere of camera-relative p. Parabolic Earth: the exact
 // sqrt(r^2 + (R + h)^2) - R loses everything to float rounding at R = 6360 km, while
@@ -114,11 +114,11 @@ Number height_fraction(vec3 p) {
   return (p.y - u_cloud.height_min_m) / u_cloud.height_size_m;
 }
 vec3 motion_at(vec3 p) {
-  if (u_cloud.motion_on < 0.5) return vec3(0.0);
+  if (CV_MODE_MOTION < 0.5) return vec3(0.0);
   return motion_table_value(height_fraction(p), 0);
 }
 vec3 motion_at_previous(vec3 p) {
-  if (u_cloud.motion_on < 0.5) return vec3(0.0);
+  if (CV_MODE_MOTION < 0.5) return vec3(0.0);
   return motion_table_value(height_fraction(p), 1);
 }
 
@@ -136,9 +136,9 @@ Number cloud_density(vec3 p) {
   Number seen_h = height_fraction(p);  // the height where the sample is seen (an altitude rule below)
   vec3 uvw = moving_uvw(p, motion);
   if (uvw.y < 0.0 || uvw.y > 1.0) return 0.0;
-  bool tiles = u_cloud.tiles_xz > 0.5;
+  bool tiles = CV_MODE_TILES > 0.5;
   if (!tiles && (uvw.x < 0.0 || uvw.x > 1.0 || uvw.z < 0.0 || uvw.z > 1.0)) return 0.0;
-  vec4 v = u_cloud.exact_filter > 0.5 ? volume_trilinear(uvw) : volume_filtered(uvw);
+  vec4 v = CV_MODE_EXACT_FILTER > 0.5 ? volume_trilinear(uvw) : volume_filtered(uvw);
   Number base = v.x;
   if (layer_mode()) {
     // Coverage remap (HZD): raise the threshold where coverage is low, then scale by coverage.
@@ -150,13 +150,13 @@ Number cloud_density(vec3 p) {
     base = clamp((x - (1.0 - c)) / max(c, 1e-4), 0.0, 1.0) * c;
   }
   Number erosion = u_cloud.erosion;
-  if (u_cloud.has_detail > 0.5 && erosion > 0.0 && base > 0.0) {
+  if (CV_MODE_DETAIL > 0.5 && erosion > 0.0 && base > 0.0) {
     vec3 dv = vec3(v.y, v.z, v.w);
-    if (u_cloud.curl_amplitude_m > 0.0) {
+    if (CV_MODE_CURL > 0.5) {
       // The detail is read where the curl field moves it (motion.curl_*): the base shape stays.
       vec3 off = curl_detail_offset_m(uvw, seen_h, u_cloud.curl_repeats, u_cloud.curl_shift, u_cloud.curl_amplitude_m);
       vec3 q = uvw + off / volume_uvw_extent_m();
-      vec4 w = u_cloud.exact_filter > 0.5 ? volume_trilinear(q) : volume_filtered(q);
+      vec4 w = CV_MODE_EXACT_FILTER > 0.5 ? volume_trilinear(q) : volume_filtered(q);
       dv = vec3(w.y, w.z, w.w);
     }
     Number detail = dot(dv, vec3(0.625, 0.25, 0.125));
@@ -178,7 +178,7 @@ bool occupied(vec3 p) {
   vec3 c = moving_uvw(p, motion_at(p)) * u_cloud.volume_dims / u_cloud.occ_cell_voxels;
   ivec3 cell = ivec3(floor(c));
   ivec3 n = ivec3(u_cloud.occ_dims);
-  bool tiles = u_cloud.tiles_xz > 0.5;
+  bool tiles = CV_MODE_TILES > 0.5;
   cell.x = tiles ? wrap_index(cell.x, n.x) : clamp_index(cell.x, n.x);
   cell.y = clamp_index(cell.y, n.y);
   cell.z = tiles ? wrap_index(cell.z, n.z) : clamp_index(cell.z, n.z);

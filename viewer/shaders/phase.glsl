@@ -33,7 +33,7 @@ vec3 phase_mie_rgb(Number cos_theta) {
 // The phase function of one channel-less quantity (the path tracer's sampling, the light octaves):
 // the Mie table's green channel, or the analytic lobe.
 Number phase_function(Number cos_theta) {
-  int mode = int(u_cloud.phase_mode);
+  int mode = int(CV_MODE_PHASE);
   if (mode == CV_PHASE_HG) return phase_hg(cos_theta, u_cloud.hg_g);
   if (mode == CV_PHASE_MIE) return phase_mie_rgb(cos_theta).y;
   if (mode == CV_PHASE_TWO_LOBE_HG) return lobe_two_hg(u_cloud.hg_g, u_cloud.hg_g2, u_cloud.lobe_weight, cos_theta);
@@ -44,6 +44,6 @@ Number phase_function(Number cos_theta) {
 
 // The phase function per colour channel: the Mie table's three, or the analytic lobe in all three.
 vec3 phase_function_rgb(Number cos_theta) {
-  if (int(u_cloud.phase_mode) == CV_PHASE_MIE) return phase_mie_rgb(cos_theta);
+  if (int(CV_MODE_PHASE) == CV_PHASE_MIE) return phase_mie_rgb(cos_theta);
   return vec3(phase_function(cos_theta));
 }

@@ -1,5 +1,5 @@
 // Background sky and aerial perspective: the analytic model (render.sky=analytic, CV_SKY_ANALYTIC)
-// or the precomputed atmosphere (sky_atmosphere.glsl, CV_SKY_PRECOMPUTED), chosen by u_cloud.sky_mode.
+// or the precomputed atmosphere (sky_atmosphere.glsl, CV_SKY_PRECOMPUTED), chosen by CV_MODE_SKY.
 // Needs constants.glsl, medium.glsl (layer_mode), sky_atmosphere.glsl and `u_cloud`.
 
 // Horizon-to-zenith gradient and a soft sun disc.

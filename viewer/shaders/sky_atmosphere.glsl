@@ -3,7 +3,7 @@
 // light. The camera sits at altitude u_cloud.sky_altitude_m with the planet's centre straight below
 // (world +y is the local zenith). Needs atmosphere.glsl and `u_cloud`.
 
-bool sky_precomputed() { return int(u_cloud.sky_mode) == CV_SKY_PRECOMPUTED; }
+bool sky_precomputed() { return int(CV_MODE_SKY) == CV_SKY_PRECOMPUTED; }
 
 // Sun colour reaching camera-relative point p (top-of-atmosphere colour u_cloud.sun_color times
 // the transmittance from p to the sun; 0 in the Earth's shadow). The analytic sky: the constant.
@@ -18,7 +18,7 @@ vec3 sun_color_at(vec3 p) {
 // The air's light along camera ray rd up to t_max (atmosphere_scattering's arguments and outputs),
 // marched per pixel or read from the 4D scattering LUT (render.sky_lut).
 vec3 sky_scattering(vec3 rd, vec3 solar, Number t_max, OUT(vec3) transmittance, OUT(Number) t_end, OUT(vec3) ground) {
-  return atmosphere_sky(u_cloud.sky_altitude_m, rd, u_cloud.sun_dir, solar, t_max, u_cloud.sky_lut > 0.5, transmittance,
+  return atmosphere_sky(u_cloud.sky_altitude_m, rd, u_cloud.sun_dir, solar, t_max, CV_MODE_SKY_LUT > 0.5, transmittance,
                         t_end, ground);
 }
 

@@ -63,7 +63,7 @@ void main() {
   vec4 m = texelFetch(s_cloud, px, 0);
   float t = texelFetch(s_scene_distance, px, 0).r;
   vec3 scene_color = texelFetch(s_scene_color, px, 0).rgb;
-  if (!sky_precomputed() || int(u_cloud.output_mode) == CV_OUTPUT_TRANSMITTANCE) {
+  if (!sky_precomputed() || int(CV_MODE_OUTPUT) == CV_OUTPUT_TRANSMITTANCE) {
     o_color = vec4(compose_over(m, rd, t, scene_color), 1.0);
     return;
   }

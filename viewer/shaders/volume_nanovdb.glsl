@@ -21,7 +21,7 @@ vec4 nanovdb_texel(ivec3 texel) {
 // erodes density > 0, is never read (three quarters of the lookups in empty space saved).
 vec4 nanovdb_filtered(vec3 uvw) {
   ivec3 n = ivec3(u_cloud.volume_dims);
-  bool tiles = u_cloud.tiles_xz > 0.5;
+  bool tiles = CV_MODE_TILES > 0.5;
   vec3 x = uvw * vec3(n) - 0.5;
   vec3 fl = floor(x);
   vec3 f = x - fl;

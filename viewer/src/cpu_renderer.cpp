@@ -170,6 +170,7 @@ struct CpuShader {
   vec3 curl_texel(ivec3 i) const { return cloudgen::curl_field_texel(i.x, i.y, i.z); }
 
 // The list and order of shaders/cloud_headers.glsl (after its GLSL-only bindings), plus post.glsl.
+#include "../shaders/modes.glsl"
 #include "../shaders/common.glsl"
 #include "../shaders/volume_nanovdb.glsl"
 #include "cloudgen/phase_lobes.glsl"

@@ -3,8 +3,10 @@
 // GPU timer queries around every pass.
 #include <algorithm>
 #include <array>
+#include <cstdio>
 #include <cstring>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -62,6 +64,49 @@ GLuint link_program(const ShaderSource& src, const std::string& vs, const std::s
     throw ShaderError("shader link error (" + vs + " + " + fs + "):\n" + log, fs, 0);
   }
   return p;
+}
+
+// modes.glsl's switches baked into the GL programs (render.compiled_modes): one row per CV_MODE_*
+// macro, the value the frame's CloudParams give it. A macro modes.glsl declares and this table
+// lacks is an undeclared identifier in every cloud program, so the two cannot drift apart silently.
+struct ModeRow {
+  const char* macro;
+  double (*value)(const ref::CloudParams&);
+};
+const ModeRow kModes[] = {
+    {"CV_MODE_LAYER", [](const ref::CloudParams& p) { return p.layer_on; }},
+    {"CV_MODE_MOTION", [](const ref::CloudParams& p) { return p.motion_on; }},
+    {"CV_MODE_TILES", [](const ref::CloudParams& p) { return p.tiles_xz; }},
+    {"CV_MODE_EXACT_FILTER", [](const ref::CloudParams& p) { return p.exact_filter; }},
+    {"CV_MODE_DETAIL", [](const ref::CloudParams& p) { return p.has_detail; }},
+    {"CV_MODE_CURL", [](const ref::CloudParams& p) { return p.curl_amplitude_m > 0.0 ? 1.0 : 0.0; }},
+    {"CV_MODE_LIGHT", [](const ref::CloudParams& p) { return p.light_mode; }},
+    {"CV_MODE_DF_LIGHT", [](const ref::CloudParams& p) { return p.df_light; }},
+    {"CV_MODE_LIGHT_VOLUME", [](const ref::CloudParams& p) { return p.light_volume_on; }},
+    {"CV_MODE_MS_VOLUME", [](const ref::CloudParams& p) { return p.ms_volume_on; }},
+    {"CV_MODE_MS_OCTAVES", [](const ref::CloudParams& p) { return p.ms_octaves; }},
+    {"CV_MODE_PHASE", [](const ref::CloudParams& p) { return p.phase_mode; }},
+    {"CV_MODE_SKY", [](const ref::CloudParams& p) { return p.sky_mode; }},
+    {"CV_MODE_SKY_LUT", [](const ref::CloudParams& p) { return p.sky_lut; }},
+    {"CV_MODE_OUTPUT", [](const ref::CloudParams& p) { return p.output_mode; }},
+    {"CV_MODE_ADAPTIVE", [](const ref::CloudParams& p) { return p.adaptive; }},
+    {"CV_MODE_SKIP", [](const ref::CloudParams& p) { return p.occupancy_skip; }},
+    {"CV_MODE_SKIP_DISTANCE", [](const ref::CloudParams& p) { return p.skip_distance; }},
+    {"CV_MODE_DENSITY_STEP", [](const ref::CloudParams& p) { return p.density_step; }},
+};
+
+// The text that replaces modes.glsl for a frame: each macro a float constant (the value rounded
+// to float, as the uniform block holds it).
+std::string compiled_modes_text(const ref::CloudParams& p) {
+  std::string text = "// modes.glsl compiled for one frame's modes (gl_renderer.cpp, kModes)\n";
+  for (const ModeRow& row : kModes) {
+    char value[64];
+    std::snprintf(value, sizeof(value), "%.9g", double(float(row.value(p))));
+    std::string v = value;
+    if (v.find_first_of(".en") == std::string::npos) v += ".0";
+    text += std::string("#define ") + row.macro + " (" + v + ")\n";
+  }
+  return text;
 }
 
 // Render targets and passes are declared in two tables (make_targets, make_passes); resize() and
@@ -348,35 +393,44 @@ struct GlRenderer::Impl {
       if (t.name == name) return t;
     throw GlError("render pass refers to an undeclared target '" + name + "'");
   }
-  // Passes sharing a program share one GL object: delete each object once.
+  // Every program linked so far, by the expanded text of its two stages: passes sharing a program
+  // share one GL object, and a set of modes seen before (modes.glsl, nanovdb_storage.glsl) costs no
+  // second compile. Programs that do not include a switch's file are the same for every value.
+  std::map<std::string, GLuint> program_cache;
+  std::string modes_text;  // modes.glsl's override; empty = the file (the modes read at run time)
   void delete_programs() {
-    std::vector<GLuint> done;
-    for (Pass& p : passes) {
-      if (p.program && std::find(done.begin(), done.end(), p.program) == done.end()) {
-        glDeleteProgram(p.program);
-        done.push_back(p.program);
-      }
-      p.program = 0;
-    }
+    for (auto& c : program_cache) glDeleteProgram(c.second);
+    program_cache.clear();
+    for (Pass& p : passes) p.program = 0;
   }
   void build_programs() {
-    // Link every distinct (vertex, fragment) pair once; nothing changes unless all succeed.
-    std::vector<std::pair<std::pair<std::string, std::string>, GLuint>> built;
+    // Link what the cache lacks; nothing changes unless all succeed.
+    std::vector<std::string> keys;
+    std::vector<std::pair<std::string, GLuint>> built;
     try {
       for (const Pass& p : passes) {
-        auto key = std::make_pair(p.vs, p.fs);
-        bool have = false;
+        std::vector<std::string> files;
+        std::string key = shaders.expand(p.vs, files) + '\0' + shaders.expand(p.fs, files);
+        bool have = program_cache.count(key) > 0;
         for (auto& b : built) have = have || b.first == key;
         if (!have) built.push_back({key, link_program(shaders, p.vs, p.fs)});
+        keys.push_back(std::move(key));
       }
     } catch (...) {
       for (auto& b : built) glDeleteProgram(b.second);
       throw;
     }
-    delete_programs();
-    for (Pass& p : passes)
-      for (auto& b : built)
-        if (b.first == std::make_pair(p.vs, p.fs)) p.program = b.second;
+    for (auto& b : built) program_cache.emplace(std::move(b.first), b.second);
+    for (size_t i = 0; i < passes.size(); ++i) passes[i].program = program_cache.at(keys[i]);
+  }
+  // render.compiled_modes: the programs for this frame's modes (built once per set of values).
+  void use_modes(const FrameSetup& f) {
+    std::string text = f.settings.compiled_modes ? compiled_modes_text(f.params) : std::string();
+    if (text == modes_text) return;
+    if (text.empty()) shaders.clear_override("modes.glsl");
+    else shaders.set_override("modes.glsl", text);
+    modes_text = text;
+    build_programs();
   }
   // All targets, or (a viewport resize) only those the viewport sizes: the LUTs and the 3D
   // targets keep their contents (a window resize recomputes nothing).
@@ -733,7 +787,22 @@ GlRenderer::~GlRenderer() {
   glDeleteQueries(GLsizei(m.queries.size()), m.queries.data());
 }
 
-void GlRenderer::reload_shaders() { impl_->build_programs(); }
+void GlRenderer::reload_shaders() {
+  // The files may have changed: compile everything again, keeping the old programs if that fails.
+  Impl& m = *impl_;
+  std::map<std::string, GLuint> old;
+  std::swap(old, m.program_cache);
+  std::vector<GLuint> in_use;
+  for (const Pass& p : m.passes) in_use.push_back(p.program);
+  try {
+    m.build_programs();
+  } catch (...) {
+    std::swap(old, m.program_cache);
+    for (size_t i = 0; i < m.passes.size(); ++i) m.passes[i].program = in_use[i];
+    throw;
+  }
+  for (auto& c : old) glDeleteProgram(c.second);
+}
 
 std::string GlRenderer::renderer_string() const {
   const char* r = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
@@ -857,6 +926,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   Impl& m = *impl_;
   if (!m.have_volume) throw GlError("GlRenderer::render before set_volume");
   m.resize(f.width, f.height);
+  m.use_modes(f);
   gpu::CloudParams cp = to_gpu(f.params);
   glNamedBufferSubData(m.ubo_cloud, 0, sizeof(cp), &cp);
   const Target& bloom = m.target("bloom_a");
@@ -1067,6 +1137,7 @@ std::vector<glm::vec3> GlRenderer::transmittance_dump(const AtmosphereSettings& 
 }
 
 int GlRenderer::light_volume_builds() const { return impl_->light_builds; }
+int GlRenderer::program_count() const { return int(impl_->program_cache.size()); }
 
 int GlRenderer::ms_volume_builds() const { return impl_->ms_builds; }
 

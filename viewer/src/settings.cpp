@@ -78,6 +78,7 @@ std::vector<ParamDef> build() {
   t.push_back(real("adaptive_growth", &RenderSettings::adaptive_growth, 0, 10, "step growth per metre beyond the start, 1/m (0 = 4 / largest extent: the step doubles every quarter extent)"));
   t.push_back(boolean("jitter", &RenderSettings::jitter, "jitter the sample inside each step per pixel and frame (else the midpoint)"));
   t.push_back(boolean("exact_filter", &RenderSettings::exact_filter, "trilinear filtering by hand from texelFetch (strict GPU-vs-CPU mode)"));
+  t.push_back(boolean("compiled_modes", &RenderSettings::compiled_modes, "GL: compile the programs for the frame's modes (box or layer, motion, filter, light volume, sky, phase, skipping...) so the compiler drops every branch the frame does not take; llvmpipe runs both sides of a branch, so this is 3-10x there on the thesis views (docs/viewer-speed.md). A mode change recompiles once (then cached). false: one program reads the modes at run time; the same image"));
   t.push_back(real("max_distance", &RenderSettings::max_distance, 1, 1e8, "march no farther than this, m"));
   t.push_back(real("transmittance_cutoff", &RenderSettings::transmittance_cutoff, 0, 0.5, "stop the primary march when the transmittance falls below this (early exit)"));
   t.push_back(integer("density_step", &RenderSettings::density_step, 1, 16, "density-aware step: after a sample below density_step_below the next step is this many small steps (1 = off; changes the image)"));

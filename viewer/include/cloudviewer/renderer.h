@@ -36,8 +36,9 @@ class ShaderSource {
   std::string expand(const std::string& name, std::vector<std::string>& files) const;
   const std::string& dir() const { return dir_; }
   /// Replaces one file's text (before --shader-dir and the embedded copies): the renderer's
-  /// compile-time switches (nanovdb_storage.glsl).
+  /// compile-time switches (nanovdb_storage.glsl, modes.glsl).
   void set_override(const std::string& name, std::string text) { overrides_[name] = std::move(text); }
+  void clear_override(const std::string& name) { overrides_.erase(name); }
 
  private:
   void expand_into(const std::string& name, std::vector<std::string>& files, std::string& out,
@@ -114,6 +115,8 @@ class GlRenderer {
   /// How many times the light volume has been built (render.light_volume): once per change of the
   /// sun, the volume or a lighting key, never for a camera move alone.
   int light_volume_builds() const;
+  /// Distinct GL programs linked so far (render.compiled_modes: one set per set of modes seen).
+  int program_count() const;
   /// How many times the diffusion volume has been solved (render.ms_volume), and the last solve's
   /// iterations, convergence and energy balance (its fluence is on the GPU: empty here).
   int ms_volume_builds() const;

@@ -54,6 +54,7 @@ struct RenderSettings {
   double adaptive_growth = 0;      ///< 1/m; 0 = auto (4 / largest extent)
   bool jitter = true;              ///< jittered start against banding
   bool exact_filter = false;       ///< trilinear by hand (texelFetch) instead of the texture unit
+  bool compiled_modes = true;      ///< GL: programs compiled for the frame's modes (docs/viewer-speed.md)
   double max_distance = 1e7;       ///< m
   double transmittance_cutoff = CV_TRANSMITTANCE_EPSILON;  ///< stop the primary march below this transmittance
   int density_step = 1;            ///< after a sample below density_step_below, step this many small steps (1: off)
