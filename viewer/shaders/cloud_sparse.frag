@@ -3,13 +3,20 @@
 // cross matrix picks for this frame (u_temporal.zw), into a quarter-by-quarter target: (radiance,
 // transmittance) after aerial perspective, and the cloud's opacity-weighted distance (0: none)
 // that the resolve reprojects with. With the precomputed sky also the air in front of the
-// background at the same pixel (background_air; smooth, so temporal_compose upsamples it).
+// background at the same pixel (background_air; smooth, so temporal_compose upsamples it), for
+// each kind of background the block holds: the sky (inscattered light to the top of the air) and
+// the ground (inscattered light and transmittance up to the ground's distance). The kind this pixel
+// does not see is taken at the block's nearest pixel that sees it, when there is one, so every
+// full-resolution pixel finds its own kind in its own block and temporal_compose never marches
+// the air itself (a per-pixel fallback cost every pixel its time on llvmpipe, which runs both
+// sides of a branch).
 #include "cloud_headers.glsl"
 layout(binding = CV_UNIT_PASS_INPUT0) uniform sampler2D s_scene_distance;
 layout(location = 0) out vec4 o_cloud;
 layout(location = 1) out vec4 o_depth;
-layout(location = 2) out vec4 o_air;    // inscattered, scene distance
-layout(location = 3) out vec4 o_air_t;  // transmittance to the scene
+layout(location = 2) out vec4 o_air;      // ground: inscattered, its distance (0: the block has no ground)
+layout(location = 3) out vec4 o_air_t;    // ground: transmittance to it
+layout(location = 4) out vec4 o_air_sky;  // sky: inscattered, 1 (0: the block has no sky)
 void main() {
   ivec2 full = ivec2(gl_FragCoord.xy) * 4 + ivec2(u_temporal.zw);
   full = min(full, ivec2(u_viewport.xy) - 1);  // a partial block at the right or top edge
@@ -19,8 +26,39 @@ void main() {
   int iterations = 0;
   o_cloud = cloud_layer(rd, full, t_scene, t_mean, iterations);
   o_depth = vec4(t_mean, 0.0, 0.0, 0.0);
-  vec3 inscattered = vec3(0.0), transmittance = vec3(1.0);
-  if (sky_precomputed()) background_air(rd, t_scene, inscattered, transmittance);
-  o_air = vec4(inscattered, t_scene);
-  o_air_t = vec4(transmittance, 0.0);
+  o_air = vec4(0.0);
+  o_air_t = vec4(1.0, 1.0, 1.0, 0.0);
+  o_air_sky = vec4(0.0);
+  if (!sky_precomputed()) return;
+  bool sky = t_scene >= CV_NO_HIT_TEST;
+  // The block's nearest pixel that sees the other kind.
+  ivec2 base = ivec2(gl_FragCoord.xy) * 4;
+  int best = 1 << 20;
+  ivec2 other = full;
+  float t_other = 0.0;
+  for (int i = 0; i < 16; ++i) {
+    ivec2 q = min(base + ivec2(i & 3, i >> 2), ivec2(u_viewport.xy) - 1);
+    float tq = texelFetch(s_scene_distance, q, 0).r;
+    ivec2 d = q - full;
+    int d2 = d.x * d.x + d.y * d.y;
+    if ((tq >= CV_NO_HIT_TEST) != sky && d2 < best) {
+      best = d2;
+      other = q;
+      t_other = tq;
+    }
+  }
+  for (int k = 0; k < 2; ++k) {
+    if (k == 1 && best == (1 << 20)) break;
+    bool kind_sky = k == 0 ? sky : !sky;
+    float t = k == 0 ? t_scene : t_other;
+    vec3 ray = k == 0 ? rd : pixel_ray(u_inv_view_proj, vec2(other) + 0.5, u_viewport.xy);
+    vec3 inscattered = vec3(0.0), transmittance = vec3(1.0);
+    background_air(ray, t, inscattered, transmittance);
+    if (kind_sky) {
+      o_air_sky = vec4(inscattered, 1.0);
+    } else {
+      o_air = vec4(inscattered, t);
+      o_air_t = vec4(transmittance, 0.0);
+    }
+  }
 }

@@ -113,6 +113,7 @@
 #define CV_UNIT_ORDERS_IRRADIANCE 26  // RGBA32F CV_IRRADIANCE_W x 1: the last order's irradiance on the ground
 #define CV_UNIT_ORDERS_SUM 27         // RGBA32F 3D, orders table: the orders 2..N summed (read by the 4D LUT's pass)
 #define CV_UNIT_ORDERS_DENSITY_M 28   // the density's Mie part
+#define CV_UNIT_PASS_INPUT5 29       // a pass's sixth input (temporal_compose: the sky's air)
 
 // The multiple-scattering volume (render.ms_volume, lighting.glsl): each cell's extinction and
 // first-scattering source are means over CV_MS_SUBSAMPLES^3 stratified points of the cell (2: as

@@ -114,7 +114,7 @@ std::string compiled_modes_text(const ref::CloudParams& p) {
 //  - a Target sized by the viewport (divisor 1 or 2) or fixed (a LUT: `fixed_w`/`fixed_h`), with
 //    `history` to keep last frame's copy readable as "NAME@prev" (swapped after every frame);
 //  - a Pass naming its program, the target it writes, the attachments it reads (bound in order to
-//    CV_UNIT_PASS_INPUT0 .. 4), when it runs, and its timing group.
+//    CV_UNIT_PASS_INPUT0 .. 5), when it runs, and its timing group.
 struct Target {
   std::string name;
   std::vector<GLenum> colors;  // internal format of each colour attachment
@@ -170,9 +170,9 @@ std::vector<Target> make_targets() {
   t[5].fixed_w = CV_TRANSMITTANCE_W, t[5].fixed_h = CV_TRANSMITTANCE_H;
   // Temporal upsampling: this frame's pixel of every 4x4 block, and the resolved full-resolution
   // cloud layer with last frame's copy (both: (L, T) and the cloud distance).
-  // The quarter target also holds the air in front of the background (inscattered + the scene
-  // distance, transmittance) at the same pixels.
-  t[6].name = "cloud_quarter", t[6].colors = {GL_RGBA32F, GL_R32F, GL_RGBA32F, GL_RGBA32F};
+  // The quarter target also holds the air in front of the background at the same pixels: toward
+  // the ground (inscattered + its distance, transmittance) and toward the sky (inscattered).
+  t[6].name = "cloud_quarter", t[6].colors = {GL_RGBA32F, GL_R32F, GL_RGBA32F, GL_RGBA32F, GL_RGBA32F};
   t[6].divisor = 4, t[6].round_up = true;
   t[7].name = "cloud_layer", t[7].colors = {GL_RGBA32F, GL_R32F}, t[7].history = true;
   Target ms;     // atmosphere LUT Psi_ms(r, mu_s): orders 2..N of the sky's scattering
@@ -311,7 +311,8 @@ std::vector<Pass> make_passes() {
   Pass over;
   over.name = "temporal_compose", over.vs = "fullscreen.vert", over.fs = "temporal_compose.frag";
   over.target = "hdr", over.group = Group::Clouds, over.enabled = temporal;
-  over.inputs = {{"cloud_layer", 0}, {"scene", 0}, {"scene", 1}, {"cloud_quarter", 2}, {"cloud_quarter", 3}};
+  over.inputs = {{"cloud_layer", 0}, {"scene", 0}, {"scene", 1}, {"cloud_quarter", 2}, {"cloud_quarter", 3},
+                {"cloud_quarter", 4}};
   p.push_back(over);
   Pass bright;
   bright.name = "bloom_bright", bright.vs = "fullscreen.vert", bright.fs = "bloom_bright.frag";
@@ -626,7 +627,7 @@ struct GlRenderer::Impl {
       bool prev = name.size() > 5 && name.compare(name.size() - 5, 5, "@prev") == 0;
       Target& in = target(prev ? name.substr(0, name.size() - 5) : name);
       static const GLuint units[] = {CV_UNIT_PASS_INPUT0, CV_UNIT_PASS_INPUT1, CV_UNIT_PASS_INPUT2, CV_UNIT_PASS_INPUT3,
-                                     CV_UNIT_PASS_INPUT4};
+                                     CV_UNIT_PASS_INPUT4, CV_UNIT_PASS_INPUT5};
       if (i >= sizeof(units) / sizeof(units[0])) throw GlError("render pass '" + p.name + "' reads too many inputs");
       glBindTextureUnit(units[i], in.tex[prev ? 1 : 0][size_t(p.inputs[i].second)]);
     }
