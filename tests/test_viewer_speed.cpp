@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "cloudviewer/app.h"
+#include "cloudviewer/errors.h"
 
 #include "cloudviewer/image.h"
 #include "cloudviewer/renderer.h"
@@ -350,6 +351,37 @@ TEST(ViewerSpeed, CompiledModesKeepTheImage) {
   r.render(frame(cases[0], true));
   EXPECT_EQ(r.program_count(), all);
   EXPECT_EQ(max_abs_diff(first.linear, r.read_back().linear), 0.0);
+}
+
+// A set of modes that fails to compile (a file broken under --shader-dir after the renderer
+// started) throws, and leaves the renderer with the programs and modes it had: the modes it was
+// built for still render the same picture, and the failed set fails again instead of drawing with
+// programs compiled for other modes.
+TEST(ViewerSpeed, CompiledModesSurviveAFailedCompile) {
+  namespace fs = std::filesystem;
+  fs::path dir = fs::temp_directory_path() / "cloudviewer_modes_broken";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  for (const std::string& name : embedded_shader_names()) std::ofstream(dir / name) << ShaderSource().load(name);
+  gl_context();
+  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
+  Camera cam = default_camera(vol, 60, 64.0 / 36);
+  auto frame = [&](bool exact) {
+    RenderSettings s;
+    s.exact_filter = exact;
+    return make_frame(vol, s, cam, default_sun(cam), 64, 36);
+  };
+  GlRenderer r{ShaderSource(dir.string())};
+  r.set_volume(vol);
+  r.render(frame(false));
+  FrameImages before = r.read_back();
+  std::string text = ShaderSource().load("medium.glsl");
+  std::ofstream(dir / "medium.glsl") << text << "\nthis is not glsl;\n";
+  EXPECT_THROW(r.render(frame(true)), ShaderError);
+  r.render(frame(false));
+  EXPECT_EQ(max_abs_diff(before.linear, r.read_back().linear), 0.0);
+  EXPECT_THROW(r.render(frame(true)), ShaderError);
+  fs::remove_all(dir);
 }
 
 TEST(ViewerSpeed, TrackKeysCarryTheirOwnSettings) {

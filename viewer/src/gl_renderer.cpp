@@ -428,10 +428,18 @@ struct GlRenderer::Impl {
   void use_modes(const FrameSetup& f) {
     std::string text = f.settings.compiled_modes ? compiled_modes_text(f.params) : std::string();
     if (text == modes_text) return;
-    if (text.empty()) shaders.clear_override("modes.glsl");
-    else shaders.set_override("modes.glsl", text);
+    auto apply = [this](const std::string& t) {
+      if (t.empty()) shaders.clear_override("modes.glsl");
+      else shaders.set_override("modes.glsl", t);
+    };
+    apply(text);
+    try {
+      build_programs();
+    } catch (...) {  // (a file broken under --shader-dir) keep the programs and the modes they were built for
+      apply(modes_text);
+      throw;
+    }
     modes_text = text;
-    build_programs();
   }
   // All targets, or (a viewport resize) only those the viewport sizes: the LUTs and the 3D
   // targets keep their contents (a window resize recomputes nothing).
