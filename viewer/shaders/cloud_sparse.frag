@@ -17,6 +17,18 @@ layout(location = 1) out vec4 o_depth;
 layout(location = 2) out vec4 o_air;      // ground: inscattered, its distance (0: the block has no ground)
 layout(location = 3) out vec4 o_air_t;    // ground: transmittance to it
 layout(location = 4) out vec4 o_air_sky;  // sky: inscattered, 1 (0: the block has no sky)
+// Writes the air in front of the background at distance t along `ray` into the outputs of its
+// kind (the sky when t >= CV_NO_HIT_TEST, else the ground).
+void store_background_air(vec3 ray, float t) {
+  vec3 inscattered = vec3(0.0), transmittance = vec3(1.0);
+  background_air(ray, t, inscattered, transmittance);
+  if (t >= CV_NO_HIT_TEST) {
+    o_air_sky = vec4(inscattered, 1.0);
+  } else {
+    o_air = vec4(inscattered, t);
+    o_air_t = vec4(transmittance, 0.0);
+  }
+}
 void main() {
   ivec2 full = ivec2(gl_FragCoord.xy) * 4 + ivec2(u_temporal.zw);
   full = min(full, ivec2(u_viewport.xy) - 1);  // a partial block at the right or top edge
@@ -30,10 +42,12 @@ void main() {
   o_air_t = vec4(1.0, 1.0, 1.0, 0.0);
   o_air_sky = vec4(0.0);
   if (!sky_precomputed()) return;
+  store_background_air(rd, t_scene);
+  // The block's nearest pixel that sees the other kind, when there is one.
   bool sky = t_scene >= CV_NO_HIT_TEST;
-  // The block's nearest pixel that sees the other kind.
   ivec2 base = ivec2(gl_FragCoord.xy) * 4;
-  int best = 1 << 20;
+  bool found = false;
+  int best = 0;
   ivec2 other = full;
   float t_other = 0.0;
   for (int i = 0; i < 16; ++i) {
@@ -41,24 +55,12 @@ void main() {
     float tq = texelFetch(s_scene_distance, q, 0).r;
     ivec2 d = q - full;
     int d2 = d.x * d.x + d.y * d.y;
-    if ((tq >= CV_NO_HIT_TEST) != sky && d2 < best) {
+    if ((tq >= CV_NO_HIT_TEST) != sky && (!found || d2 < best)) {
+      found = true;
       best = d2;
       other = q;
       t_other = tq;
     }
   }
-  for (int k = 0; k < 2; ++k) {
-    if (k == 1 && best == (1 << 20)) break;
-    bool kind_sky = k == 0 ? sky : !sky;
-    float t = k == 0 ? t_scene : t_other;
-    vec3 ray = k == 0 ? rd : pixel_ray(u_inv_view_proj, vec2(other) + 0.5, u_viewport.xy);
-    vec3 inscattered = vec3(0.0), transmittance = vec3(1.0);
-    background_air(ray, t, inscattered, transmittance);
-    if (kind_sky) {
-      o_air_sky = vec4(inscattered, 1.0);
-    } else {
-      o_air = vec4(inscattered, t);
-      o_air_t = vec4(transmittance, 0.0);
-    }
-  }
+  if (found) store_background_air(pixel_ray(u_inv_view_proj, vec2(other) + 0.5, u_viewport.xy), t_other);
 }
