@@ -117,12 +117,14 @@ vec3 transmittance_to_top(Number r, Number mu) {
 // ------------------------------------------------------------------------------- single scattering
 // Transmittance between (r, mu) and the point at distance d along the ray (inside the atmosphere),
 // as a ratio of two LUT lookups; rays that hit the ground use the reversed ray, which does not.
+// The ray is chosen before the two lookups, not between four: llvmpipe evaluates both sides of a
+// per-pixel choice.
 vec3 transmittance_along(Number r, Number mu, Number d, bool hits_ground) {
   Number bottom = u_atmo.bottom_radius_m, top = u_atmo.top_radius_m;
   Number r_d = clamp(sqrt(d * d + 2.0 * r * mu * d + r * r), bottom, top);
   Number mu_d = clamp((r * mu + d) / r_d, -1.0, 1.0);
-  vec3 num = hits_ground ? transmittance_to_top(r_d, -mu_d) : transmittance_to_top(r, mu);
-  vec3 den = hits_ground ? transmittance_to_top(r, -mu) : transmittance_to_top(r_d, mu_d);
+  vec3 num = transmittance_to_top(hits_ground ? r_d : r, hits_ground ? -mu_d : mu);
+  vec3 den = transmittance_to_top(hits_ground ? r : r_d, hits_ground ? -mu : mu_d);
   return min(num / max(den, vec3(1e-30)), vec3(1.0));
 }
 

@@ -48,12 +48,3 @@ void air_segment(vec3 rd, Number t, OUT(vec3) inscattered, OUT(vec3) transmittan
   Number t_end = 0.0;
   inscattered = sky_scattering(rd, solar, t, transmittance, t_end, ground);
 }
-
-// A surface at distance t along rd (the ground pass's ground) seen through the air.
-vec3 surface_through_air(vec3 radiance, Number t, vec3 rd) {
-  if (!sky_precomputed()) return radiance;
-  vec3 inscattered = vec3(0.0);
-  vec3 transmittance = vec3(1.0);
-  air_segment(rd, t, inscattered, transmittance);
-  return radiance * transmittance + inscattered;
-}
