@@ -699,21 +699,117 @@ vec3 atmosphere_ground_radiance(Number r, Number mu_s, Number nu, Number d_end, 
          (transmittance_to_sun(bottom, mu_s_g) * max(mu_s_g, 0.0) + ground_sky_irradiance(mu_s_g));
 }
 
-// Radiance of the sky seen from altitude `alt` (planet centre straight below, zenith +y) along unit
-// `v`, with the sun along unit `s` and `solar` its irradiance at the top of the atmosphere: single
-// Rayleigh + Mie scattering plus the orders 2..N, up to the top, the ground or t_max.
-// `transmittance` receives the view ray's transmittance over that segment (0 when it ends on the
-// ground), `t_end` its length from the camera (CV_NO_HIT when the ray misses the atmosphere) and
-// `ground` the ground radiance there (albedo / pi * (direct sun + the sky's irradiance); 0 when the
-// ray does not end on the ground). Two ways to the same integrals:
-//  - `from_lut` false: ray-marched per pixel (scattering_sums: CV_SKY_SAMPLES samples, each
-//    reading the transmittance LUT and the multiple-scattering LUT);
-//  - `from_lut` true: read from the 4D scattering LUT. Up to the boundary the ray ends on it is one
+// ------------------------------------------------------------------ the camera's air LUT
+// render.air_lut: the sky's integrals seen from one radius r (the camera's) with one sun, as a 3D
+// table over the view direction and the distance along the ray, after Hillaire 2020's sky-view
+// and aerial-perspective LUTs but in direction space (azimuth from the sun's, elevation), so it
+// holds for every camera heading and position at that altitude and changes only with the sun, the
+// altitude and the atmosphere. The last distance is the longest ray, so the sky behind everything
+// is its last slice. Each texel is the per-pixel march (or the 4D LUT) of its own ray and
+// distance, divided by the segment's opacity 1 - T; a lookup is trilinear by hand, like the 4D
+// LUT's, never across the horizon, and multiplies by the pixel's own 1 - T (exact, from the
+// transmittance LUT). The two parts are before the phase functions (the sun's Mie peak stays exact
+// per pixel): single Rayleigh with the orders 2..N divided by the Rayleigh phase at the texel's nu
+// (nu changes little between neighbours), and single Mie. Elevation: below and above the horizon
+// (cosine air_horizon_mu) each get half the rows, with sqrt spacing from the horizon (Hillaire's),
+// texel centres strictly inside their half. Distance: measured from where the ray enters the air.
+
+// The cosine of the horizon's zenith angle from radius r (-1 .. 0; 0 on or below the ground).
+Number air_horizon_mu(Number r) {
+  Number q = u_atmo.bottom_radius_m / max(r, u_atmo.bottom_radius_m);
+  return -atmo_safe_sqrt(1.0 - q * q);
+}
+// The longest ray through the air from radius r (or from the top, where a ray from higher up
+// enters): to the horizon, then on to the top.
+Number air_lut_range(Number r) {
+  Number bottom = u_atmo.bottom_radius_m, top = u_atmo.top_radius_m;
+  Number start = min(r, top);
+  return atmo_safe_sqrt(start * start - bottom * bottom) + atmo_safe_sqrt(top * top - bottom * bottom);
+}
+// Distance of depth coordinate w in [0, 1] (slices at w = k / (CV_AIR_DEPTH - 1)), and its inverse.
+Number air_lut_distance(Number w, Number range) {
+  return range * (exp(CV_AIR_DEPTH_LAMBDA * w) - 1.0) / (exp(CV_AIR_DEPTH_LAMBDA) - 1.0);
+}
+Number air_lut_depth(Number t, Number range) {
+  return log(1.0 + clamp(t / range, 0.0, 1.0) * (exp(CV_AIR_DEPTH_LAMBDA) - 1.0)) / CV_AIR_DEPTH_LAMBDA;
+}
+// The elevation (radians) of row coordinate a in [0, 1] of one half (0 at the horizon), and back.
+Number air_lut_elevation(Number a, bool below, Number horizon) {
+  return below ? horizon - a * a * (horizon + 0.5 * CV_PI) : horizon + a * a * (0.5 * CV_PI - horizon);
+}
+Number air_lut_row(Number elevation, bool below, Number horizon) {
+  Number span = below ? horizon + 0.5 * CV_PI : 0.5 * CV_PI - horizon;
+  return sqrt(clamp((below ? horizon - elevation : elevation - horizon) / max(span, 1e-9), 0.0, 1.0));
+}
+
+// Texel (azimuth, elevation, distance) of the air LUT seen from radius r: the view ray's mu and
+// cos(azimuth from the sun's), its length t in the air (from the camera, or from where a ray from
+// space enters the air) and which half it is in.
+void air_texel_geometry(ivec3 texel, Number r, OUT(Number) mu, OUT(Number) cos_phi, OUT(Number) t, OUT(bool) below) {
+  int half_rows = CV_AIR_ELEVATION / 2;
+  below = texel.y < half_rows;
+  Number a = (Number(below ? half_rows - 1 - texel.y : texel.y - half_rows) + 0.5) / Number(half_rows);
+  mu = sin(air_lut_elevation(a, below, asin(air_horizon_mu(r))));
+  cos_phi = cos(CV_PI * Number(texel.x) / Number(CV_AIR_AZIMUTH - 1));
+  // The first slice a hundredth of the way to the second: the parts' limit at t -> 0 (below).
+  t = air_lut_distance(max(Number(texel.z), 0.01) / Number(CV_AIR_DEPTH - 1), air_lut_range(r));
+}
+
+// The two parts at (r, mu, mu_s, nu) over the first t metres in the air, whose transmittance
+// is `transmittance`, from the LUT: trilinear between the eight nearest texel centres, within the
+// half `below` names, times 1 - transmittance (the texels hold the parts divided by it).
+void air_lut_parts(Number r, Number mu, Number mu_s, Number nu, Number t, bool below, vec3 transmittance,
+                   OUT(vec3) rayleigh, OUT(vec3) mie) {
+  int half_rows = CV_AIR_ELEVATION / 2;
+  Number horizon = asin(air_horizon_mu(r));
+  Number elevation = asin(clamp(mu, -1.0, 1.0));
+  Number row = air_lut_row(elevation, below, horizon) * Number(half_rows) - 0.5;
+  row = clamp(row, 0.0, Number(half_rows - 1));
+  row = below ? Number(half_rows - 1) - row : Number(half_rows) + row;
+  // The azimuth from the sun's: cos phi = (nu - mu mu_s) / (sin(view) sin(sun)).
+  Number sines = atmo_safe_sqrt(1.0 - mu * mu) * atmo_safe_sqrt(1.0 - mu_s * mu_s);
+  Number cos_phi = sines > 1e-6 ? clamp((nu - mu * mu_s) / sines, -1.0, 1.0) : 1.0;
+  vec3 p = vec3(acos(cos_phi) / CV_PI * Number(CV_AIR_AZIMUTH - 1), row,
+                air_lut_depth(t, air_lut_range(r)) * Number(CV_AIR_DEPTH - 1));
+  int lo_row = below ? 0 : half_rows;
+  ivec3 i0 = ivec3(clamp(floor(p.x), 0.0, Number(CV_AIR_AZIMUTH - 2)),
+                   clamp(floor(p.y), Number(lo_row), Number(lo_row + half_rows - 2)),
+                   clamp(floor(p.z), 0.0, Number(CV_AIR_DEPTH - 2)));
+  vec3 f = clamp(p - vec3(i0), 0.0, 1.0);
+  rayleigh = vec3(0.0);
+  mie = vec3(0.0);
+  for (int k = 0; k < 8; ++k) {
+    ivec3 o = ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
+    Number w = (o.x == 1 ? f.x : 1.0 - f.x) * (o.y == 1 ? f.y : 1.0 - f.y) * (o.z == 1 ? f.z : 1.0 - f.z);
+    rayleigh += w * air_texel(0, i0 + o);
+    mie += w * air_texel(1, i0 + o);
+  }
+  rayleigh *= vec3(1.0) - transmittance;
+  mie *= vec3(1.0) - transmittance;
+}
+
+// ------------------------------------------------------------------------------ the sky, per ray
+// The sky's light along a view ray from altitude `alt` (planet centre straight below, zenith +y)
+// along unit `v`, with the sun along unit `s`, for unit solar irradiance at the top of the
+// atmosphere, up to the top, the ground or t_max: single Rayleigh and single Mie before their
+// phase functions, and the orders 2..N. `transmittance` receives the view ray's transmittance over
+// that segment (0 when it ends on the ground), `t_end` its length from the camera (CV_NO_HIT when
+// the ray misses the atmosphere) and `ground` the ground's radiance there (albedo / pi * (direct
+// sun + the sky's irradiance); 0 when the ray does not end on the ground). Three sources of the
+// same integrals (CV_AIR_*):
+//  - CV_AIR_MARCH: ray-marched per pixel (scattering_sums: CV_SKY_SAMPLES samples, each reading
+//    the transmittance LUT and the multiple-scattering LUT);
+//  - CV_AIR_SKY_LUT: read from the 4D scattering LUT. Up to the boundary the ray ends on it is one
 //    lookup; a segment that ends sooner, at p (aerial perspective), is Bruneton's
 //    S(x) - T(x, p) S(p) (GetSkyRadianceToPoint), with p's lookup in the same half of the mu axis
-//    as x's (a ray and its continuation from p reach the same boundary).
-vec3 atmosphere_sky(Number alt, vec3 v, vec3 s, vec3 solar, Number t_max, bool from_lut, OUT(vec3) transmittance,
-                    OUT(Number) t_end, OUT(vec3) ground) {
+//    as x's (a ray and its continuation from p reach the same boundary);
+//  - CV_AIR_CAMERA_LUT: read from the camera's air LUT (one lookup; only for the `alt` and `s` it
+//    was built for), the orders folded into `rayleigh`.
+void atmosphere_sky_parts(Number alt, vec3 v, vec3 s, Number t_max, int source, OUT(vec3) rayleigh, OUT(vec3) mie,
+                          OUT(vec3) multiple, OUT(vec3) transmittance, OUT(Number) t_end, OUT(vec3) ground) {
+  rayleigh = vec3(0.0);
+  mie = vec3(0.0);
+  multiple = vec3(0.0);
   transmittance = vec3(1.0);
   ground = vec3(0.0);
   t_end = CV_NO_HIT;
@@ -722,17 +818,17 @@ vec3 atmosphere_sky(Number alt, vec3 v, vec3 s, vec3 solar, Number t_max, bool f
   Number mu_s = 0.0;
   Number nu = 0.0;
   Number t0 = 0.0;
-  if (!atmosphere_ray_start(alt, v, s, r, mu, mu_s, nu, t0)) return vec3(0.0);
+  if (!atmosphere_ray_start(alt, v, s, r, mu, mu_s, nu, t0)) return;
   bool hits_ground = ray_intersects_ground(r, mu);
   Number d_atmo = hits_ground ? distance_to_bottom_boundary(r, mu) : distance_to_top_boundary(r, mu);
   Number d_end = clamp(t_max - t0, 0.0, d_atmo);
   t_end = t0 + d_end;
   transmittance = transmittance_along(r, mu, d_end, hits_ground);
-  // Single Rayleigh and single Mie before their phase functions, and the orders 2..N.
-  vec3 rayleigh = vec3(0.0);
-  vec3 mie = vec3(0.0);
-  vec3 multiple = vec3(0.0);
-  if (from_lut) {
+  if (source == CV_AIR_CAMERA_LUT) {
+    Number r_cam = u_atmo.bottom_radius_m + clamp(alt, 0.0, 1e9);
+    air_lut_parts(r_cam, clamp(v.y, -1.0, 1.0), clamp(s.y, -1.0, 1.0), nu, d_end, hits_ground, transmittance, rayleigh,
+                  mie);
+  } else if (source == CV_AIR_SKY_LUT) {
     scattering_lookup(r, mu, mu_s, nu, hits_ground, rayleigh, mie, multiple);
     if (d_end < d_atmo) {
       Number bottom = u_atmo.bottom_radius_m, top = u_atmo.top_radius_m;
@@ -754,18 +850,60 @@ vec3 atmosphere_sky(Number alt, vec3 v, vec3 s, vec3 solar, Number t_max, bool f
     mie *= dx * u_atmo.mie_scattering_per_m;
     multiple *= dx;
   }
-  if (hits_ground && d_end >= d_atmo) ground = atmosphere_ground_radiance(r, mu_s, nu, d_end, solar);
+  if (hits_ground && d_end >= d_atmo) ground = atmosphere_ground_radiance(r, mu_s, nu, d_end, vec3(1.0));
+}
+
+// Radiance of the sky along the same ray, for solar irradiance `solar` at the top of the
+// atmosphere: atmosphere_sky_parts with the phase functions. `ground` is for `solar` too.
+vec3 atmosphere_sky(Number alt, vec3 v, vec3 s, vec3 solar, Number t_max, int source, OUT(vec3) transmittance,
+                    OUT(Number) t_end, OUT(vec3) ground) {
+  vec3 rayleigh = vec3(0.0);
+  vec3 mie = vec3(0.0);
+  vec3 multiple = vec3(0.0);
+  atmosphere_sky_parts(alt, v, s, t_max, source, rayleigh, mie, multiple, transmittance, t_end, ground);
+  ground *= solar;
+  Number nu = clamp(dot(v, s), -1.0, 1.0);
   return solar * (rayleigh * rayleigh_phase(nu) + mie * mie_phase(u_atmo.mie_g, nu) + multiple);
+}
+
+// A texel of the camera's air LUT for the camera at altitude `alt` and the sun along unit `s`:
+// the two parts of its ray over its distance from `source` (CV_AIR_MARCH or CV_AIR_SKY_LUT).
+void compute_air_texel(ivec3 texel, Number alt, vec3 s, int source, OUT(vec3) rayleigh, OUT(vec3) mie) {
+  Number r = u_atmo.bottom_radius_m + clamp(alt, 0.0, 1e9);
+  Number mu = 0.0;
+  Number cos_phi = 1.0;
+  Number t = 0.0;
+  bool below = false;
+  air_texel_geometry(texel, r, mu, cos_phi, t, below);
+  // The view direction in a frame whose x axis is the sun's azimuth.
+  Number mu_s = clamp(s.y, -1.0, 1.0);
+  Number sin_v = atmo_safe_sqrt(1.0 - mu * mu);
+  vec3 v = vec3(sin_v * cos_phi, mu, sin_v * atmo_safe_sqrt(1.0 - cos_phi * cos_phi));
+  vec3 s_frame = vec3(atmo_safe_sqrt(1.0 - mu_s * mu_s), mu_s, 0.0);
+  vec3 multiple = vec3(0.0);
+  vec3 transmittance = vec3(1.0);
+  vec3 ground = vec3(0.0);
+  Number t_end = 0.0;
+  Number r_in = 0.0, mu_in = 0.0, mu_s_in = 0.0, nu_in = 0.0, t0 = 0.0;  // where the ray enters the air
+  if (atmosphere_ray_start(alt, v, s_frame, r_in, mu_in, mu_s_in, nu_in, t0)) t += t0;
+  atmosphere_sky_parts(alt, v, s_frame, t, source, rayleigh, mie, multiple, transmittance, t_end, ground);
+  rayleigh += multiple / rayleigh_phase(clamp(dot(v, s_frame), -1.0, 1.0));
+  // Divided by the segment's opacity: for air of one kind under one light the quotient (the mean
+  // source over the extinction) is the same at every distance, so it interpolates far better
+  // across slices and rows than the parts, which grow as 1 - T; the lookup's T is exact.
+  vec3 opacity = max(vec3(1.0) - transmittance, vec3(1e-7));
+  rayleigh /= opacity;
+  mie /= opacity;
 }
 
 // The sky marched per pixel, and read from the 4D scattering LUT (render.sky_lut).
 vec3 atmosphere_scattering(Number alt, vec3 v, vec3 s, vec3 solar, Number t_max, OUT(vec3) transmittance,
                            OUT(Number) t_end, OUT(vec3) ground) {
-  return atmosphere_sky(alt, v, s, solar, t_max, false, transmittance, t_end, ground);
+  return atmosphere_sky(alt, v, s, solar, t_max, CV_AIR_MARCH, transmittance, t_end, ground);
 }
 vec3 atmosphere_scattering_lut(Number alt, vec3 v, vec3 s, vec3 solar, Number t_max, OUT(vec3) transmittance,
                                OUT(Number) t_end, OUT(vec3) ground) {
-  return atmosphere_sky(alt, v, s, solar, t_max, true, transmittance, t_end, ground);
+  return atmosphere_sky(alt, v, s, solar, t_max, CV_AIR_SKY_LUT, transmittance, t_end, ground);
 }
 
 // ------------------------------------------------------------------------------ ground irradiance

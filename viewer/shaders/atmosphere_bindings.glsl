@@ -15,6 +15,9 @@ vec3 irradiance_texel(int texel) { return texelFetch(s_irradiance, ivec2(texel, 
 vec3 scattering_texel(ivec3 texel) { return texelFetch(s_scattering, texel, 0).rgb; }
 vec3 single_mie_texel(ivec3 texel) { return texelFetch(s_single_mie, texel, 0).rgb; }
 vec3 scattering_multiple_texel(ivec3 texel) { return texelFetch(s_scattering_multiple, texel, 0).rgb; }
+layout(binding = CV_UNIT_AIR) uniform sampler3D s_air_lut;          // RGBA32F, the camera's air LUT (render.air_lut)
+layout(binding = CV_UNIT_AIR_MIE) uniform sampler3D s_air_lut_mie;  // RGBA32F, its Mie part
+vec3 air_texel(int part, ivec3 texel) { return part == 0 ? texelFetch(s_air_lut, texel, 0).rgb : texelFetch(s_air_lut_mie, texel, 0).rgb; }
 layout(binding = CV_UNIT_ORDERS_SUM) uniform sampler3D s_orders_sum;  // RGBA32F, the orders table
 // The orders table (atmosphere.density_orders), parts 0..5: single Rayleigh, single Mie, the last
 // order's light, the density's Rayleigh and (5) Mie angular integrals, the sum. Only the orders passes (CV_ATMOSPHERE_ORDERS) read the

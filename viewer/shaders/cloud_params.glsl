@@ -94,7 +94,7 @@ struct CloudParams {
   Number curl_shift;        // curl distortion (cloudgen/curl_distortion.glsl): the field's rise, in its tiles
   Number height_min_m;      // box mode: the box heights are measured in (motion, erosion), min y
   Number height_size_m;     //   relative to the camera, and its height
-  Number height_pad0;
+  Number air_lut;           // 1: the sky and the aerial perspective from the camera's air LUT (render.air_lut)
   Number height_pad1;
   // Multiple scattering by octaves (lighting.glsl inscattered_radiance).
   Number ms_octaves;        // 1 = single scattering only, up to 4

@@ -114,6 +114,21 @@
 #define CV_UNIT_ORDERS_SUM 27         // RGBA32F 3D, orders table: the orders 2..N summed (read by the 4D LUT's pass)
 #define CV_UNIT_ORDERS_DENSITY_M 28   // the density's Mie part
 #define CV_UNIT_PASS_INPUT5 29       // a pass's sixth input (temporal_compose: the sky's air)
+// The camera's air LUT (render.air_lut, atmosphere.glsl): the air's light seen from the camera's
+// altitude with the frame's sun, over CV_AIR_AZIMUTH azimuths from the sun's (0..pi, both ends
+// included) x CV_AIR_ELEVATION elevations (two halves, below and above the horizon, denser near
+// it) x CV_AIR_DEPTH distances (0 to the longest ray, geometric with CV_AIR_DEPTH_LAMBDA), two
+// parts: single Rayleigh with the orders 2..N folded in, single Mie, both before the phase functions.
+#define CV_AIR_AZIMUTH 16
+#define CV_AIR_ELEVATION 64
+#define CV_AIR_DEPTH 64
+#define CV_AIR_DEPTH_LAMBDA 9.0
+#define CV_UNIT_AIR 30                // RGBA32F 3D: the air LUT's Rayleigh part (orders 2..N folded in)
+#define CV_UNIT_AIR_MIE 31            // RGBA32F 3D: its Mie part
+// Where the sky's integrals come from (atmosphere_sky's `source`).
+#define CV_AIR_MARCH 0                // marched per pixel (scattering_sums)
+#define CV_AIR_SKY_LUT 1              // Bruneton's 4D scattering LUT (render.sky_lut)
+#define CV_AIR_CAMERA_LUT 2           // the camera's air LUT (render.air_lut)
 
 // The multiple-scattering volume (render.ms_volume, lighting.glsl): each cell's extinction and
 // first-scattering source are means over CV_MS_SUBSAMPLES^3 stratified points of the cell (2: as

@@ -20,6 +20,7 @@
 #define CV_MODE_PHASE u_cloud.phase_mode
 #define CV_MODE_SKY u_cloud.sky_mode
 #define CV_MODE_SKY_LUT u_cloud.sky_lut
+#define CV_MODE_AIR_LUT u_cloud.air_lut
 #define CV_MODE_OUTPUT u_cloud.output_mode
 #define CV_MODE_ADAPTIVE u_cloud.adaptive
 #define CV_MODE_SKIP u_cloud.occupancy_skip

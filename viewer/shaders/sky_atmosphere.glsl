@@ -15,11 +15,22 @@ vec3 sun_color_at(vec3 p) {
   return u_cloud.sun_color * transmittance_to_sun(r, mu_s);
 }
 
-// The air's light along camera ray rd up to t_max (atmosphere_scattering's arguments and outputs),
-// marched per pixel or read from the 4D scattering LUT (render.sky_lut).
+// Where the frame's sky comes from (CV_AIR_*): the camera's air LUT (render.air_lut), the 4D
+// scattering LUT (render.sky_lut) or the per-pixel march; the air LUT's own texels from the other two.
+int sky_source() {
+  return CV_MODE_AIR_LUT > 0.5 ? CV_AIR_CAMERA_LUT : CV_MODE_SKY_LUT > 0.5 ? CV_AIR_SKY_LUT : CV_AIR_MARCH;
+}
+int air_lut_source() { return CV_MODE_SKY_LUT > 0.5 ? CV_AIR_SKY_LUT : CV_AIR_MARCH; }
+
+// The air's light along camera ray rd up to t_max (atmosphere_scattering's arguments and outputs).
 vec3 sky_scattering(vec3 rd, vec3 solar, Number t_max, OUT(vec3) transmittance, OUT(Number) t_end, OUT(vec3) ground) {
-  return atmosphere_sky(u_cloud.sky_altitude_m, rd, u_cloud.sun_dir, solar, t_max, CV_MODE_SKY_LUT > 0.5, transmittance,
-                        t_end, ground);
+  return atmosphere_sky(u_cloud.sky_altitude_m, rd, u_cloud.sun_dir, solar, t_max, sky_source(), transmittance, t_end,
+                        ground);
+}
+
+// A texel of the camera's air LUT for this frame's camera altitude and sun (air_lut.frag).
+void frame_air_texel(ivec3 texel, OUT(vec3) rayleigh, OUT(vec3) mie) {
+  compute_air_texel(texel, u_cloud.sky_altitude_m, u_cloud.sun_dir, air_lut_source(), rayleigh, mie);
 }
 
 // Background radiance along camera ray rd: single scattering, the ground beyond the ground pass's

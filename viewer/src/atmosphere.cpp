@@ -225,6 +225,7 @@ struct AtmosphereShader {
   vec3 scattering_texel(ivec3) const { return vec3(0.0); }  // the 4D LUT: ScatteringShader below
   vec3 single_mie_texel(ivec3) const { return vec3(0.0); }
   vec3 scattering_multiple_texel(ivec3) const { return vec3(0.0); }
+  vec3 air_texel(int, ivec3) const { return vec3(0.0); }  // the camera's air LUT: the CPU renderer
   vec3 orders_texel(int, ivec3) const { return vec3(0.0); }
   vec3 orders_irradiance_texel(int) const { return vec3(0.0); }
 
@@ -252,6 +253,7 @@ struct SizedAtmosphereShader {
   vec3 scattering_texel(ivec3) const { return vec3(0.0); }
   vec3 single_mie_texel(ivec3) const { return vec3(0.0); }
   vec3 scattering_multiple_texel(ivec3) const { return vec3(0.0); }
+  vec3 air_texel(int, ivec3) const { return vec3(0.0); }  // the camera's air LUT: the CPU renderer
   vec3 orders_texel(int, ivec3) const { return vec3(0.0); }
   vec3 orders_irradiance_texel(int) const { return vec3(0.0); }
 #include "../shaders/atmosphere.glsl"
@@ -294,6 +296,7 @@ struct SizedMsShader {
   vec3 scattering_texel(ivec3) const { return vec3(0.0); }
   vec3 single_mie_texel(ivec3) const { return vec3(0.0); }
   vec3 scattering_multiple_texel(ivec3) const { return vec3(0.0); }
+  vec3 air_texel(int, ivec3) const { return vec3(0.0); }  // the camera's air LUT: the CPU renderer
   vec3 orders_texel(int, ivec3) const { return vec3(0.0); }
   vec3 orders_irradiance_texel(int) const { return vec3(0.0); }
 #include "../shaders/atmosphere.glsl"
@@ -335,6 +338,7 @@ struct OrdersShader {
   vec3 scattering_texel(ivec3) const { return vec3(0.0); }
   vec3 single_mie_texel(ivec3) const { return vec3(0.0); }
   vec3 scattering_multiple_texel(ivec3) const { return vec3(0.0); }
+  vec3 air_texel(int, ivec3) const { return vec3(0.0); }  // the camera's air LUT: the CPU renderer
   vec3 orders_texel(int p, ivec3 t) const { return (*part[size_t(p)])[orders_index(t)]; }
   vec3 orders_irradiance_texel(int t) const { return (*irr_orders)[size_t(t)]; }
 #include "../shaders/atmosphere.glsl"
@@ -413,6 +417,7 @@ struct ScatteringShader {
   vec3 scattering_texel(ivec3 t) const { return lut_texel(t)[0]; }
   vec3 single_mie_texel(ivec3 t) const { return lut_texel(t)[1]; }
   vec3 scattering_multiple_texel(ivec3 t) const { return lut_texel(t)[2]; }
+  vec3 air_texel(int, ivec3) const { return vec3(0.0); }  // the camera's air LUT: the CPU renderer
   vec3 orders_texel(int part, ivec3 t) const { return part == 4 ? base.orders_sum()[orders_index(t)] : vec3(0.0); }
   vec3 orders_irradiance_texel(int) const { return vec3(0.0); }
 #include "../shaders/atmosphere.glsl"

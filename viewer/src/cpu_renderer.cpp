@@ -31,6 +31,13 @@ namespace {
 
 using namespace glm;
 
+// The camera's air LUT (render.air_lut) of one frame: each texel computed by atmosphere.glsl's
+// compute_air_texel the first time a pixel reads it, shared by the threads.
+struct AirTexels {
+  std::mutex mutex;
+  std::unordered_map<int64_t, std::array<dvec3, 2>> texels;
+};
+
 struct CpuShader {
   CV_GLSL_DOUBLE_TYPES;
 
@@ -69,6 +76,23 @@ struct CpuShader {
   vec3 scattering_texel(ivec3 t) { return lut_texel(t)[0]; }
   vec3 single_mie_texel(ivec3 t) { return lut_texel(t)[1]; }
   vec3 scattering_multiple_texel(ivec3 t) { return lut_texel(t)[2]; }
+  AirTexels* air = nullptr;  ///< this frame's air LUT; null: each read computes its texel again
+  vec3 air_texel(int part, ivec3 t) {
+    std::array<dvec3, 2> v;
+    if (!air) {
+      frame_air_texel(t, v[0], v[1]);
+      return v[size_t(part)];
+    }
+    const int64_t key = (int64_t(t.z) * CV_AIR_ELEVATION + t.y) * CV_AIR_AZIMUTH + t.x;
+    {
+      std::lock_guard<std::mutex> lock(air->mutex);
+      auto it = air->texels.find(key);
+      if (it != air->texels.end()) return it->second[size_t(part)];
+    }
+    frame_air_texel(t, v[0], v[1]);
+    std::lock_guard<std::mutex> lock(air->mutex);
+    return air->texels.emplace(key, v).first->second[size_t(part)];
+  }
   vec3 orders_texel(int part, ivec3 t) const { return part == 4 ? lut.orders_sum()[orders_index(t)] : vec3(0.0); }
   vec3 orders_irradiance_texel(int) const { return vec3(0.0); }
 
@@ -368,6 +392,7 @@ void scene_hit(CpuShader& sh, const ref::CloudParams& P, const dvec3& rd, double
 struct Lookups {
   std::shared_ptr<const AtmosphereLuts> shared;
   const AtmosphereLuts& lut;
+  AirTexels air;  // render.air_lut: this frame's (the camera's altitude and the sun are the frame's)
   explicit Lookups(const FrameSetup& frame)
       : shared(int(frame.params.sky_mode) == CV_SKY_PRECOMPUTED ? shared_atmosphere_luts(frame.settings.atmosphere)
                                                                  : nullptr),
@@ -429,6 +454,7 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
   }
   tbb::parallel_for(0, h, [&](int y) {
     CpuShader sh(P, vol, look.lut, &frame.motion_table);
+    sh.air = &look.air;
     sh.light_volume = &light_volume;
     sh.ms_volume = &ms_volume;
     for (int x = 0; x < w; ++x) {
@@ -657,6 +683,7 @@ glm::dvec3 pathtrace_ray(const PreparedVolume& vol, const FrameSetup& frame, con
                          uint32_t seed) {
   Lookups look(frame);
   CpuShader sh(frame.params, vol, look.lut, &frame.motion_table);
+  sh.air = &look.air;
   PhaseSampler phase(frame.params);
   PathTracer pt{sh, frame.params, phase, majorant_of(vol, frame.params), 4096};
   dvec3 sum(0.0);
@@ -678,6 +705,7 @@ FrameImages render_pathtrace(const PreparedVolume& vol, const FrameSetup& frame,
   std::atomic<int> rows_done{0};
   tbb::parallel_for(0, h, [&](int y) {
     CpuShader sh(P, vol, look.lut, &frame.motion_table);
+    sh.air = &look.air;
     PathTracer pt{sh, P, phase, majorant, o.max_scatterings};
     for (int x = 0; x < w; ++x) {
       dvec3 rd = sh.pixel_ray(frame.inv_view_proj, dvec2(x + 0.5, y + 0.5), dvec2(w, h));

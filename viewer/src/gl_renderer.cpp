@@ -88,6 +88,7 @@ const ModeRow kModes[] = {
     {"CV_MODE_PHASE", [](const ref::CloudParams& p) { return p.phase_mode; }},
     {"CV_MODE_SKY", [](const ref::CloudParams& p) { return p.sky_mode; }},
     {"CV_MODE_SKY_LUT", [](const ref::CloudParams& p) { return p.sky_lut; }},
+    {"CV_MODE_AIR_LUT", [](const ref::CloudParams& p) { return p.air_lut; }},
     {"CV_MODE_OUTPUT", [](const ref::CloudParams& p) { return p.output_mode; }},
     {"CV_MODE_ADAPTIVE", [](const ref::CloudParams& p) { return p.adaptive; }},
     {"CV_MODE_SKIP", [](const ref::CloudParams& p) { return p.occupancy_skip; }},
@@ -153,6 +154,7 @@ struct Pass {
   int runs = 0;                                      // precompute: how many times it has run
   bool light_volume = false;                         // runs only when the light volume's inputs changed
   bool ms_volume = false;                            // runs only when the diffusion volume's inputs changed
+  bool air_lut = false;                              // runs only when the air LUT's inputs changed
   bool orders_loop = false;                          // precompute: the density orders' loop follows it
   bool driven = false;                               // run by the orders loop, not by the frame's walk
   int blend_attachment = -1;                         // a 3D target's attachment this pass adds into
@@ -191,6 +193,10 @@ std::vector<Target> make_targets() {
   ms_source.name = "ms_source", ms_source.colors = {GL_RG32F};
   ms_source.volume_size = [](const FrameSetup& f) { return glm::ivec3(f.params.ms_volume_dims); };
   t.push_back(ms_source);
+  Target air;  // the camera's air LUT (render.air_lut): Rayleigh with the orders folded in, Mie
+  air.name = "air", air.colors = {GL_RGBA32F, GL_RGBA32F};
+  air.volume_size = [](const FrameSetup&) { return glm::ivec3(CV_AIR_AZIMUTH, CV_AIR_ELEVATION, CV_AIR_DEPTH); };
+  t.push_back(air);
   Target scattering;  // atmosphere LUT S(r, mu, mu_s, nu): single Rayleigh, single Mie, orders 2..N
   scattering.name = "scattering", scattering.colors = {GL_RGBA32F, GL_RGBA32F, GL_RGBA32F};
   scattering.volume_size = [](const FrameSetup&) {
@@ -272,6 +278,13 @@ std::vector<Pass> make_passes() {
   scattering.lut_units = {CV_UNIT_SCATTERING, CV_UNIT_SINGLE_MIE, CV_UNIT_SCATTERING_MULTIPLE};
   scattering.enabled = [](const FrameSetup& f) { return f.params.sky_lut > 0.5; };
   p.push_back(scattering);
+  // The camera's air LUT (reads the LUTs above), rebuilt when the sun, the camera's altitude or the
+  // atmosphere changes; the ground pass and the cloud passes read it.
+  Pass air;
+  air.name = "air_lut", air.vs = "fullscreen.vert", air.fs = "air_lut.frag", air.target = "air";
+  air.group = Group::Atmosphere, air.air_lut = true;
+  air.enabled = [](const FrameSetup& f) { return f.params.air_lut > 0.5; };
+  p.push_back(air);
   Pass ground;
   ground.name = "ground", ground.vs = "ground.vert", ground.fs = "ground.frag", ground.target = "scene";
   ground.group = Group::Ground, ground.mesh = true;
@@ -361,6 +374,9 @@ struct GlRenderer::Impl {
   int volume_serial = 0;              // counts set_volume calls (part of the light volume's key)
   std::vector<double> light_key;      // what the light volume was built from; empty = not built
   int light_builds = 0;
+  std::vector<double> air_key;        // what the air LUT was built from; empty = not built
+  int air_builds = 0;
+  int atmo_generation = 0;            // counts the atmosphere LUTs' recomputes (part of the air LUT's key)
   GLuint tex_ms = 0;                  // render.ms_volume: the solved fluence and flux (RGBA32F, ms_volume_dims)
   std::vector<double> ms_key;         // what it was solved from; empty = not built
   int ms_builds = 0;
@@ -455,6 +471,7 @@ struct GlRenderer::Impl {
     if (viewport_only) return;
     atmo_valid = false;
     light_key.clear();
+    air_key.clear();
     ms_key.clear();
   }
   void resize(int width, int height) {
@@ -1002,6 +1019,24 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glDisable(GL_FRAMEBUFFER_SRGB);
   // The analytic sky reads no LUT: skip the precompute (and keep the LUTs' state for later frames).
   bool atmo_dirty = f.settings.sky == SkyMode::Precomputed && m.atmosphere_dirty(f.settings.atmosphere);
+  if (atmo_dirty) m.atmo_generation += 1;
+  // The air LUT: rebuilt when the sun, the camera's altitude, its source or the atmosphere changes.
+  bool air_dirty = false;
+  if (f.params.air_lut > 0.5) {
+    Target& air = m.target("air");
+    if (m.ensure_volume_target(air, f)) m.air_key.clear();
+    std::vector<double> akey = {f.params.sun_dir.x, f.params.sun_dir.y, f.params.sun_dir.z, f.params.sky_altitude_m,
+                                f.params.sky_lut, double(m.atmo_generation)};
+    air_dirty = akey != m.air_key;
+    m.air_key = akey;
+  }
+  // Never sample the air LUT while its pass writes it.
+  {
+    const Target& air = m.target("air");
+    const bool bound = f.params.air_lut > 0.5 && !air_dirty && air.tex[0].size() == 2;
+    glBindTextureUnit(CV_UNIT_AIR, bound ? air.tex[0][0] : 0);
+    glBindTextureUnit(CV_UNIT_AIR_MIE, bound ? air.tex[0][1] : 0);
+  }
   // The light volume: rebuilt when its key changes (not when only the camera moves).
   Target& light = m.target("light_volume");
   bool light_dirty = false;
@@ -1039,6 +1074,14 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
         m.run(m.passes[i], f);
         m.light_builds += 1;
         glBindTextureUnit(CV_UNIT_LIGHT_VOLUME, light.tex[0][0]);
+      }
+    } else if (m.passes[i].air_lut) {
+      if (air_dirty) {
+        m.run(m.passes[i], f);
+        m.air_builds += 1;
+        const Target& air = m.target("air");
+        glBindTextureUnit(CV_UNIT_AIR, air.tex[0][0]);
+        glBindTextureUnit(CV_UNIT_AIR_MIE, air.tex[0][1]);
       }
     } else if (m.passes[i].ms_volume) {
       if (ms_dirty) {  // its timing includes the read-back, the CPU solve and the upload
@@ -1146,6 +1189,7 @@ std::vector<glm::vec3> GlRenderer::transmittance_dump(const AtmosphereSettings& 
 }
 
 int GlRenderer::light_volume_builds() const { return impl_->light_builds; }
+int GlRenderer::air_lut_builds() const { return impl_->air_builds; }
 int GlRenderer::program_count() const { return int(impl_->program_cache.size()); }
 
 int GlRenderer::ms_volume_builds() const { return impl_->ms_builds; }

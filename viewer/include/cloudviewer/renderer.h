@@ -115,6 +115,8 @@ class GlRenderer {
   /// How many times the light volume has been built (render.light_volume): once per change of the
   /// sun, the volume or a lighting key, never for a camera move alone.
   int light_volume_builds() const;
+  /// How many times the camera's air LUT (render.air_lut) has been built.
+  int air_lut_builds() const;
   /// Distinct GL programs linked so far (render.compiled_modes: one set per set of modes seen).
   int program_count() const;
   /// How many times the diffusion volume has been solved (render.ms_volume), and the last solve's
