@@ -144,6 +144,7 @@ FrameSetup sky_frame(int w, int h, double sun_az, double sun_el, glm::dvec3 eye 
   apply_setting(s, "render.sky=precomputed");
   apply_setting(s, "render.exact_filter=true");
   apply_setting(s, "render.steps=64");
+  apply_setting(s, "render.air_lut=false");  // the sky's own tests study the march and the 4D LUT
   for (const char* a : sets) apply_setting(s, a);
   Camera cam = default_camera(blob(), fov, double(w) / h);
   if (eye != target) cam.eye = eye, cam.target = target, cam.fov_y_deg = fov;

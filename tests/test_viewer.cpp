@@ -751,6 +751,7 @@ TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
   CV_EXPECT_OFFSET(df_light);
   CV_EXPECT_OFFSET(transmittance_cutoff);
   CV_EXPECT_OFFSET(sky_lut);
+  CV_EXPECT_OFFSET(air_lut);
   CV_EXPECT_OFFSET(ground_half_extent_m);
   CV_EXPECT_OFFSET(camera_world_mod_m);
   CV_EXPECT_OFFSET(shadow_samples);
@@ -783,9 +784,10 @@ TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
   EXPECT_EQ(r.pass_names().at(5), "atmosphere_orders_irradiance");
   EXPECT_EQ(r.pass_names().at(6), "atmosphere_orders_multiple");
   EXPECT_EQ(r.pass_names().at(7), "atmosphere_scattering");
-  EXPECT_EQ(r.pass_names().at(8), "ground");
-  EXPECT_EQ(r.pass_names().at(9), "light_volume");
-  EXPECT_EQ(r.pass_names().at(10), "ms_volume");  // reads the light volume
+  EXPECT_EQ(r.pass_names().at(8), "air_lut");  // reads the LUTs before it
+  EXPECT_EQ(r.pass_names().at(9), "ground");
+  EXPECT_EQ(r.pass_names().at(10), "light_volume");
+  EXPECT_EQ(r.pass_names().at(11), "ms_volume");  // reads the light volume
   EXPECT_EQ(r.pass_names().back(), "tonemap");
 }
 

@@ -316,8 +316,8 @@ TEST(ViewerSpeed, CompiledModesKeepTheImage) {
        {"render.skipping=none", "render.density_step=2", "render.ms_volume=true", "render.phase=mie"}, 0},
       {"one octave, two lobes, analytic sky, transmittance output",
        {"render.ms_octaves=1", "render.phase=two-lobe-hg", "render.sky=analytic", "render.output=transmittance"}, 0},
-      {"no light march, Draine, temporal, air LUT",
-       {"render.light_march=false", "render.phase=draine-hg", "render.temporal=true", "render.air_lut=true"}, 0},
+      {"no light march, Draine, temporal, marched air",
+       {"render.light_march=false", "render.phase=draine-hg", "render.temporal=true", "render.air_lut=false"}, 0},
   };
 
   GlRenderer r{ShaderSource()};

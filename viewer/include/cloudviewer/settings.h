@@ -89,7 +89,7 @@ struct RenderSettings {
   // background
   SkyMode sky = SkyMode::Precomputed;  ///< Bruneton's atmosphere, or the analytic gradient (the thesis)
   bool sky_lut = false;            ///< render.sky=precomputed: the sky from the 4D scattering LUT, not marched
-  bool air_lut = false;            ///< render.sky=precomputed: the sky from the camera's air LUT, not marched
+  bool air_lut = true;             ///< render.sky=precomputed: the sky from the camera's air LUT, not marched
   bool ground = true;
   double ground_height = 0;        ///< m (world y)
   bool ground_height_auto = true;  ///< ground at min(0, volume bottom)
