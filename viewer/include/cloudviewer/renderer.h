@@ -20,7 +20,7 @@ struct FrameImages {
 
 struct GpuTimings {
   double ground_ms = 0, cloud_ms = 0, post_ms = 0, total_ms = 0;
-  double atmosphere_ms = 0;  ///< the atmosphere LUT passes (0 unless an atmosphere.* key changed)
+  double atmosphere_ms = 0;  ///< the atmosphere LUT passes and the air LUT (0 unless an atmosphere.* key, the sun or the camera altitude changed)
   double light_volume_ms = 0;  ///< the light volume's rebuild (0 unless the sun, volume or a lighting key changed)
   std::vector<std::pair<std::string, double>> passes;  ///< every pass in order, ms
 };
