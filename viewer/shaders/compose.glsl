@@ -15,24 +15,6 @@ vec4 cloud_layer(vec3 rd, ivec2 pixel, Number t_scene, OUT(Number) t_mean, OUT(i
   return aerial_perspective(m, t_mean, rd);
 }
 
-// The air in front of the background along rd (precomputed sky only; temporal upsampling samples
-// it at 1/16 of the pixels): `inscattered` is the sky without the sun's disc for a ray that sees
-// no ground (t_scene >= CV_NO_HIT_TEST, `transmittance` 0), else the light the air scatters over
-// the t_scene metres to the ground and their transmittance. The background is then
-// scene_color * transmittance + inscattered (+ the sun's disc on the sky). One integral serves
-// both kinds of pixel (precomputed_sky_air's and air_segment's, up to the end of the ray or to
-// t_scene): llvmpipe would evaluate both of two per-pixel alternatives.
-void background_air(vec3 rd, Number t_scene, OUT(vec3) inscattered, OUT(vec3) transmittance) {
-  bool sky = t_scene >= CV_NO_HIT_TEST;
-  vec3 solar = u_cloud.sun_color * u_cloud.sun_radiance;
-  vec3 ground = vec3(0.0);
-  vec3 t_air = vec3(1.0);
-  Number t_end = 0.0;
-  inscattered = sky_scattering(rd, solar, sky ? CV_NO_HIT : t_scene, t_air, t_end, ground);
-  if (sky) inscattered += t_air * ground;
-  transmittance = sky ? vec3(0.0) : t_air;
-}
-
 // The cloud layer `m` composited over what lies behind it: the sky, or the ground at `t_scene`
 // (>= CV_NO_HIT_TEST: none) with radiance `scene_color` seen through the air. Linear HDR; the
 // transmittance output writes T instead.
@@ -43,8 +25,7 @@ vec3 compose_over(vec4 m, vec3 rd, Number t_scene, vec3 scene_color) {
     vec3 inscattered = vec3(0.0);
     vec3 transmittance = vec3(1.0);
     background_air(rd, t_scene, inscattered, transmittance);
-    background = scene_color * transmittance + inscattered;
-    if (t_scene >= CV_NO_HIT_TEST) background = inscattered + precomputed_sun_disc(rd);
+    background = background_through_air(rd, t_scene >= CV_NO_HIT_TEST, scene_color, inscattered, transmittance);
   } else {
     background = t_scene >= CV_NO_HIT_TEST ? sky_radiance(rd) : scene_color;
   }

@@ -33,24 +33,6 @@ void frame_air_texel(ivec3 texel, OUT(vec3) rayleigh, OUT(vec3) mie) {
   compute_air_texel(texel, u_cloud.sky_altitude_m, u_cloud.sun_dir, air_lut_source(), rayleigh, mie);
 }
 
-// Background radiance along camera ray rd: single scattering, the ground beyond the ground pass's
-// mesh (sunlit, albedo atmosphere.ground_albedo) seen through the air, and the sun's disc.
-// precomputed_sky_air is the smooth part (scattering and the far ground), precomputed_sun_disc the
-// sharp one: temporal upsampling evaluates the first at 1/16 of the pixels.
-vec3 precomputed_sky_air(vec3 rd) {
-  vec3 solar = u_cloud.sun_color * u_cloud.sun_radiance;
-  vec3 transmittance = vec3(1.0);
-  vec3 ground = vec3(0.0);
-  Number t_end = 0.0;
-  vec3 sky = sky_scattering(rd, solar, CV_NO_HIT, transmittance, t_end, ground);
-  return sky + transmittance * ground;
-}
-vec3 precomputed_sun_disc(vec3 rd) {
-  vec3 solar = u_cloud.sun_color * u_cloud.sun_radiance;
-  return atmosphere_sun_disc(u_cloud.sky_altitude_m, rd, u_cloud.sun_dir, solar * u_cloud.sun_disc_scale);
-}
-vec3 precomputed_sky_radiance(vec3 rd) { return precomputed_sky_air(rd) + precomputed_sun_disc(rd); }
-
 // Aerial perspective: the light the air scatters towards the camera over the first t metres of
 // camera ray rd (`inscattered`) and the air's transmittance over them (RGB: `transmittance`).
 void air_segment(vec3 rd, Number t, OUT(vec3) inscattered, OUT(vec3) transmittance) {
@@ -58,4 +40,42 @@ void air_segment(vec3 rd, Number t, OUT(vec3) inscattered, OUT(vec3) transmittan
   vec3 ground = vec3(0.0);
   Number t_end = 0.0;
   inscattered = sky_scattering(rd, solar, t, transmittance, t_end, ground);
+}
+
+// The air in front of the background along rd (temporal upsampling samples it at 1/16 of the
+// pixels): `inscattered` is the sky without the sun's disc for a ray that sees no ground
+// (t_scene >= CV_NO_HIT_TEST, `transmittance` 0; the far ground beyond the ground pass's mesh,
+// sunlit with albedo atmosphere.ground_albedo, seen through the air, included), else the light the
+// air scatters over the t_scene metres to the ground and their transmittance. One integral serves
+// both kinds of pixel, up to the end of the ray or to t_scene: llvmpipe would evaluate both of two
+// per-pixel alternatives.
+void background_air(vec3 rd, Number t_scene, OUT(vec3) inscattered, OUT(vec3) transmittance) {
+  bool sky = t_scene >= CV_NO_HIT_TEST;
+  vec3 solar = u_cloud.sun_color * u_cloud.sun_radiance;
+  vec3 ground = vec3(0.0);
+  vec3 t_air = vec3(1.0);
+  Number t_end = 0.0;
+  inscattered = sky_scattering(rd, solar, sky ? CV_NO_HIT : t_scene, t_air, t_end, ground);
+  if (sky) inscattered += t_air * ground;
+  transmittance = sky ? vec3(0.0) : t_air;
+}
+
+// The sun's disc along rd (the sharp part of the sky, always per pixel).
+vec3 precomputed_sun_disc(vec3 rd) {
+  vec3 solar = u_cloud.sun_color * u_cloud.sun_radiance;
+  return atmosphere_sun_disc(u_cloud.sky_altitude_m, rd, u_cloud.sun_dir, solar * u_cloud.sun_disc_scale);
+}
+
+// The background from its air (background_air's outputs): the sky with the sun's disc, or the
+// ground's radiance `scene_color` seen through the air.
+vec3 background_through_air(vec3 rd, bool sky, vec3 scene_color, vec3 inscattered, vec3 transmittance) {
+  return sky ? inscattered + precomputed_sun_disc(rd) : scene_color * transmittance + inscattered;
+}
+
+// The sky behind everything along rd.
+vec3 precomputed_sky_radiance(vec3 rd) {
+  vec3 inscattered = vec3(0.0);
+  vec3 transmittance = vec3(1.0);
+  background_air(rd, CV_NO_HIT, inscattered, transmittance);
+  return background_through_air(rd, true, vec3(0.0), inscattered, transmittance);
 }

@@ -52,7 +52,7 @@ vec3 background(ivec2 px, vec3 rd, float t, vec3 scene_color) {
   }
   inscattered /= max(wsum, 1e-6);
   transmittance /= max(wsum, 1e-6);
-  return sky ? inscattered + precomputed_sun_disc(rd) : scene_color * transmittance + inscattered;
+  return background_through_air(rd, sky, scene_color, inscattered, transmittance);
 }
 
 void main() {

@@ -279,7 +279,7 @@ std::vector<Pass> make_passes() {
   scattering.enabled = [](const FrameSetup& f) { return f.params.sky_lut > 0.5; };
   p.push_back(scattering);
   // The camera's air LUT (reads the LUTs above), rebuilt when the sun, the camera's altitude or the
-  // atmosphere changes; the ground pass and the cloud passes read it.
+  // atmosphere changes; the cloud passes read it.
   Pass air;
   air.name = "air_lut", air.vs = "fullscreen.vert", air.fs = "air_lut.frag", air.target = "air";
   air.group = Group::Atmosphere, air.air_lut = true;
