@@ -304,6 +304,120 @@ TEST(ViewerMotion, OccupancySkippingStaysExactWhileMoving) {
   }
 }
 
+// While the clouds move (box mode), occupied() reads make_frame's grid over the march box instead of
+// looking the motion up (frame.cpp build_moved_occupancy). What the march relies on: an unmarked
+// cell holds no density, nor does any point one large step (k small steps) away from it. Checked at
+// random points of the march box against the CPU reference's density, for a box cloud and a
+// tileable one, at two times, without shear (a tight grid, where a missing margin shows) and with
+// strong shear (cells that gather many static cells); the grid must also leave cells to skip.
+TEST(ViewerMotion, MovedOccupancyLeavesOutOnlyEmptySpace) {
+  for (const char* kind : {"blob", "noise"}) {
+    PreparedVolume vol = prepare_volume(synthetic_volume(kind), 8, 1);
+    for (glm::dvec2 ts : {glm::dvec2(95, 0), glm::dvec2(95, 3), glm::dvec2(240, 0), glm::dvec2(240, 3)}) {
+      const double t = ts.x, shear = ts.y;
+      const std::string at = std::string(kind) + " t " + std::to_string(int(t)) + " shear " + std::to_string(int(shear));
+      RenderSettings s;
+      s.steps = 128;
+      s.motion.wind_shear = shear;
+      s.motion.wind_speed = 6.0;
+      s.erosion = 0;
+      FrameSetup f = frame_at(vol, s, t);
+      ASSERT_EQ(f.params.motion_on, 1.0);
+      const glm::ivec3 n(f.params.moved_occ_dims);
+      ASSERT_EQ(f.moved_occupancy.size(), size_t(n.x) * n.y * n.z) << at;
+      size_t marked = 0;
+      for (uint8_t c : f.moved_occupancy) marked += c;
+      EXPECT_GT(marked, 0u) << at;
+      EXPECT_LT(double(marked), 0.8 * double(f.moved_occupancy.size())) << at << ": nothing to skip";
+      const glm::dvec3 lo = f.params.march_min_m, ext = f.params.march_size_m;
+      const double cell = f.params.moved_occ_cell_m, large = f.params.large_step_count * f.params.step_m;
+      auto marked_at = [&](glm::dvec3 p) {
+        glm::ivec3 c(glm::floor((p - lo) / cell));
+        c = glm::clamp(c, glm::ivec3(0), n - 1);
+        return f.moved_occupancy[(size_t(c.z) * n.y + c.y) * n.x + c.x] != 0;
+      };
+      uint32_t state = 11;
+      auto next = [&] { return ((state = state * 1664525u + 1013904223u) >> 8) / double(1u << 24); };
+      int unmarked = 0, dense = 0;
+      for (int i = 0; i < 20000; ++i) {
+        glm::dvec3 p = lo + ext * glm::dvec3(next(), next(), next());
+        if (reference_density(vol, f, p) > 0) {
+          ++dense;
+          // The same property seen from the cloud: every point of the box within a large step of
+          // density lies in a marked cell (this probes the grid's edge, where a wrong margin shows).
+          // The corners of the large step's reach cross the most cell borders.
+          for (int k = 0; k < 8; ++k) {
+            glm::dvec3 q = p + glm::dvec3(k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1) * (0.999 * large);
+            if (glm::any(glm::lessThan(q, lo)) || glm::any(glm::greaterThanEqual(q, lo + ext))) continue;
+            ASSERT_TRUE(marked_at(q)) << at << ": (" << q.x << ", " << q.y << ", " << q.z
+                                      << ") is a large step from density but unmarked";
+          }
+        }
+        if (marked_at(p)) continue;
+        ++unmarked;
+        // A large step from p in any direction, at most its length in each axis (L-infinity).
+        glm::dvec3 d = (glm::dvec3(next(), next(), next()) * 2.0 - 1.0) * large;
+        ASSERT_EQ(reference_density(vol, f, p), 0.0) << at << " at (" << p.x << ", " << p.y << ", " << p.z << ")";
+        ASSERT_EQ(reference_density(vol, f, p + d), 0.0) << at << " one large step from (" << p.x << ", "
+                                                           << p.y << ", " << p.z << ")";
+      }
+      EXPECT_GT(unmarked, 2000) << at;
+      EXPECT_GT(dense, 50) << at << ": the samples must reach the cloud";
+    }
+  }
+}
+
+// The grid's margin, where random points rarely look: a volume whose only density is three voxels,
+// each in the corner of its coarse cell, so density reaches the cell's faces. Around each voxel's
+// moved image, every point a large step from density must lie in a marked cell, at many times (the
+// moved grid's offset against the static cells changes with time) and without shear (the tightest
+// grid). A grid that marked only the cells holding density, or had no half-voxel margin, fails here.
+TEST(ViewerMotion, MovedOccupancyKeepsItsMarginAtCellFaces) {
+  cloudgen::Volume v = synthetic_volume("blob");
+  std::fill(v.density.begin(), v.density.end(), 0.f);
+  const std::array<std::array<uint32_t, 3>, 3> dots = {{{47, 23, 47}, {56, 16, 39}, {31, 31, 64}}};
+  for (const auto& d : dots) v.density[v.index(d[0], d[1], d[2])] = 1.f;
+  PreparedVolume vol = prepare_volume(v, 8, 1);
+  int dense = 0;
+  for (int ti = 0; ti < 24; ++ti) {
+    RenderSettings s;
+    s.steps = 96;
+    s.motion.wind_shear = 0.0;
+    s.motion.wind_speed = 5.0;
+    s.erosion = 0;
+    const double t = 20.0 + 7.3 * ti;
+    FrameSetup f = frame_at(vol, s, t);
+    ASSERT_EQ(f.params.motion_on, 1.0);
+    const glm::ivec3 n(f.params.moved_occ_dims);
+    ASSERT_EQ(f.moved_occupancy.size(), size_t(n.x) * n.y * n.z);
+    const glm::dvec3 lo = f.params.march_min_m, hi = lo + f.params.march_size_m;
+    const double cell = f.params.moved_occ_cell_m, large = f.params.large_step_count * f.params.step_m;
+    auto marked_at = [&](glm::dvec3 p) {
+      glm::ivec3 c = glm::clamp(glm::ivec3(glm::floor((p - lo) / cell)), glm::ivec3(0), n - 1);
+      return f.moved_occupancy[(size_t(c.z) * n.y + c.y) * n.x + c.x] != 0;
+    };
+    uint32_t state = 5 + ti;
+    auto next = [&] { return ((state = state * 1664525u + 1013904223u) >> 8) / double(1u << 24); };
+    for (const auto& d : dots) {
+      glm::dvec3 c = f.params.volume_min_m + (glm::dvec3(d[0], d[1], d[2]) + 0.5) * vol.voxel_size;
+      double h = (c.y - f.params.volume_min_m.y) / f.params.volume_size_m.y;
+      c += table_displacement(f, h);  // where the voxel is seen at this time
+      for (int i = 0; i < 200; ++i) {
+        glm::dvec3 p = c + (glm::dvec3(next(), next(), next()) * 2.0 - 1.0) * vol.voxel_size;
+        if (reference_density(vol, f, p) <= 0) continue;
+        ++dense;
+        for (int k = 0; k < 8; ++k) {
+          glm::dvec3 q = p + glm::dvec3(k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1) * (0.999 * large);
+          if (glm::any(glm::lessThan(q, lo)) || glm::any(glm::greaterThanEqual(q, hi))) continue;
+          ASSERT_TRUE(marked_at(q)) << "t " << t << ": (" << q.x << ", " << q.y << ", " << q.z
+                                    << ") is a large step from density but unmarked";
+        }
+      }
+    }
+  }
+  EXPECT_GT(dense, 2000) << "the samples must find the voxels' density";
+}
+
 // Time 0 with the default (moving) parameters, and any time with the motion switched off, are the
 // static image bit for bit; the defaults move the clouds by time 60.
 TEST(ViewerMotion, TimeZeroIsStaticAndTheDefaultsMove) {

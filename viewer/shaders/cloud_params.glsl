@@ -118,4 +118,7 @@ struct CloudParams {
   vec3 curl_repeats;        Number curl_amplitude_m;  // whole tiles of the field per volume axis; 0 = off
   // Multiple scattering from the flux-limited diffusion solve (render.ms_volume, lighting.glsl).
   vec3 ms_volume_dims;      Number ms_volume_on;      // cells of the fluence volume; 1: orders >= 2 from it
+  // Moving clouds in box mode: occupied() reads the march box's own grid for this time (cells of
+  // moved_occ_cell_m metres from march_min_m; FrameSetup::moved_occupancy), no motion lookup.
+  vec3 moved_occ_dims;      Number moved_occ_cell_m;
 };

@@ -18,7 +18,8 @@
 // class that includes shader headers), `CloudParams u_cloud` and the lookups:
 //   vec4   volume_texel(ivec3 texel)     texel of the RGBA volume, texel inside the grid
 //   vec4   volume_filtered(vec3 uvw)     filtered lookup (the GPU's texture unit; exact on the CPU)
-//   Number occupancy_texel(ivec3 cell)   1 where the coarse cell may hold density, else 0
+//   Number occupancy_texel(ivec3 cell)   1 where the coarse cell may hold density, else 0 (moving clouds in
+//                                        box mode: the march box's grid, FrameSetup::moved_occupancy)
 //   int    distance_texel(ivec3 cell)    L-infinity cells to the nearest cell holding density (0: it does)
 //   Number light_volume_texel(ivec3 t)   optical depth toward the sun at a light-volume texel
 //   Number light_volume_filtered(vec3 uvw)  its filtered lookup (exact on the CPU)

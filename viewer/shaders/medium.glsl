@@ -174,7 +174,18 @@ Number cloud_density(vec3 p) {
 // points inside the box, so indices are clamped (wrapped in x/z for tiling volumes): a ray entering
 // through a face must see that face's cell even when rounding puts the point a hair outside, or a
 // large step could skip a whole corner of a dense boundary cell.
+//
+// Moving clouds in box mode read instead the grid make_frame builds over the march box for this
+// time (occupancy_texel then serves that grid): a cell is marked when the static cells its points
+// can be displaced from lie within one cell of density (frame.cpp build_moved_occupancy). Marked
+// wherever density, or density a large step away, can be, and no motion-table read (on llvmpipe those reads were nearly all
+// of what moving clouds cost the thesis path: docs/motion.md).
 bool occupied(vec3 p) {
+  if (CV_MODE_MOTION > 0.5 && !layer_mode()) {
+    ivec3 m = ivec3(floor((p - u_cloud.march_min_m) / u_cloud.moved_occ_cell_m));
+    ivec3 mn = ivec3(u_cloud.moved_occ_dims);
+    return occupancy_texel(ivec3(clamp_index(m.x, mn.x), clamp_index(m.y, mn.y), clamp_index(m.z, mn.z))) > 0.5;
+  }
   vec3 c = moving_uvw(p, motion_at(p)) * u_cloud.volume_dims / u_cloud.occ_cell_voxels;
   ivec3 cell = ivec3(floor(c));
   ivec3 n = ivec3(u_cloud.occ_dims);

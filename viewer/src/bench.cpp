@@ -340,7 +340,7 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
   double nf = double(frames.size());
   out << "\n" << std::left << std::setw(18) << "configuration" << std::right << std::setw(11) << "frame ms"
       << std::setw(11) << "clouds ms";
-  for (const std::string& v : views) out << std::setw(10) << (v.substr(0, 8) + " ms");
+  for (const std::string& v : views) out << std::setw(12) << (v.substr(0, 8) + " ms");
   out << std::setw(9) << "speed-up" << std::setw(10) << "trips/px" << std::setw(12) << "max|diff|" << std::setw(12)
       << "RMSE base";
   if (o.bench_reference > 0) out << std::setw(12) << "RMSE ref";
@@ -352,7 +352,7 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
         << s.total / nf << std::setw(11) << s.cloud / nf;
     for (const std::string& v : views) {
       auto it = s.by_view.find(v);
-      out << std::setw(10) << (it == s.by_view.end() ? 0.0 : it->second.first / it->second.second);
+      out << std::setw(12) << (it == s.by_view.end() ? 0.0 : it->second.first / it->second.second);
     }
     out << std::setw(8) << (sums[0].total / s.total) << "x" << std::setprecision(1) << std::setw(10) << s.trips / nf
         << std::setprecision(5) << std::setw(12) << s.max_diff

@@ -47,11 +47,13 @@ struct CpuShader {
   const AtmosphereLuts& lut;
   const ref::AtmosphereParams& u_atmo;
   const std::vector<dvec3>* motion = nullptr;  // FrameSetup::motion_table (2 rows)
+  const std::vector<uint8_t>* moved_occ = nullptr;  // FrameSetup::moved_occupancy (moving clouds, box mode)
   const std::vector<double>* light_volume = nullptr;  ///< light_volume_dims texels, x fastest
 
   CpuShader(const ref::CloudParams& p, const PreparedVolume& v, const AtmosphereLuts& t,
-            const std::vector<dvec3>* motion_table = nullptr)
-      : u_cloud(p), vol(v), lut(t), u_atmo(t.params), motion(motion_table) {}
+            const FrameSetup* frame = nullptr)
+      : u_cloud(p), vol(v), lut(t), u_atmo(t.params),
+        motion(frame ? &frame->motion_table : nullptr), moved_occ(frame ? &frame->moved_occupancy : nullptr) {}
 
   vec3 transmittance_texel(ivec2 t) const { return lut.transmittance[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
   vec3 multiple_scattering_texel(ivec2 t) const {
@@ -165,6 +167,11 @@ struct CpuShader {
   }
   bool nanovdb_has_detail() const { return vol.has_detail; }
   Number occupancy_texel(ivec3 c) const {
+    if (u_cloud.motion_on > 0.5 && u_cloud.layer_on < 0.5) {  // the march box's grid of a moving frame (medium.glsl occupied)
+      const ivec3 n = ivec3(u_cloud.moved_occ_dims);
+      if (!moved_occ || moved_occ->size() != size_t(n.x) * n.y * n.z) return 1.0;  // none given: may hold density
+      return (*moved_occ)[(size_t(c.z) * n.y + c.y) * n.x + c.x];
+    }
     return vol.occ[(size_t(c.z) * vol.occ_dims[1] + c.y) * vol.occ_dims[0] + c.x];
   }
   int distance_texel(ivec3 c) const {
@@ -360,7 +367,7 @@ int reference_cross_matrix(int x, int y) {
 }
 
 double reference_density(const PreparedVolume& vol, const FrameSetup& frame, const glm::dvec3& p) {
-  CpuShader sh(frame.params, vol, no_lut(), &frame.motion_table);
+  CpuShader sh(frame.params, vol, no_lut(), &frame);
   return sh.cloud_density(p);
 }
 
@@ -453,7 +460,7 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
         o.asymmetry);
   }
   tbb::parallel_for(0, h, [&](int y) {
-    CpuShader sh(P, vol, look.lut, &frame.motion_table);
+    CpuShader sh(P, vol, look.lut, &frame);
     sh.air = &look.air;
     sh.light_volume = &light_volume;
     sh.ms_volume = &ms_volume;
@@ -682,7 +689,7 @@ double majorant_of(const PreparedVolume& vol, const ref::CloudParams& P) {
 glm::dvec3 pathtrace_ray(const PreparedVolume& vol, const FrameSetup& frame, const glm::dvec3& rd, int spp,
                          uint32_t seed) {
   Lookups look(frame);
-  CpuShader sh(frame.params, vol, look.lut, &frame.motion_table);
+  CpuShader sh(frame.params, vol, look.lut, &frame);
   sh.air = &look.air;
   PhaseSampler phase(frame.params);
   PathTracer pt{sh, frame.params, phase, majorant_of(vol, frame.params), 4096};
@@ -704,7 +711,7 @@ FrameImages render_pathtrace(const PreparedVolume& vol, const FrameSetup& frame,
   if (o.standard_error) *o.standard_error = Image(w, h);
   std::atomic<int> rows_done{0};
   tbb::parallel_for(0, h, [&](int y) {
-    CpuShader sh(P, vol, look.lut, &frame.motion_table);
+    CpuShader sh(P, vol, look.lut, &frame);
     sh.air = &look.air;
     PathTracer pt{sh, P, phase, majorant, o.max_scatterings};
     for (int x = 0; x < w; ++x) {

@@ -75,6 +75,81 @@ void apply_motion(const RenderSettings& s, bool baked, double height, ref::Cloud
   if (p.layer_on < 0.5) p.max_iterations = std::max(p.max_iterations, 4.0 * std::ceil(diag / p.step_m) + 64.0);
 }
 
+// Moving clouds in box mode: the occupancy grid of the march box at this time, so that occupied()
+// needs no motion lookup (medium.glsl). Cells are the volume's coarse cells in size, laid from
+// march_min_m. What is seen at p is the static volume at q = p - D(h(p)), with D the motion table
+// interpolated linearly (what both renderers use), so over a cell's heights D stays within the
+// range of the table entries that span them: the static points a cell can show lie in its box
+// moved by that range (grown by half a voxel for rounding). The cell is marked when any static cell
+// there is within one cell of a cell holding density (the distance field's d <= 1; the padded grid
+// when a volume has no field, padding >= 1). Unmarked, p's q is a whole cell from density, so
+// density is 0 at p and, along a large step of L (1 + G / H) < cell - voxel / 2, at every point
+// of it: apply_motion's shortened large step keeps the march exact as before.
+void build_moved_occupancy(const PreparedVolume& vol, const std::vector<glm::dvec3>& table, ref::CloudParams& p,
+                           std::vector<uint8_t>& out) {
+  const double cell = vol.occ_cell * vol.voxel_size;
+  const glm::dvec3 origin = p.march_min_m - p.volume_min_m;  // the march box's min, volume-local metres
+  glm::ivec3 n(1);
+  for (int a = 0; a < 3; ++a) n[a] = std::max(1, int(std::ceil(p.march_size_m[a] / cell - 1e-9)));
+  const std::array<int, 3>& sn = vol.occ_dims;
+  const bool use_dist = vol.dist.size() == vol.occ.size();
+  const double cells = double(n.x) * n.y * n.z;
+  if (cells > double(1 << 24) || std::max(n.x, std::max(n.y, n.z)) > 2048) {  // absurd times: no skipping
+    p.moved_occ_dims = glm::dvec3(1.0);
+    p.moved_occ_cell_m = std::max(p.march_size_m.x, std::max(p.march_size_m.y, p.march_size_m.z)) + 1.0;
+    out.assign(1, 1);
+    return;
+  }
+  p.moved_occ_dims = glm::dvec3(n);
+  p.moved_occ_cell_m = cell;
+  const double margin = 0.5 * vol.voxel_size;
+  const int last = CV_MOTION_LUT_SIZE - 1;
+  auto h_of = [&](double y_local) { return (vol.origin.y + y_local - vol.height_min) / vol.height_size; };
+  // A static axis range [lo, hi] (metres) as cell indices; false when it misses a non-wrapping volume.
+  auto span = [&](double lo, double hi, int axis, bool wraps, int& i0, int& i1) {
+    i0 = int(std::floor(lo / cell));
+    i1 = int(std::floor(hi / cell));
+    if (wraps) {
+      if (i1 - i0 >= sn[axis]) i0 = 0, i1 = sn[axis] - 1;
+      return true;
+    }
+    i0 = std::max(i0, 0);
+    i1 = std::min(i1, sn[axis] - 1);
+    return i0 <= i1;
+  };
+  auto near_density = [&](int x, int y, int z) {
+    size_t i = (size_t(z) * sn[1] + y) * sn[0] + x;
+    return use_dist ? vol.dist[i] <= 1 : vol.occ[i] != 0;
+  };
+  out.assign(size_t(cells), 0);
+  for (int j = 0; j < n.y; ++j) {
+    double y0 = origin.y + j * cell - margin, y1 = origin.y + (j + 1) * cell + margin;
+    double h0 = std::clamp(h_of(y0), 0.0, 1.0) * last, h1 = std::clamp(h_of(y1), 0.0, 1.0) * last;
+    int e0 = std::clamp(int(std::floor(h0)), 0, last), e1 = std::clamp(int(std::ceil(h1)), 0, last);
+    glm::dvec3 dlo = table[size_t(e0)], dhi = dlo;
+    for (int e = e0; e <= e1; ++e) dlo = glm::min(dlo, table[size_t(e)]), dhi = glm::max(dhi, table[size_t(e)]);
+    int y_0, y_1;
+    if (!span(y0 - dhi.y, y1 - dlo.y, 1, false, y_0, y_1)) continue;
+    for (int k = 0; k < n.z; ++k) {
+      double z0 = origin.z + k * cell - margin, z1 = origin.z + (k + 1) * cell + margin;
+      int z_0, z_1;
+      if (!span(z0 - dhi.z, z1 - dlo.z, 2, vol.tiles, z_0, z_1)) continue;
+      for (int i = 0; i < n.x; ++i) {
+        double x0 = origin.x + i * cell - margin, x1 = origin.x + (i + 1) * cell + margin;
+        int x_0, x_1;
+        if (!span(x0 - dhi.x, x1 - dlo.x, 0, vol.tiles, x_0, x_1)) continue;
+        bool hit = false;
+        for (int z = z_0; z <= z_1 && !hit; ++z)
+          for (int y = y_0; y <= y_1 && !hit; ++y)
+            for (int x = x_0; x <= x_1 && !hit; ++x)
+              hit = near_density(vol.tiles ? ((x % sn[0]) + sn[0]) % sn[0] : x, y,
+                                 vol.tiles ? ((z % sn[2]) + sn[2]) % sn[2] : z);
+        out[(size_t(k) * n.y + j) * n.x + i] = hit ? 1 : 0;
+      }
+    }
+  }
+}
+
 }  // namespace
 
 std::vector<glm::dvec3> motion_table_row(const RenderSettings& s, double t) {
@@ -250,6 +325,7 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   if (p.motion_on > 0.5) {
     f.motion_table = motion_table_row(s, s.time);
     f.motion_table.insert(f.motion_table.end(), f.motion_table.begin(), f.motion_table.end());
+    if (!layer) build_moved_occupancy(vol, f.motion_table, p, f.moved_occupancy);
   }
   f.params = rounded_to_float(p);
   f.view_proj = view_projection(cam, width, height);

@@ -371,6 +371,8 @@ struct GlRenderer::Impl {
   std::vector<Target> targets = make_targets();
   std::vector<Pass> passes = make_passes();
   GLuint tex_volume = 0, tex_occ = 0, tex_dist = 0, tex_mie = 0, tex_coverage = 0, tex_motion = 0, tex_curl = 0;
+  GLuint tex_moved_occ = 0;           // FrameSetup::moved_occupancy (R8), bound for occupied() while clouds move
+  glm::ivec3 moved_occ_dims{0, 0, 0};  // its allocated size
   int volume_serial = 0;              // counts set_volume calls (part of the light volume's key)
   std::vector<double> light_key;      // what the light volume was built from; empty = not built
   int light_builds = 0;
@@ -798,7 +800,7 @@ GlRenderer::~GlRenderer() {
   Impl& m = *impl_;
   m.delete_programs();
   m.delete_targets();
-  GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_dist, m.tex_mie, m.tex_coverage, m.tex_motion, m.tex_curl, m.tex_ms};
+  GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_dist, m.tex_mie, m.tex_coverage, m.tex_motion, m.tex_curl, m.tex_ms, m.tex_moved_occ};
   for (GLuint t : texs)
     if (t) glDeleteTextures(1, &t);
   if (m.tex_nano) glDeleteTextures(1, &m.tex_nano);
@@ -989,6 +991,21 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
     for (size_t i = 0; i < rows.size(); ++i) texels[i] = glm::vec4(glm::vec3(rows[i]), 0.f);
     glTextureSubImage2D(m.tex_motion, 0, 0, 0, CV_MOTION_LUT_SIZE, 2, GL_RGBA, GL_FLOAT, texels.data());
   }
+  const bool moved_occ = !f.moved_occupancy.empty();  // the march box's occupancy at this time (medium.glsl occupied)
+  if (moved_occ) {
+    const glm::ivec3 n(f.params.moved_occ_dims);
+    if (n != m.moved_occ_dims) {
+      if (m.tex_moved_occ) glDeleteTextures(1, &m.tex_moved_occ);
+      glCreateTextures(GL_TEXTURE_3D, 1, &m.tex_moved_occ);
+      glTextureStorage3D(m.tex_moved_occ, 1, GL_R8, n.x, n.y, n.z);
+      glTextureParameteri(m.tex_moved_occ, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+      glTextureParameteri(m.tex_moved_occ, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+      m.moved_occ_dims = n;
+    }
+    std::vector<uint8_t> cells(f.moved_occupancy.size());
+    for (size_t i = 0; i < cells.size(); ++i) cells[i] = f.moved_occupancy[i] ? 255 : 0;
+    glTextureSubImage3D(m.tex_moved_occ, 0, 0, 0, 0, n.x, n.y, n.z, GL_RED, GL_UNSIGNED_BYTE, cells.data());
+  }
   m.history_valid = temporal;
   m.history_key = key;
   m.history_eye = f.camera.eye;
@@ -999,7 +1016,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_FRAME, m.ubo_frame);
   glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_ATMOSPHERE, m.ubo_atmo);
   glBindTextureUnit(CV_UNIT_VOLUME, m.tex_volume);
-  glBindTextureUnit(CV_UNIT_OCCUPANCY, m.tex_occ);
+  glBindTextureUnit(CV_UNIT_OCCUPANCY, moved_occ ? m.tex_moved_occ : m.tex_occ);
   glBindTextureUnit(CV_UNIT_DISTANCE, m.tex_dist);
   glBindTextureUnit(CV_UNIT_NANOVDB_GRIDS, m.tex_nano);
   // Beyond a storage block the shaders read the buffer texture; the storage binding then covers

@@ -182,6 +182,10 @@ struct FrameSetup {
   /// and, for temporal reprojection, the previous frame's (row 1; the GL renderer fills it in).
   /// Empty when the clouds are still.
   std::vector<glm::dvec3> motion_table;
+  /// Moving clouds in box mode: the occupancy of the march box at this time, params.moved_occ_dims
+  /// cells of params.moved_occ_cell_m from params.march_min_m (x fastest, 0 or 1), which both
+  /// renderers' occupied() reads instead of the volume's grid (medium.glsl). Empty otherwise.
+  std::vector<uint8_t> moved_occupancy;
 };
 
 /// motion_displacement (cloudgen/motion.glsl) at CV_MOTION_LUT_SIZE evenly spaced heights in
