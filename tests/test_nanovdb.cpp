@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <iterator>
 #include <memory>
 
@@ -172,6 +173,10 @@ TEST(NanoVdb, SameViewGivesTheSameImageAsTheDensePath) {
   const PreparedVolume dense = open_input(p.string(), with({"render.volume=dense"}));
   const PreparedVolume nano = open_input(p.string(), with({"render.volume=nanovdb"}));
   ASSERT_TRUE(nano.nano);
+  // The height range of the height fraction (ambient gradient, motion) is the dense path's too.
+  EXPECT_EQ(nano.height_min, dense.height_min);
+  EXPECT_EQ(nano.height_size, dense.height_size);
+  EXPECT_EQ(nano.baked_motion, dense.baked_motion);
   RenderSettings s = with({"render.steps=96"});
   const FrameSetup f = frame_for(dense, s, 96, 54);
   const FrameImages cd = render_cpu(dense, f), cn = render_cpu(nano, f);
@@ -193,10 +198,13 @@ TEST(NanoVdb, SameViewGivesTheSameImageAsTheDensePath) {
   // GL nanovdb against the CPU nanovdb reference, as the dense path's own test (> 50 dB).
   const FrameImages cpu_e = render_cpu(nano, fe);
   EXPECT_GT(psnr(en.display, cpu_e.display), 50.0);
-  // PNanoVDB's accessor walk on the GPU instead of the page table: the same values, the same image.
-  RenderSettings acc = ex;
-  apply_setting(acc, "render.nanovdb_lookup=accessor");
-  EXPECT_EQ(max_abs_diff(render_gl(nano, frame_for(dense, acc, 96, 54)).linear, en.linear), 0.0);
+  // The default GPU lookup is the brick atlas (en above); the page table and PNanoVDB's accessor
+  // walk read the same values with the same hand filter: the same image.
+  for (const char* lookup : {"render.nanovdb_lookup=table", "render.nanovdb_lookup=accessor"}) {
+    RenderSettings other = ex;
+    apply_setting(other, lookup);
+    EXPECT_EQ(max_abs_diff(render_gl(nano, frame_for(dense, other, 96, 54)).linear, en.linear), 0.0) << lookup;
+  }
   // Detail grids of separate layouts (files from elsewhere) take one tree walk per grid: same image.
   auto copy = std::make_shared<cloudgen::NanoVolume>(*nano.nano);
   copy->detail_shared_layout = false;
@@ -204,6 +212,84 @@ TEST(NanoVdb, SameViewGivesTheSameImageAsTheDensePath) {
   EXPECT_EQ(max_abs_diff(render_cpu(separate, f).linear, cd.linear), 0.0);
   EXPECT_LE(max_abs_diff(render_gl(separate, fe).linear, ed.linear), 1e-6);
   if (HasFailure()) dump("same_view", gd.display, gn.display);
+}
+
+// The brick atlas (render.nanovdb_lookup=atlas) against an independent reading of the grids:
+// every texel of every brick is the dense texture's texel at its clamped or wrapped index, as
+// NanoVDB's own accessor reads it (cloudgen::nano_value); a cell without a brick reads no density
+// anywhere in its 9^3; a tiling volume wraps. A budget below the atlas's size gives none.
+TEST(NanoVdb, BrickAtlasHoldsTheDenseTexels) {
+  for (const char* kind : {"blob", "noise"}) {
+    const cloudgen::Volume v = synthetic_volume(kind);
+    auto n = std::make_shared<cloudgen::NanoVolume>(cloudgen::nano_from_volume(v, all_grids()));
+    const PreparedVolume pv = prepare_nano(n, 8, 1);
+    ASSERT_EQ(pv.tiles, std::string(kind) == "noise");
+    const NanoAtlas a = build_nano_atlas(pv, 2048, uint64_t(1) << 30);
+    ASSERT_GT(a.cells[0], 0) << kind;
+    ASSERT_EQ(a.channels, 4);
+    const int B = NanoAtlas::kBrick;
+    const size_t W = size_t(a.layout[0]) * B, H = size_t(a.layout[1]) * B;
+    size_t with_brick = 0, checked = 0;
+    uint32_t state = 3;
+    auto next = [&](int m) { return int(((state = state * 1664525u + 1013904223u) >> 8) % uint32_t(m)); };
+    for (int cz = 0; cz < a.cells[2]; ++cz)
+      for (int cy = 0; cy < a.cells[1]; ++cy)
+        for (int cx = 0; cx < a.cells[0]; ++cx) {
+          const uint16_t* e = &a.index[((size_t(cz) * a.cells[1] + cy) * a.cells[0] + cx) * 4];
+          with_brick += e[3];
+          // Some texels of each cell (all 729 of every 7th), at the index the dense sampler reads.
+          const int samples = (cx + cy + cz) % 7 == 0 ? B * B * B : 24;
+          for (int s = 0; s < samples; ++s) {
+            const int x = samples == B * B * B ? s % B : next(B), y = samples == B * B * B ? (s / B) % B : next(B),
+                      z = samples == B * B * B ? s / (B * B) : next(B);
+            const int t[3] = {8 * cx - 1 + x, 8 * cy - 1 + y, 8 * cz - 1 + z};
+            std::array<int32_t, 3> ijk;
+            for (int k = 0; k < 3; ++k) {
+              const int d = pv.dims[size_t(k)];
+              const int i = pv.tiles && k != 1 ? ((t[k] % d) + d) % d : std::clamp(t[k], 0, d - 1);
+              ijk[size_t(k)] = i + n->index_min[size_t(k)];
+            }
+            const float want = std::max(cloudgen::nano_value(*n, 0, ijk), 0.0f);
+            if (e[3] == 0) {
+              ASSERT_EQ(want, 0.0f) << kind << " cell " << cx << "," << cy << "," << cz << " has density but no brick";
+              continue;
+            }
+            const float* got = &a.texels[(((size_t(e[2]) + z) * H + e[1] + y) * W + e[0] + x) * 4];
+            ASSERT_EQ(got[0], want) << kind << " cell " << cx << "," << cy << "," << cz << " texel " << x << "," << y << "," << z;
+            for (int c = 0; c < 3; ++c)
+              ASSERT_EQ(got[1 + c], cloudgen::nano_value(*n, size_t(n->detail[size_t(c)]), ijk)) << kind << " detail " << c;
+            ++checked;
+          }
+        }
+    EXPECT_EQ(with_brick, a.bricks);
+    EXPECT_GT(a.bricks, 0u);
+    EXPECT_GT(checked, 10000u) << kind;
+    if (std::string(kind) == "blob") {
+      EXPECT_LT(a.bricks, size_t(a.cells[0]) * a.cells[1] * a.cells[2]) << "empty cells keep no brick";
+    }
+    EXPECT_EQ(build_nano_atlas(pv, 2048, a.bytes() / 2).cells[0], 0) << "over the budget: no atlas";
+  }
+}
+
+// A tiling volume through the atlas on the GPU: the wrap at the tile's sides reads the dense
+// texture's texels (exact filter: the same float arithmetic, <= 1e-6) and filters as its sampler.
+TEST(NanoVdb, AtlasOfATilingVolumeGivesTheDenseImage) {
+  const cloudgen::Volume v = synthetic_volume("noise");
+  auto n = std::make_shared<cloudgen::NanoVolume>(cloudgen::nano_from_volume(v, all_grids()));
+  const PreparedVolume nano = prepare_nano(n, 8, 1);
+  const PreparedVolume dense = prepare_volume(v, 8, 1);
+  ASSERT_TRUE(nano.tiles);
+  RenderSettings ex = with({"render.steps=96", "render.exact_filter=true"});
+  const FrameSetup fe = frame_for(dense, ex, 96, 54);
+  const double d = max_abs_diff(render_gl(dense, fe).linear, render_gl(nano, fe).linear);
+  std::cout << "tiling volume, GL dense vs atlas (exact filter): max |diff| " << d << "\n";
+  EXPECT_LE(d, 1e-6);
+  RenderSettings s = with({"render.steps=96"});
+  const FrameSetup f = frame_for(dense, s, 96, 54);
+  const FrameImages gd = render_gl(dense, f), gn = render_gl(nano, f);
+  std::cout << "tiling volume, GL dense vs atlas (texture unit): PSNR " << psnr(gd.display, gn.display) << " dB\n";
+  EXPECT_GT(psnr(gd.display, gn.display), 45.0);
+  EXPECT_GT(image_stats(gn.display).stddev, 0.05);
 }
 
 // A volume beyond the dense path's budget (here a deliberately small render.dense_budget) opens

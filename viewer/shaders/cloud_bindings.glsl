@@ -107,7 +107,38 @@ vec4 nanovdb_filtered(vec3 uvw);
 
 // The storage is chosen at compile time (nanovdb_storage.glsl): a run-time branch here made
 // llvmpipe's dense programs 4x slower and, at 512 steps with exact_filter, wrong.
-#if CV_NANOVDB
+#if CV_NANOVDB && CV_NANOVDB_ATLAS
+// render.nanovdb_lookup=atlas (viewer/include/cloudviewer/scene.h NanoAtlas): s_volume holds the
+// occupied bricks, s_nvdb_pages (RGBA16UI) per brick cell its first texel and 1, or 0 for none.
+// A lookup whose lower corner is i0 reads cell (i0 + 1) >> 3, whose brick starts at texel 8 c - 1
+// and holds all 8 corners; the texture unit filters inside the brick as it does the dense texture.
+// Outside the box, the dense sampler's clamp (y; x, z unless the volume tiles) or wrap first.
+vec3 atlas_position(vec3 uvw) {
+  vec3 n = u_cloud.volume_dims;
+  vec3 x = uvw * n - 0.5;
+  vec3 hi = n - 1.0;
+  if (CV_MODE_TILES > 0.5) {
+    x.xz -= n.xz * floor(x.xz / n.xz);
+    hi.xz = n.xz - 1.0 / 1024.0;
+  }
+  return clamp(x, vec3(-1.0), hi);
+}
+vec4 atlas_value(vec4 v) { return u_nvdb_detail != 0 ? v : vec4(v.x, 0.0, 0.0, 0.0); }
+vec4 volume_texel(ivec3 texel) {
+  ivec3 c = (texel + 1) >> 3;
+  uvec4 e = texelFetch(s_nvdb_pages, c, 0);
+  if (e.w == 0u) return vec4(0.0);
+  return atlas_value(texelFetch(s_volume, ivec3(e.xyz) + texel + 1 - 8 * c, 0));
+}
+vec4 volume_filtered(vec3 uvw) {
+  vec3 x = atlas_position(uvw);
+  ivec3 c = (ivec3(floor(x)) + 1) >> 3;
+  uvec4 e = texelFetch(s_nvdb_pages, c, 0);
+  if (e.w == 0u) return vec4(0.0);
+  vec3 s = vec3(e.xyz) + (x - vec3(8 * c - 1)) + 0.5;
+  return atlas_value(texture(s_volume, s / vec3(textureSize(s_volume, 0))));
+}
+#elif CV_NANOVDB
 vec4 volume_texel(ivec3 texel) { return nanovdb_texel(texel); }
 vec4 volume_filtered(vec3 uvw) { return nanovdb_filtered(uvw); }
 #else

@@ -6,6 +6,9 @@
 #include <cstdio>
 #include <cstring>
 #include <functional>
+#include <chrono>
+#include <cmath>
+#include <iostream>
 #include <map>
 #include <string>
 #include <vector>
@@ -392,6 +395,61 @@ struct GlRenderer::Impl {
   uint64_t pages_bytes = 0;
   glm::ivec3 nvdb_index_min{0};
   glm::uvec4 nvdb_grid{0u};
+  // render.nanovdb_lookup=atlas: the grids' brick atlas (scene.h NanoAtlas), built on the first
+  // frame that asks for it; bound at the dense volume's unit, its index at the page table's.
+  PreparedVolume atlas_of;  // what build_nano_atlas reads of the volume (nano, dims, tiles, detail)
+  GLuint tex_atlas = 0, tex_atlas_index = 0;
+  int atlas_state = 0;  // 0 not built, 1 built, -1 refused (beyond kAtlasBudget: the page table instead)
+  static constexpr uint64_t kAtlasBudget = uint64_t(1) << 30;
+  bool ensure_atlas() {
+    if (atlas_state != 0) return atlas_state > 0;
+    GLint max3d = 0;
+    glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max3d);
+    const auto t0 = std::chrono::steady_clock::now();
+    const NanoAtlas a = build_nano_atlas(atlas_of, max3d, kAtlasBudget);
+    if (a.cells[0] == 0) {
+      std::cerr << "cloudviewer: the NanoVDB brick atlas would exceed " << (kAtlasBudget >> 20) << " MiB or a "
+                << max3d << "^3 texture; render.nanovdb_lookup=atlas falls back to the page table\n";
+      atlas_state = -1;
+      return false;
+    }
+    const int B = NanoAtlas::kBrick;
+    glCreateTextures(GL_TEXTURE_3D, 1, &tex_atlas);
+    glTextureStorage3D(tex_atlas, 1, a.channels == 1 ? GL_R32F : GL_RGBA32F, a.layout[0] * B, a.layout[1] * B,
+                       a.layout[2] * B);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTextureSubImage3D(tex_atlas, 0, 0, 0, 0, a.layout[0] * B, a.layout[1] * B, a.layout[2] * B,
+                        a.channels == 1 ? GL_RED : GL_RGBA, GL_FLOAT, a.texels.data());
+    glTextureParameteri(tex_atlas, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTextureParameteri(tex_atlas, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    for (GLenum w : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R}) glTextureParameteri(tex_atlas, w, GL_CLAMP_TO_EDGE);
+    glCreateTextures(GL_TEXTURE_3D, 1, &tex_atlas_index);
+    glTextureStorage3D(tex_atlas_index, 1, GL_RGBA16UI, a.cells[0], a.cells[1], a.cells[2]);
+    glTextureSubImage3D(tex_atlas_index, 0, 0, 0, 0, a.cells[0], a.cells[1], a.cells[2], GL_RGBA_INTEGER,
+                        GL_UNSIGNED_SHORT, a.index.data());
+    glTextureParameteri(tex_atlas_index, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(tex_atlas_index, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    if (glGetError() != GL_NO_ERROR) {  // (out of GPU memory) the page table needs nothing more
+      delete_atlas();
+      atlas_state = -1;
+      std::cerr << "cloudviewer: uploading the NanoVDB brick atlas (" << (a.bytes() >> 20)
+                << " MiB) failed; render.nanovdb_lookup=atlas falls back to the page table\n";
+      return false;
+    }
+    atlas_state = 1;
+    const size_t cells = size_t(a.cells[0]) * a.cells[1] * a.cells[2];
+    std::cerr << "cloudviewer: NanoVDB brick atlas: " << a.bricks << " bricks of 9^3 (" << std::lround(100.0 * a.bricks / cells)
+              << "% of the " << cells << " leaf cells), " << std::lround(double(a.bytes()) / (1 << 20) * 10) / 10.0
+              << " MiB on the GPU beside the grids, built in "
+              << std::lround(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * 1000) << " ms\n";
+    return true;
+  }
+  void delete_atlas() {
+    if (tex_atlas) glDeleteTextures(1, &tex_atlas);
+    if (tex_atlas_index) glDeleteTextures(1, &tex_atlas_index);
+    tex_atlas = tex_atlas_index = 0;
+    atlas_state = 0;
+  }
   bool atmo_valid = false;            // the LUT targets hold `atmo_done`'s tables
   AtmosphereSettings atmo_done;
   GLuint vao_empty = 0, vao_ground = 0, vbo_ground = 0;
@@ -602,17 +660,20 @@ struct GlRenderer::Impl {
     ms_builds += 1;
   }
   // nanovdb_storage.glsl's switches: rebuilds the programs when they change.
-  int storage = 0;  // 0 dense, 1 nanovdb from a storage buffer, 2 nanovdb from a buffer texture
+  int storage = 0;  // 0 dense, 1 nanovdb from a storage buffer, 2 nanovdb from a buffer texture, 3 the brick atlas
   void use_storage(int st) {
     if (st == storage) return;
     shaders.set_override("nanovdb_storage.glsl", std::string("#define CV_NANOVDB ") + (st ? "1" : "0") +
-                                                     "\n#define CV_NANOVDB_BUFFER_TEXTURE " + (st == 2 ? "1" : "0") + "\n");
+                                                     "\n#define CV_NANOVDB_BUFFER_TEXTURE " + (st == 2 ? "1" : "0") +
+                                                     "\n#define CV_NANOVDB_ATLAS " + (st == 3 ? "1" : "0") + "\n");
     storage = st;
     build_programs();
   }
   // The nanovdb lookups' plain uniforms (cloud_bindings.glsl); passes without them skip them.
   void set_volume_uniforms(GLuint program) const {
-    if (!nvdb_on || glGetUniformLocation(program, "u_nvdb_grid") < 0) return;
+    // (The atlas programs read only u_nvdb_detail: the others are then inactive, location -1,
+    // which glUniform ignores.)
+    if (!nvdb_on || glGetUniformLocation(program, "u_nvdb_detail") < 0) return;
     glUniform1i(glGetUniformLocation(program, "u_nvdb_detail"), nvdb_detail);
     glUniform1i(glGetUniformLocation(program, "u_nvdb_shared"), nvdb_shared);
     glUniform1i(glGetUniformLocation(program, "u_nvdb_table"), nvdb_table);
@@ -800,6 +861,7 @@ GlRenderer::~GlRenderer() {
   Impl& m = *impl_;
   m.delete_programs();
   m.delete_targets();
+  m.delete_atlas();
   GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_dist, m.tex_mie, m.tex_coverage, m.tex_motion, m.tex_curl, m.tex_ms, m.tex_moved_occ};
   for (GLuint t : texs)
     if (t) glDeleteTextures(1, &t);
@@ -855,6 +917,12 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
   glTextureParameteri(m.tex_pages, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   glCreateTextures(GL_TEXTURE_3D, 1, &m.tex_volume);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  m.delete_atlas();
+  m.atlas_of = PreparedVolume{};
+  m.atlas_of.nano = vol.nano;
+  m.atlas_of.dims = vol.dims;
+  m.atlas_of.tiles = vol.tiles;
+  m.atlas_of.has_detail = vol.has_detail;
   if (vol.nano) {
     // The grids as they are in memory (NanoVDB is position-independent: offsets are relative);
     // the dense texture becomes one texel the lookups never read.
@@ -954,6 +1022,9 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   Impl& m = *impl_;
   if (!m.have_volume) throw GlError("GlRenderer::render before set_volume");
   m.resize(f.width, f.height);
+  // The nanovdb lookups' storage (nanovdb_storage.glsl) before the modes, so a change links once more.
+  const bool atlas = m.nvdb_on && f.settings.nanovdb_lookup == NanoLookup::Atlas && m.ensure_atlas();
+  m.use_storage(!m.nvdb_on ? 0 : atlas ? 3 : m.nvdb_ssbo ? 1 : 2);
   m.use_modes(f);
   gpu::CloudParams cp = to_gpu(f.params);
   glNamedBufferSubData(m.ubo_cloud, 0, sizeof(cp), &cp);
@@ -1015,7 +1086,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_CLOUD, m.ubo_cloud);
   glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_FRAME, m.ubo_frame);
   glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_ATMOSPHERE, m.ubo_atmo);
-  glBindTextureUnit(CV_UNIT_VOLUME, m.tex_volume);
+  glBindTextureUnit(CV_UNIT_VOLUME, atlas ? m.tex_atlas : m.tex_volume);
   glBindTextureUnit(CV_UNIT_OCCUPANCY, moved_occ ? m.tex_moved_occ : m.tex_occ);
   glBindTextureUnit(CV_UNIT_DISTANCE, m.tex_dist);
   glBindTextureUnit(CV_UNIT_NANOVDB_GRIDS, m.tex_nano);
@@ -1023,7 +1094,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   // only the first 32 bytes (a binding larger than GL_MAX_SHADER_STORAGE_BLOCK_SIZE is an error).
   if (m.nvdb_ssbo) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CV_BINDING_NANOVDB, m.buf_nano);
   else glBindBufferRange(GL_SHADER_STORAGE_BUFFER, CV_BINDING_NANOVDB, m.buf_nano, 0, 32);
-  glBindTextureUnit(CV_UNIT_NANOVDB_PAGES, m.tex_pages);
+  glBindTextureUnit(CV_UNIT_NANOVDB_PAGES, atlas ? m.tex_atlas_index : m.tex_pages);
   m.nvdb_table = m.nvdb_pages_ok && f.settings.nanovdb_lookup == NanoLookup::Table ? 1 : 0;
   if (int(f.params.phase_mode) == CV_PHASE_MIE) m.ensure_mie_texture();
   glBindTextureUnit(CV_UNIT_MIE, m.tex_mie);

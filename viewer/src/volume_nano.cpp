@@ -1,12 +1,15 @@
 // The nanovdb volume path (render.volume=nanovdb, docs/nanovdb.md): the storage choice, and a
 // PreparedVolume that holds NanoVDB grids instead of the dense RGBA copy.
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <string>
 
 #include "cloudviewer/errors.h"
 #include "cloudviewer/scene.h"
 
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
+#include "cloudgen/motion.h"
 #include "cloudgen/nvdb.h"
 #endif
 
@@ -43,6 +46,134 @@ uint64_t volume_gpu_bytes(const PreparedVolume& v) {
 }
 
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
+NanoAtlas build_nano_atlas(const PreparedVolume& v, int max_side, uint64_t max_bytes) {
+  NanoAtlas a;
+  if (!v.nano) return a;
+  const cloudgen::NanoVolume& n = *v.nano;
+  const int channels = v.has_detail ? 4 : 1;
+  // Each grid's leaf page table: a voxel's value is one word of the buffer (docs in nvdb.h).
+  std::vector<cloudgen::NanoPages> pages;
+  pages.push_back(cloudgen::nano_pages(n, 0));
+  if (v.has_detail)
+    for (int g = 0; g < 3; ++g) pages.push_back(cloudgen::nano_pages(n, size_t(n.detail[size_t(g)])));
+  const uint8_t* words = n.data();
+  auto value = [&](size_t g, std::array<int32_t, 3> ijk) {
+    const cloudgen::NanoPages& t = pages[g];
+    size_t i = 0, stride = 1;
+    for (int k = 0; k < 3; ++k) {
+      const int32_t c = (ijk[size_t(k)] - t.origin[size_t(k)]) >> 3;
+      if (c < 0 || c >= int32_t(t.dims[size_t(k)])) return 0.0f;
+      i += size_t(c) * stride;
+      stride *= t.dims[size_t(k)];
+    }
+    uint32_t e = t.entries[i];
+    if (e & cloudgen::NanoPages::kNanoConstant) e &= ~cloudgen::NanoPages::kNanoConstant;
+    else e += uint32_t((ijk[0] & 7) << 6 | (ijk[1] & 7) << 3 | (ijk[2] & 7));
+    float f;
+    std::memcpy(&f, words + size_t(e) * 4, 4);
+    return f;
+  };
+  const int B = NanoAtlas::kBrick;
+  for (int k = 0; k < 3; ++k) a.cells[size_t(k)] = v.dims[size_t(k)] / 8 + 1;
+  const size_t ncell = size_t(a.cells[0]) * a.cells[1] * a.cells[2];
+  a.index.assign(ncell * 4, 0);
+  // The bricks in cell order, then laid into the texture.
+  std::vector<float> bricks, brick(size_t(B * B * B) * channels);
+  std::vector<uint32_t> number(ncell, 0);  // brick number + 1 (0: none)
+  auto texel = [&](int t, int k) {  // the dense sampler's clamp (y, or x/z of a non-tiling volume) or wrap
+    const int d = v.dims[size_t(k)];
+    if (v.tiles && k != 1) return ((t % d) + d) % d;
+    return std::clamp(t, 0, d - 1);
+  };
+  // A cell can hold density only where a density leaf cell it reads is not a constant 0 (a tile
+  // or the background): checked first, so the scan costs the occupied leaves, not the box, and
+  // an atlas over the budget is refused before its bricks are read.
+  const cloudgen::NanoPages& dp = pages[0];
+  auto may_hold = [&](int cx, int cy, int cz) {
+    std::array<std::array<int32_t, 3>, 3> leaf;
+    std::array<int, 3> count{{0, 0, 0}};
+    const int c3[3] = {cx, cy, cz};
+    for (int k = 0; k < 3; ++k)
+      for (int x = 0; x < B; ++x) {
+        const int32_t l = (texel(8 * c3[k] - 1 + x, k) + n.index_min[size_t(k)] - dp.origin[size_t(k)]) >> 3;
+        bool seen = false;
+        for (int j = 0; j < count[size_t(k)]; ++j) seen = seen || leaf[size_t(k)][size_t(j)] == l;
+        if (!seen) leaf[size_t(k)][size_t(count[size_t(k)]++)] = l;
+      }
+    for (int i = 0; i < count[0]; ++i)
+      for (int j = 0; j < count[1]; ++j)
+        for (int k = 0; k < count[2]; ++k) {
+          const int32_t l[3] = {leaf[0][size_t(i)], leaf[1][size_t(j)], leaf[2][size_t(k)]};
+          bool inside = true;
+          for (int q = 0; q < 3; ++q) inside = inside && l[q] >= 0 && l[q] < int32_t(dp.dims[size_t(q)]);
+          if (!inside) continue;
+          const uint32_t e = dp.entries[(size_t(l[2]) * dp.dims[1] + l[1]) * dp.dims[0] + l[0]];
+          if (!(e & cloudgen::NanoPages::kNanoConstant)) return true;
+          float f;
+          std::memcpy(&f, words + size_t(e & ~cloudgen::NanoPages::kNanoConstant) * 4, 4);
+          if (f > 0.0f) return true;
+        }
+    return false;
+  };
+  std::vector<uint8_t> maybe(ncell, 0);
+  size_t bound = 0;
+  for (int cz = 0; cz < a.cells[2]; ++cz)
+    for (int cy = 0; cy < a.cells[1]; ++cy)
+      for (int cx = 0; cx < a.cells[0]; ++cx)
+        if (may_hold(cx, cy, cz)) maybe[(size_t(cz) * a.cells[1] + cy) * a.cells[0] + cx] = 1, ++bound;
+  if (uint64_t(bound) * brick.size() * 4 + a.index.size() * 2 > max_bytes) return NanoAtlas{};
+  for (int cz = 0; cz < a.cells[2]; ++cz)
+    for (int cy = 0; cy < a.cells[1]; ++cy)
+      for (int cx = 0; cx < a.cells[0]; ++cx) {
+        const size_t cell = (size_t(cz) * a.cells[1] + cy) * a.cells[0] + cx;
+        if (!maybe[cell]) continue;
+        bool any = false;
+        for (int z = 0; z < B; ++z)
+          for (int y = 0; y < B; ++y)
+            for (int x = 0; x < B; ++x) {
+              const std::array<int32_t, 3> ijk = {texel(8 * cx - 1 + x, 0) + n.index_min[0],
+                                                  texel(8 * cy - 1 + y, 1) + n.index_min[1],
+                                                  texel(8 * cz - 1 + z, 2) + n.index_min[2]};
+              float* out = &brick[((size_t(z) * B + y) * B + x) * channels];
+              out[0] = std::max(value(0, ijk), 0.0f);  // as prepare_volume clamps the dense copy
+              any = any || out[0] > 0.0f;
+              for (int c = 1; c < channels; ++c) out[c] = value(size_t(c), ijk);
+            }
+        if (!any) continue;
+        number[cell] = uint32_t(1 + a.bricks);
+        bricks.insert(bricks.end(), brick.begin(), brick.end());
+        ++a.bricks;
+      }
+  a.channels = channels;
+  const int per_side = std::max(1, max_side / B);
+  const size_t nb = std::max<size_t>(a.bricks, 1);
+  a.layout[0] = int(std::min<size_t>(nb, size_t(per_side)));
+  a.layout[1] = int(std::min<size_t>((nb + a.layout[0] - 1) / a.layout[0], size_t(per_side)));
+  const size_t plane = size_t(a.layout[0]) * a.layout[1];
+  a.layout[2] = int((nb + plane - 1) / plane);
+  const uint64_t texels = uint64_t(a.layout[0]) * a.layout[1] * a.layout[2] * B * B * B;
+  if (a.layout[2] > per_side || texels * channels * 4 + a.index.size() * 2 > max_bytes) return NanoAtlas{};
+  const size_t W = size_t(a.layout[0]) * B, H = size_t(a.layout[1]) * B;
+  a.texels.assign(size_t(texels) * channels, 0.0f);
+  for (size_t cell = 0; cell < ncell; ++cell) {
+    if (number[cell] == 0) continue;
+    uint16_t* e = &a.index[cell * 4];
+    const size_t b = size_t(number[cell]) - 1;
+    const size_t bx = b % a.layout[0], by = (b / a.layout[0]) % a.layout[1], bz = b / plane;
+    e[0] = uint16_t(bx * B), e[1] = uint16_t(by * B), e[2] = uint16_t(bz * B), e[3] = 1;
+    const float* src = &bricks[b * brick.size()];
+    for (int z = 0; z < B; ++z)
+      for (int y = 0; y < B; ++y)
+        std::memcpy(&a.texels[(((bz * B + z) * H + by * B + y) * W + bx * B) * channels],
+                    src + ((size_t(z) * B + y) * B) * channels, sizeof(float) * B * channels);
+  }
+  return a;
+}
+#else
+NanoAtlas build_nano_atlas(const PreparedVolume&, int, uint64_t) { return NanoAtlas{}; }
+#endif
+
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
 PreparedVolume prepare_nano(std::shared_ptr<const cloudgen::NanoVolume> n, int occ_cell, int occ_padding) {
   PreparedVolume p;
   for (int i = 0; i < 3; ++i) {
@@ -60,6 +191,13 @@ PreparedVolume prepare_nano(std::shared_ptr<const cloudgen::NanoVolume> n, int o
       throw InputError("volume origin " + std::to_string(n->origin[size_t(i)]) + " m: must be finite, |x| <= 1e8 m");
   p.voxel_size = n->voxel_size;
   p.origin = glm::dvec3(n->origin[0], n->origin[1], n->origin[2]);
+  // The height range the clouds' height fraction spans (ambient light, motion), as prepare_volume:
+  // the box, or the generator's whole layer when the file records it.
+  p.height_min = p.origin.y;
+  p.height_size = double(p.dims[1]) * p.voxel_size;
+  double box_min = 0, box_height = 0;
+  if (cloudgen::motion_height_box(n->metadata, box_min, box_height)) p.height_min = box_min, p.height_size = box_height;
+  for (const auto& kv : n->metadata) p.baked_motion |= kv.first == "time_seconds";
   p.tiles = n->tiles_xz;
   p.has_detail = n->has_detail();
   p.nano = std::move(n);

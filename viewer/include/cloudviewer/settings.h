@@ -31,7 +31,7 @@ enum class SkyMode { Analytic = CV_SKY_ANALYTIC, Precomputed = CV_SKY_PRECOMPUTE
 /// How the volume reaches the shaders: a dense RGBA texture, or NanoVDB grids in a GPU buffer.
 enum class VolumeStorage { Auto = 0, Dense = 1, NanoVdb = 2 };
 /// How the GPU finds a NanoVDB voxel: a leaf page table, or PNanoVDB's read accessor walk.
-enum class NanoLookup { Table = 0, Accessor = 1 };
+enum class NanoLookup { Table = 0, Accessor = 1, Atlas = 2 };
 
 struct RenderSettings {
   // placement
@@ -109,7 +109,7 @@ struct RenderSettings {
   // volume storage (docs/nanovdb.md)
   VolumeStorage volume = VolumeStorage::Auto;  ///< auto: nanovdb when the dense texture exceeds dense_budget
   double dense_budget = 0;         ///< MiB the dense path may use (RGBA floats + occupancy); 0 = a third of the free memory
-  NanoLookup nanovdb_lookup = NanoLookup::Table;  ///< GPU: leaf page table or PNanoVDB accessor
+  NanoLookup nanovdb_lookup = NanoLookup::Atlas;  ///< GPU: brick atlas, leaf page table or PNanoVDB accessor
   // The atmosphere model (`--set atmosphere.KEY=VALUE`; its own table in atmosphere.h).
   AtmosphereSettings atmosphere;
 };
