@@ -117,9 +117,28 @@ void build_moved_occupancy(const PreparedVolume& vol, const std::vector<glm::dve
     i1 = std::min(i1, sn[axis] - 1);
     return i0 <= i1;
   };
-  auto near_density = [&](int x, int y, int z) {
-    size_t i = (size_t(z) * sn[1] + y) * sn[0] + x;
-    return use_dist ? vol.dist[i] <= 1 : vol.occ[i] != 0;
+  // Per static y layer, a summed-area table over (x, z) of the cells near density: a moved cell's
+  // footprint, which long times and strong shear stretch over the whole tile, then costs its y
+  // span times at most four look-ups, not its cells.
+  const int sx = sn[0], sy = sn[1], sz = sn[2];
+  std::vector<uint32_t> sat(size_t(sy) * (sz + 1) * (sx + 1), 0);
+  auto at = [&](int y, int z, int x) -> uint32_t& { return sat[(size_t(y) * (sz + 1) + z) * (sx + 1) + x]; };
+  for (int y = 0; y < sy; ++y)
+    for (int z = 0; z < sz; ++z)
+      for (int x = 0; x < sx; ++x) {
+        const size_t i = (size_t(z) * sy + y) * sx + x;
+        const uint32_t near = use_dist ? vol.dist[i] <= 1 : vol.occ[i] != 0;
+        at(y, z + 1, x + 1) = near + at(y, z, x + 1) + at(y, z + 1, x) - at(y, z, x);
+      }
+  // A span from span() as at most two ranges inside [0, n) (a wrapping axis may run past an end).
+  auto pieces = [](int i0, int i1, int len, std::array<std::array<int, 2>, 2>& r) {
+    const int a = ((i0 % len) + len) % len, b = a + (i1 - i0);
+    if (b < len) {
+      r[0] = {a, b};
+      return 1;
+    }
+    r[0] = {a, len - 1}, r[1] = {0, b - len};
+    return 2;
   };
   out.assign(size_t(cells), 0);
   for (int j = 0; j < n.y; ++j) {
@@ -134,16 +153,21 @@ void build_moved_occupancy(const PreparedVolume& vol, const std::vector<glm::dve
       double z0 = origin.z + k * cell - margin, z1 = origin.z + (k + 1) * cell + margin;
       int z_0, z_1;
       if (!span(z0 - dhi.z, z1 - dlo.z, 2, vol.tiles, z_0, z_1)) continue;
+      std::array<std::array<int, 2>, 2> zr;
+      const int nzr = pieces(z_0, z_1, sz, zr);
       for (int i = 0; i < n.x; ++i) {
         double x0 = origin.x + i * cell - margin, x1 = origin.x + (i + 1) * cell + margin;
         int x_0, x_1;
         if (!span(x0 - dhi.x, x1 - dlo.x, 0, vol.tiles, x_0, x_1)) continue;
+        std::array<std::array<int, 2>, 2> xr;
+        const int nxr = pieces(x_0, x_1, sx, xr);
         bool hit = false;
-        for (int z = z_0; z <= z_1 && !hit; ++z)
-          for (int y = y_0; y <= y_1 && !hit; ++y)
-            for (int x = x_0; x <= x_1 && !hit; ++x)
-              hit = near_density(vol.tiles ? ((x % sn[0]) + sn[0]) % sn[0] : x, y,
-                                 vol.tiles ? ((z % sn[2]) + sn[2]) % sn[2] : z);
+        for (int y = y_0; y <= y_1 && !hit; ++y)
+          for (int a = 0; a < nzr && !hit; ++a)
+            for (int b = 0; b < nxr && !hit; ++b) {
+              const int za = zr[size_t(a)][0], zb = zr[size_t(a)][1], xa = xr[size_t(b)][0], xb = xr[size_t(b)][1];
+              hit = at(y, zb + 1, xb + 1) + at(y, za, xa) - at(y, za, xb + 1) - at(y, zb + 1, xa) > 0;
+            }
         out[(size_t(k) * n.y + j) * n.x + i] = hit ? 1 : 0;
       }
     }
