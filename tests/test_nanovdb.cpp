@@ -295,6 +295,21 @@ TEST(NanoVdb, AtlasOfATilingVolumeGivesTheDenseImage) {
 // A volume beyond the dense path's budget (here a deliberately small render.dense_budget) opens
 // and renders through NanoVDB under volume=auto, from .nvdb, from .vdb (converted sparse, no
 // dense copy) and from a raw texture; volume=dense refuses it naming the setting.
+// volume=auto: dense within the budget and below a 2 GiB texture, nanovdb beyond either (a
+// texture of cumulus-field 1024, 2.4 GB, fails on llvmpipe with any budget); dense and nanovdb obey.
+TEST(NanoVdb, AutoStorageKeepsTheDenseTextureUnderTwoGiB) {
+  const RenderSettings roomy = with({"render.dense_budget=100000"});  // MiB: the budget is not the limit
+  const uint64_t limit_voxels = kDenseTextureLimit / 16;
+  EXPECT_FALSE(use_nanovdb(roomy, limit_voxels - 1));
+  EXPECT_TRUE(use_nanovdb(roomy, limit_voxels));
+  EXPECT_TRUE(use_nanovdb(roomy, uint64_t(1024) * 146 * 1024));
+  EXPECT_FALSE(use_nanovdb(with({"render.dense_budget=100000", "render.volume=dense"}), limit_voxels * 2));
+  EXPECT_TRUE(use_nanovdb(with({"render.volume=nanovdb"}), 8));
+  const RenderSettings tight = with({"render.dense_budget=1"});  // 1 MiB: 65,000 voxels
+  EXPECT_FALSE(use_nanovdb(tight, 60000));
+  EXPECT_TRUE(use_nanovdb(tight, 70000));
+}
+
 TEST(NanoVdb, VolumeBeyondTheDenseBudgetRendersThroughNanoVdb) {
   const fs::path nvdb = written("big.nvdb", cloudgen::Format::Nvdb);
   const fs::path vdb = written("big.vdb", cloudgen::Format::Vdb);

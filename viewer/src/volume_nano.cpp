@@ -27,7 +27,9 @@ bool use_nanovdb(const RenderSettings& s, uint64_t voxels) {
     case VolumeStorage::NanoVdb: return true;
     case VolumeStorage::Auto: break;
   }
-  return prepared_bytes(voxels) > dense_budget_bytes(s);
+  // Also beyond 2 GiB of RGBA32F texture, which llvmpipe (and other drivers) cannot allocate as one
+  // texture whatever the budget: cumulus-field at 1024 failed there with "out of GPU memory".
+  return prepared_bytes(voxels) > dense_budget_bytes(s) || voxels * 16 >= kDenseTextureLimit;
 }
 
 uint64_t volume_gpu_bytes(const PreparedVolume& v) {

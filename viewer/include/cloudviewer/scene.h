@@ -108,8 +108,11 @@ struct NanoAtlas {
 NanoAtlas build_nano_atlas(const PreparedVolume& v, int max_side, uint64_t max_bytes);
 /// Bytes the dense path's budget allows (render.dense_budget MiB, or a third of the free memory when 0).
 uint64_t dense_budget_bytes(const RenderSettings& s);
+/// The largest RGBA32F texture render.volume=auto sends to the dense path: 2 GiB.
+constexpr uint64_t kDenseTextureLimit = uint64_t(1) << 31;
 /// Whether INPUT of `voxels` voxels goes through NanoVDB under s.volume (auto: the dense texture
-/// and occupancy, prepared_bytes(voxels), exceed dense_budget_bytes(s)).
+/// and occupancy, prepared_bytes(voxels), exceed dense_budget_bytes(s), or the texture alone
+/// kDenseTextureLimit).
 bool use_nanovdb(const RenderSettings& s, uint64_t voxels);
 /// Bytes the volume occupies on the GPU: the RGBA32F texture, or the NanoVDB buffer and its leaf
 /// page table (8 bytes per 8^3 cell), plus the R8 occupancy texture.
