@@ -140,27 +140,28 @@ void build_moved_occupancy(const PreparedVolume& vol, const std::vector<glm::dve
     r[0] = {a, len - 1}, r[1] = {0, b - len};
     return 2;
   };
+  glm::dvec3 dlo(0.0), dhi(0.0);  // the displacement range over the heights of the row at hand
+  // Cell c of the moved grid along horizontal axis a as at most two ranges of static cells (0: none).
+  auto ranges = [&](int a, int c, std::array<std::array<int, 2>, 2>& r) {
+    const double lo = origin[a] + c * cell - margin, hi = origin[a] + (c + 1) * cell + margin;
+    int i0, i1;
+    if (!span(lo - dhi[a], hi - dlo[a], a, vol.tiles, i0, i1)) return 0;
+    return pieces(i0, i1, sn[size_t(a)], r);
+  };
   out.assign(size_t(cells), 0);
   for (int j = 0; j < n.y; ++j) {
     double y0 = origin.y + j * cell - margin, y1 = origin.y + (j + 1) * cell + margin;
     double h0 = std::clamp(h_of(y0), 0.0, 1.0) * last, h1 = std::clamp(h_of(y1), 0.0, 1.0) * last;
     int e0 = std::clamp(int(std::floor(h0)), 0, last), e1 = std::clamp(int(std::ceil(h1)), 0, last);
-    glm::dvec3 dlo = table[size_t(e0)], dhi = dlo;
+    dlo = dhi = table[size_t(e0)];
     for (int e = e0; e <= e1; ++e) dlo = glm::min(dlo, table[size_t(e)]), dhi = glm::max(dhi, table[size_t(e)]);
     int y_0, y_1;
     if (!span(y0 - dhi.y, y1 - dlo.y, 1, false, y_0, y_1)) continue;
     for (int k = 0; k < n.z; ++k) {
-      double z0 = origin.z + k * cell - margin, z1 = origin.z + (k + 1) * cell + margin;
-      int z_0, z_1;
-      if (!span(z0 - dhi.z, z1 - dlo.z, 2, vol.tiles, z_0, z_1)) continue;
-      std::array<std::array<int, 2>, 2> zr;
-      const int nzr = pieces(z_0, z_1, sz, zr);
-      for (int i = 0; i < n.x; ++i) {
-        double x0 = origin.x + i * cell - margin, x1 = origin.x + (i + 1) * cell + margin;
-        int x_0, x_1;
-        if (!span(x0 - dhi.x, x1 - dlo.x, 0, vol.tiles, x_0, x_1)) continue;
-        std::array<std::array<int, 2>, 2> xr;
-        const int nxr = pieces(x_0, x_1, sx, xr);
+      std::array<std::array<int, 2>, 2> zr, xr;
+      const int nzr = ranges(2, k, zr);
+      for (int i = 0; i < n.x && nzr > 0; ++i) {
+        const int nxr = ranges(0, i, xr);
         bool hit = false;
         for (int y = y_0; y <= y_1 && !hit; ++y)
           for (int a = 0; a < nzr && !hit; ++a)
