@@ -92,7 +92,7 @@ NanoAtlas build_nano_atlas(const PreparedVolume& v, int max_side, uint64_t max_b
   // an atlas over the budget is refused before its bricks are read.
   const cloudgen::NanoPages& dp = pages[0];
   auto may_hold = [&](int cx, int cy, int cz) {
-    std::array<std::array<int32_t, 3>, 3> leaf;
+    std::array<std::array<int32_t, 9>, 3> leaf;  // the distinct leaf cells of the 9 texels per axis (a wrap: up to 4)
     std::array<int, 3> count{{0, 0, 0}};
     const int c3[3] = {cx, cy, cz};
     for (int k = 0; k < 3; ++k)
