@@ -3,11 +3,11 @@
 // GPU timer queries around every pass.
 #include <algorithm>
 #include <array>
+#include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <functional>
-#include <chrono>
-#include <cmath>
 #include <iostream>
 #include <map>
 #include <string>
