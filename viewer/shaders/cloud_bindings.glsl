@@ -124,19 +124,23 @@ vec3 atlas_position(vec3 uvw) {
   return clamp(x, vec3(-1.0), hi);
 }
 vec4 atlas_value(vec4 v) { return u_nvdb_detail != 0 ? v : vec4(v.x, 0.0, 0.0, 0.0); }
-vec4 volume_texel(ivec3 texel) {
-  ivec3 c = (texel + 1) >> 3;
+// The brick of the cell that holds lower corner i0, as the offset from a volume texel to its atlas
+// texel (the brick's first texel - (8 c - 1)); false when the cell has no brick.
+bool atlas_brick(ivec3 i0, out ivec3 offset) {
+  ivec3 c = (i0 + 1) >> 3;
   uvec4 e = texelFetch(s_nvdb_pages, c, 0);
-  if (e.w == 0u) return vec4(0.0);
-  return atlas_value(texelFetch(s_volume, ivec3(e.xyz) + texel + 1 - 8 * c, 0));
+  offset = ivec3(e.xyz) + 1 - 8 * c;
+  return e.w != 0u;
+}
+vec4 volume_texel(ivec3 texel) {
+  ivec3 offset;
+  return atlas_brick(texel, offset) ? atlas_value(texelFetch(s_volume, texel + offset, 0)) : vec4(0.0);
 }
 vec4 volume_filtered(vec3 uvw) {
   vec3 x = atlas_position(uvw);
-  ivec3 c = (ivec3(floor(x)) + 1) >> 3;
-  uvec4 e = texelFetch(s_nvdb_pages, c, 0);
-  if (e.w == 0u) return vec4(0.0);
-  vec3 s = vec3(e.xyz) + (x - vec3(8 * c - 1)) + 0.5;
-  return atlas_value(texture(s_volume, s / vec3(textureSize(s_volume, 0))));
+  ivec3 offset;
+  if (!atlas_brick(ivec3(floor(x)), offset)) return vec4(0.0);
+  return atlas_value(texture(s_volume, (x + vec3(offset) + 0.5) / vec3(textureSize(s_volume, 0))));
 }
 #elif CV_NANOVDB
 vec4 volume_texel(ivec3 texel) { return nanovdb_texel(texel); }

@@ -351,6 +351,14 @@ std::vector<Pass> make_passes() {
   return p;
 }
 
+// An occupancy grid (0 / non-0 per cell, x fastest) into its R8 3D texture of n cells, as 0 / 255:
+// the shaders' occupancy_texel reads 1 where a cell may hold density.
+void upload_mask(GLuint tex, glm::ivec3 n, const std::vector<uint8_t>& mask) {
+  std::vector<uint8_t> texels(mask.size());
+  for (size_t i = 0; i < texels.size(); ++i) texels[i] = mask[i] ? 255 : 0;
+  glTextureSubImage3D(tex, 0, 0, 0, 0, n.x, n.y, n.z, GL_RED, GL_UNSIGNED_BYTE, texels.data());
+}
+
 // The ground mesh in units of the ground's half extent (ground.vert scales and bends it): a quad
 // for box mode, then a CV_GROUND_GRID^2 grid for the curved Earth of layer mode. Uploaded once.
 std::vector<float> ground_mesh(GLint& quad_first, GLsizei& quad_count, GLint& grid_first, GLsizei& grid_count) {
@@ -994,11 +1002,9 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
   glTextureParameteri(m.tex_volume, GL_TEXTURE_WRAP_S, wrap_xz);
   glTextureParameteri(m.tex_volume, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
   glTextureParameteri(m.tex_volume, GL_TEXTURE_WRAP_R, wrap_xz);
-  std::vector<uint8_t> occ(vol.occ.size());
-  for (size_t i = 0; i < occ.size(); ++i) occ[i] = vol.occ[i] ? 255 : 0;
   glCreateTextures(GL_TEXTURE_3D, 1, &m.tex_occ);
   glTextureStorage3D(m.tex_occ, 1, GL_R8, vol.occ_dims[0], vol.occ_dims[1], vol.occ_dims[2]);
-  glTextureSubImage3D(m.tex_occ, 0, 0, 0, 0, vol.occ_dims[0], vol.occ_dims[1], vol.occ_dims[2], GL_RED, GL_UNSIGNED_BYTE, occ.data());
+  upload_mask(m.tex_occ, glm::ivec3(vol.occ_dims[0], vol.occ_dims[1], vol.occ_dims[2]), vol.occ);
   glTextureParameteri(m.tex_occ, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTextureParameteri(m.tex_occ, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   // The distance field (integer cells, texelFetch only).
@@ -1073,9 +1079,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
       glTextureParameteri(m.tex_moved_occ, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
       m.moved_occ_dims = n;
     }
-    std::vector<uint8_t> cells(f.moved_occupancy.size());
-    for (size_t i = 0; i < cells.size(); ++i) cells[i] = f.moved_occupancy[i] ? 255 : 0;
-    glTextureSubImage3D(m.tex_moved_occ, 0, 0, 0, 0, n.x, n.y, n.z, GL_RED, GL_UNSIGNED_BYTE, cells.data());
+    upload_mask(m.tex_moved_occ, n, f.moved_occupancy);
   }
   m.history_valid = temporal;
   m.history_key = key;

@@ -58,7 +58,11 @@ NanoAtlas build_nano_atlas(const PreparedVolume& v, int max_side, uint64_t max_b
   pages.push_back(cloudgen::nano_pages(n, 0));
   if (v.has_detail)
     for (int g = 0; g < 3; ++g) pages.push_back(cloudgen::nano_pages(n, size_t(n.detail[size_t(g)])));
-  const uint8_t* words = n.data();
+  auto word = [data = n.data()](uint32_t w) {  // the float at word index w of the grids' buffer
+    float f;
+    std::memcpy(&f, data + size_t(w) * 4, 4);
+    return f;
+  };
   auto value = [&](size_t g, std::array<int32_t, 3> ijk) {
     const cloudgen::NanoPages& t = pages[g];
     size_t i = 0, stride = 1;
@@ -68,12 +72,9 @@ NanoAtlas build_nano_atlas(const PreparedVolume& v, int max_side, uint64_t max_b
       i += size_t(c) * stride;
       stride *= t.dims[size_t(k)];
     }
-    uint32_t e = t.entries[i];
-    if (e & cloudgen::NanoPages::kNanoConstant) e &= ~cloudgen::NanoPages::kNanoConstant;
-    else e += uint32_t((ijk[0] & 7) << 6 | (ijk[1] & 7) << 3 | (ijk[2] & 7));
-    float f;
-    std::memcpy(&f, words + size_t(e) * 4, 4);
-    return f;
+    const uint32_t e = t.entries[i];
+    if (e & cloudgen::NanoPages::kNanoConstant) return word(e & ~cloudgen::NanoPages::kNanoConstant);
+    return word(e + uint32_t((ijk[0] & 7) << 6 | (ijk[1] & 7) << 3 | (ijk[2] & 7)));
   };
   const int B = NanoAtlas::kBrick;
   for (int k = 0; k < 3; ++k) a.cells[size_t(k)] = v.dims[size_t(k)] / 8 + 1;
@@ -110,10 +111,7 @@ NanoAtlas build_nano_atlas(const PreparedVolume& v, int max_side, uint64_t max_b
           for (int q = 0; q < 3; ++q) inside = inside && l[q] >= 0 && l[q] < int32_t(dp.dims[size_t(q)]);
           if (!inside) continue;
           const uint32_t e = dp.entries[(size_t(l[2]) * dp.dims[1] + l[1]) * dp.dims[0] + l[0]];
-          if (!(e & cloudgen::NanoPages::kNanoConstant)) return true;
-          float f;
-          std::memcpy(&f, words + size_t(e & ~cloudgen::NanoPages::kNanoConstant) * 4, 4);
-          if (f > 0.0f) return true;
+          if (!(e & cloudgen::NanoPages::kNanoConstant) || word(e & ~cloudgen::NanoPages::kNanoConstant) > 0.0f) return true;
         }
     return false;
   };
