@@ -214,6 +214,41 @@ TEST(NanoVdb, SameViewGivesTheSameImageAsTheDensePath) {
   if (HasFailure()) dump("same_view", gd.display, gn.display);
 }
 
+// The brick atlas (the default lookup) needs neither the grids nor the page table on the GPU, so
+// they stay on the CPU until a frame reads them (cumulus-field 2048's grids are 637 MiB): a
+// renderer that only drew through the atlas has not uploaded them, the first table frame does, and
+// that frame is the fresh table renderer's frame (within float rounding). The load line's estimate follows.
+TEST(NanoVdb, GridsGoToTheGpuOnlyWhenALookupReadsThem) {
+  const fs::path p = written("lazy.nvdb", cloudgen::Format::Nvdb);
+  const PreparedVolume nano = open_input(p.string(), with({"render.volume=nanovdb"}));
+  ASSERT_TRUE(nano.nano);
+  const RenderSettings atlas = with({"render.steps=64"}), table = with({"render.steps=64", "render.nanovdb_lookup=table"});
+  testutil::gl_context();
+  GlRenderer r{ShaderSource()};
+  r.set_volume(nano);
+  EXPECT_FALSE(r.nano_grids_on_gpu());
+  r.render(frame_for(nano, atlas, 64, 36));
+  EXPECT_FALSE(r.nano_grids_on_gpu()) << "the atlas frame uploaded the grids";
+  const FrameImages via_atlas = r.read_back();
+  r.render(frame_for(nano, table, 64, 36));
+  EXPECT_TRUE(r.nano_grids_on_gpu());
+  const FrameImages via_table = r.read_back();
+  // (float rounding apart: this renderer's light volume and air tables come from its first frame;
+  // a frame through the placeholders would read no cloud at all)
+  EXPECT_LE(max_abs_diff(via_table.linear, render_gl(nano, frame_for(nano, table, 64, 36)).linear), 1e-6);
+  EXPECT_GT(psnr(via_atlas.display, via_table.display), 45.0);  // the two lookups, as in SameView...
+  // A new volume puts placeholders back until a lookup reads it again.
+  r.set_volume(nano);
+  EXPECT_FALSE(r.nano_grids_on_gpu());
+  const uint64_t skipping = nano.occ.size() * 2;
+  EXPECT_EQ(volume_gpu_bytes(nano, NanoLookup::Atlas), skipping);
+  EXPECT_GE(volume_gpu_bytes(nano, NanoLookup::Table), nano_grid_bytes(nano) + skipping);
+  EXPECT_GT(nano_grid_bytes(nano), 0u);
+  const PreparedVolume dense = open_input(p.string(), with({"render.volume=dense"}));
+  EXPECT_EQ(nano_grid_bytes(dense), 0u);
+  EXPECT_EQ(volume_gpu_bytes(dense, NanoLookup::Atlas), uint64_t(dense.rgba.size()) * sizeof(float) + dense.occ.size() * 2);
+}
+
 // A tiling volume whose sides are not whole leaves (100 x 40 x 92 voxels, the noise repeated):
 // a brick at the wrap reads leaf cells from both ends of the tile.
 cloudgen::Volume odd_tiling_volume() {

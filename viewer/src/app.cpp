@@ -312,8 +312,17 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
       << vol.voxel_size << " m" << (vol.tiles ? " (tiles in x,z)" : "") << ", occupancy "
       << vol.occ_dims[0] << "x" << vol.occ_dims[1] << "x" << vol.occ_dims[2] << " cells, "
       << std::lround(vol.occupied_fraction * 100) << "% occupied, loaded in "
-      << std::chrono::duration<double>(t1 - t0).count() << " s; " << (vol.nano ? "nanovdb" : "dense") << " volume, "
-      << std::lround(double(volume_gpu_bytes(vol)) / (1 << 20) * 10) / 10.0 << " MiB on the GPU\n";
+      << std::chrono::duration<double>(t1 - t0).count() << " s; " << (vol.nano ? "nanovdb" : "dense") << " volume, ";
+  auto mib = [](uint64_t b) {  // one decimal; "<0.1" rather than 0 for a few KiB
+    const double m = std::round(double(b) / (1 << 20) * 10) / 10.0;
+    return b > 0 && m == 0 ? std::string("<0.1") : (std::ostringstream() << m).str();
+  };
+  const bool atlas = vol.nano && o.backend == "gl" && o.settings.nanovdb_lookup == NanoLookup::Atlas;
+  if (atlas)
+    out << mib(nano_grid_bytes(vol)) << " MiB of grids on the CPU, " << mib(volume_gpu_bytes(vol, NanoLookup::Atlas))
+        << " MiB on the GPU and the brick atlas (its size follows when it is built)\n";
+  else
+    out << mib(volume_gpu_bytes(vol, o.settings.nanovdb_lookup)) << " MiB on the GPU\n";
   if (!o.bench.empty()) return run_bench(o, vol, out, err);
 
   Camera cam = resolve_camera(o, vol, o.width, o.height);

@@ -448,7 +448,7 @@ struct GlRenderer::Impl {
     const size_t cells = size_t(a.cells[0]) * a.cells[1] * a.cells[2];
     std::cerr << "cloudviewer: NanoVDB brick atlas: " << a.bricks << " bricks of 9^3 (" << std::lround(100.0 * a.bricks / cells)
               << "% of the " << cells << " leaf cells), " << std::lround(double(a.bytes()) / (1 << 20) * 10) / 10.0
-              << " MiB on the GPU beside the grids, built in "
+              << " MiB on the GPU (the grids stay on the CPU), built in "
               << std::lround(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * 1000) << " ms\n";
     return true;
   }
@@ -457,6 +457,62 @@ struct GlRenderer::Impl {
     if (tex_atlas_index) glDeleteTextures(1, &tex_atlas_index);
     tex_atlas = tex_atlas_index = 0;
     atlas_state = 0;
+  }
+  // The grids' buffer (and its buffer texture) and the leaf page table: placeholders (32 bytes,
+  // one texel) until ensure_grids puts the volume's up. Both are immutable storage, so an upload
+  // makes new objects.
+  std::shared_ptr<const cloudgen::NanoVolume> grids_of;  // the volume's grids, kept for ensure_grids
+  bool grids_up = false;
+  void make_grid_objects() {
+    if (tex_nano) glDeleteTextures(1, &tex_nano);
+    if (buf_nano) glDeleteBuffers(1, &buf_nano);
+    if (tex_pages) glDeleteTextures(1, &tex_pages);
+    glCreateBuffers(1, &buf_nano);
+    glCreateTextures(GL_TEXTURE_BUFFER, 1, &tex_nano);
+    glCreateTextures(GL_TEXTURE_3D, 1, &tex_pages);
+    glTextureParameteri(tex_pages, GL_TEXTURE_MIN_FILTER, GL_NEAREST);  // integer: complete only unfiltered
+    glTextureParameteri(tex_pages, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  }
+  void upload_grid_placeholders() {
+    make_grid_objects();
+    const uint32_t placeholder[8] = {};
+    glNamedBufferStorage(buf_nano, sizeof placeholder, placeholder, 0);
+    glTextureBuffer(tex_nano, GL_RGBA32UI, buf_nano);
+    const uint32_t none[2] = {0, 0};
+    glTextureStorage3D(tex_pages, 1, GL_RG32UI, 1, 1, 1);
+    glTextureSubImage3D(tex_pages, 0, 0, 0, 0, 1, 1, 1, GL_RG_INTEGER, GL_UNSIGNED_INT, none);
+    grids_up = false;
+    pages_bytes = 0;
+  }
+  void ensure_grids() {
+    if (grids_up || !grids_of) return;
+    const cloudgen::NanoVolume& n = *grids_of;
+    make_grid_objects();
+    GLint max_texels = 0;
+    glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
+    glNamedBufferStorage(buf_nano, GLsizeiptr(n.bytes()), n.data(), 0);
+    if (n.bytes() / 16 <= uint64_t(max_texels)) glTextureBuffer(tex_nano, GL_RGBA32UI, buf_nano);
+    if (nvdb_pages_ok) {
+      const cloudgen::NanoPages d = cloudgen::nano_pages(n, 0);
+      const cloudgen::NanoPages g = nvdb_detail ? cloudgen::nano_pages(n, size_t(n.detail[0])) : d;
+      if (d.origin != g.origin || d.dims != g.dims) throw GlError("NanoVDB page tables of different boxes");
+      std::vector<uint32_t> rg(d.entries.size() * 2);
+      for (size_t i = 0; i < d.entries.size(); ++i) rg[2 * i] = d.entries[i], rg[2 * i + 1] = g.entries[i];
+      glTextureStorage3D(tex_pages, 1, GL_RG32UI, GLsizei(d.dims[0]), GLsizei(d.dims[1]), GLsizei(d.dims[2]));
+      glTextureSubImage3D(tex_pages, 0, 0, 0, 0, GLsizei(d.dims[0]), GLsizei(d.dims[1]), GLsizei(d.dims[2]), GL_RG_INTEGER,
+                          GL_UNSIGNED_INT, rg.data());
+      nvdb_page_origin = glm::ivec3(d.origin[0], d.origin[1], d.origin[2]);
+      pages_bytes = rg.size() * 4;
+    } else {
+      const uint32_t none[2] = {0, 0};
+      glTextureStorage3D(tex_pages, 1, GL_RG32UI, 1, 1, 1);
+      glTextureSubImage3D(tex_pages, 0, 0, 0, 0, 1, 1, 1, GL_RG_INTEGER, GL_UNSIGNED_INT, none);
+    }
+    if (glGetError() != GL_NO_ERROR)
+      throw GlError("uploading the NanoVDB grids (" + std::to_string(n.bytes() >> 20) + " MiB) failed (out of GPU memory?)");
+    grids_up = true;
+    std::cerr << "cloudviewer: NanoVDB grids" << (nvdb_pages_ok ? " and leaf page table" : "") << " on the GPU: "
+              << std::lround(double(n.bytes() + pages_bytes) / (1 << 20) * 10) / 10.0 << " MiB\n";
   }
   bool atmo_valid = false;            // the LUT targets hold `atmo_done`'s tables
   AtmosphereSettings atmo_done;
@@ -918,11 +974,6 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
   if (m.buf_nano) glDeleteBuffers(1, &m.buf_nano);
   if (m.tex_pages) glDeleteTextures(1, &m.tex_pages);
   m.tex_volume = m.tex_occ = m.buf_nano = m.tex_nano = m.tex_pages = 0;
-  glCreateBuffers(1, &m.buf_nano);
-  glCreateTextures(GL_TEXTURE_BUFFER, 1, &m.tex_nano);
-  glCreateTextures(GL_TEXTURE_3D, 1, &m.tex_pages);
-  glTextureParameteri(m.tex_pages, GL_TEXTURE_MIN_FILTER, GL_NEAREST);  // integer: complete only unfiltered
-  glTextureParameteri(m.tex_pages, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   glCreateTextures(GL_TEXTURE_3D, 1, &m.tex_volume);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
   m.delete_atlas();
@@ -931,6 +982,7 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
   m.atlas_of.dims = vol.dims;
   m.atlas_of.tiles = vol.tiles;
   m.atlas_of.has_detail = vol.has_detail;
+  m.grids_of = vol.nano;
   if (vol.nano) {
     // The grids as they are in memory (NanoVDB is position-independent: offsets are relative);
     // the dense texture becomes one texel the lookups never read.
@@ -944,8 +996,10 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
       throw GlError("the NanoVDB grids need " + std::to_string(vol.nano->bytes() >> 20) +
                     " MiB, more than this GL's buffer textures hold (GL_MAX_TEXTURE_BUFFER_SIZE " +
                     std::to_string(max_texels) + " RGBA32UI texels)");
-    glNamedBufferStorage(m.buf_nano, GLsizeiptr(vol.nano->bytes()), vol.nano->data(), 0);
-    if (vol.nano->bytes() / 16 <= uint64_t(max_texels)) glTextureBuffer(m.tex_nano, GL_RGBA32UI, m.buf_nano);
+    // The grids and the page table go up when a frame first reads them (render.nanovdb_lookup=
+    // table or accessor, or an atlas refused): the atlas, the default, needs neither, and on
+    // cumulus-field 2048 the grids alone are 637 MiB. Until then a placeholder stands in.
+    m.upload_grid_placeholders();
     m.nvdb_on = 1;
     m.nvdb_detail = vol.has_detail ? 1 : 0;
     m.nvdb_shared = vol.has_detail && vol.nano->detail_shared_layout ? 1 : 0;
@@ -957,36 +1011,15 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
     // The page table when every grid the shaders read has one (the detail grids through the
     // first one's layout); otherwise the lookups walk the tree with PNanoVDB's accessor.
     m.nvdb_pages_ok = !vol.has_detail || m.nvdb_shared;
-    if (m.nvdb_pages_ok) {
-      const cloudgen::NanoPages d = cloudgen::nano_pages(*vol.nano, 0);
-      const cloudgen::NanoPages g = vol.has_detail ? cloudgen::nano_pages(*vol.nano, size_t(vol.nano->detail[0])) : d;
-      if (d.origin != g.origin || d.dims != g.dims) throw GlError("NanoVDB page tables of different boxes");
-      std::vector<uint32_t> rg(d.entries.size() * 2);
-      for (size_t i = 0; i < d.entries.size(); ++i) rg[2 * i] = d.entries[i], rg[2 * i + 1] = g.entries[i];
-      glTextureStorage3D(m.tex_pages, 1, GL_RG32UI, GLsizei(d.dims[0]), GLsizei(d.dims[1]), GLsizei(d.dims[2]));
-      glTextureSubImage3D(m.tex_pages, 0, 0, 0, 0, GLsizei(d.dims[0]), GLsizei(d.dims[1]), GLsizei(d.dims[2]), GL_RG_INTEGER,
-                          GL_UNSIGNED_INT, rg.data());
-      m.nvdb_page_origin = glm::ivec3(d.origin[0], d.origin[1], d.origin[2]);
-      m.pages_bytes = rg.size() * 4;
-    } else {
-      const uint32_t none[2] = {0, 0};
-      glTextureStorage3D(m.tex_pages, 1, GL_RG32UI, 1, 1, 1);
-      glTextureSubImage3D(m.tex_pages, 0, 0, 0, 0, 1, 1, 1, GL_RG_INTEGER, GL_UNSIGNED_INT, none);
-    }
     const float zero[4] = {0, 0, 0, 0};
     glTextureStorage3D(m.tex_volume, 1, GL_RGBA32F, 1, 1, 1);
     glTextureSubImage3D(m.tex_volume, 0, 0, 0, 0, 1, 1, 1, GL_RGBA, GL_FLOAT, zero);
   } else {
-    const uint32_t placeholder[8] = {};
-    glNamedBufferStorage(m.buf_nano, sizeof placeholder, placeholder, 0);
-    glTextureBuffer(m.tex_nano, GL_RGBA32UI, m.buf_nano);
+    m.upload_grid_placeholders();
     m.nvdb_on = 0;
     m.nvdb_ssbo = 0;
     m.use_storage(0);
     m.nvdb_pages_ok = false;
-    const uint32_t none[2] = {0, 0};
-    glTextureStorage3D(m.tex_pages, 1, GL_RG32UI, 1, 1, 1);
-    glTextureSubImage3D(m.tex_pages, 0, 0, 0, 0, 1, 1, 1, GL_RG_INTEGER, GL_UNSIGNED_INT, none);
     GLint max3d = 0;
     glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max3d);
     for (int i = 0; i < 3; ++i)
@@ -1030,6 +1063,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   m.resize(f.width, f.height);
   // The nanovdb lookups' storage (nanovdb_storage.glsl) before the modes, so a change links once more.
   const bool atlas = m.nvdb_on && f.settings.nanovdb_lookup == NanoLookup::Atlas && m.ensure_atlas();
+  if (m.nvdb_on && !atlas) m.ensure_grids();
   m.use_storage(!m.nvdb_on ? 0 : atlas ? 3 : m.nvdb_ssbo ? 1 : 2);
   m.use_modes(f);
   gpu::CloudParams cp = to_gpu(f.params);
@@ -1281,6 +1315,7 @@ std::vector<glm::vec3> GlRenderer::transmittance_dump(const AtmosphereSettings& 
 }
 
 int GlRenderer::light_volume_builds() const { return impl_->light_builds; }
+bool GlRenderer::nano_grids_on_gpu() const { return impl_->grids_up; }
 int GlRenderer::air_lut_builds() const { return impl_->air_builds; }
 int GlRenderer::program_count() const { return int(impl_->program_cache.size()); }
 

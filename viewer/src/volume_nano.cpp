@@ -32,19 +32,34 @@ bool use_nanovdb(const RenderSettings& s, uint64_t voxels) {
   return prepared_bytes(voxels) > dense_budget_bytes(s) || voxels * 16 >= kDenseTextureLimit;
 }
 
-uint64_t volume_gpu_bytes(const PreparedVolume& v) {
+uint64_t nano_grid_bytes(const PreparedVolume& v) {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+  if (v.nano) return v.nano->bytes();
+#endif
+  (void)v;
+  return 0;
+}
+
+uint64_t volume_gpu_bytes(const PreparedVolume& v, NanoLookup lookup) {
+  const uint64_t skipping = v.occ.size() * 2;  // the R8 occupancy and R8UI distance textures
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
   if (v.nano) {
-    // The grids, the occupancy and the GL renderer's leaf page table (8 bytes per 8^3 leaf cell).
+    // The brick atlas (GL) leaves the grids and the page table on the CPU; its own size is known
+    // once it is built (the renderer prints it).
+    if (lookup == NanoLookup::Atlas) return skipping;
+    // The grids and the GL renderer's leaf page table (8 bytes per 8^3 leaf cell).
     uint64_t cells = 1;
     for (int a = 0; a < 3; ++a) {
       const int64_t lo = v.nano->index_min[size_t(a)] & ~7, hi = int64_t(v.nano->index_min[size_t(a)]) + v.dims[size_t(a)] - 1;
       cells *= uint64_t((hi - lo) / 8 + 1);
     }
-    return v.nano->bytes() + v.occ.size() + cells * 8;
+    // (uploaded for the accessor too, when every grid has one: one upload serves both lookups)
+    const bool table = !v.has_detail || v.nano->detail_shared_layout;
+    return v.nano->bytes() + skipping + (table ? cells * 8 : 0);
   }
 #endif
-  return uint64_t(v.rgba.size()) * sizeof(float) + v.occ.size();
+  (void)lookup;
+  return uint64_t(v.rgba.size()) * sizeof(float) + skipping;
 }
 
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN

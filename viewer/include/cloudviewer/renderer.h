@@ -115,6 +115,10 @@ class GlRenderer {
   /// How many times the light volume has been built (render.light_volume): once per change of the
   /// sun, the volume or a lighting key, never for a camera move alone.
   int light_volume_builds() const;
+  /// Whether the NanoVDB grids (and their leaf page table) are on the GPU: only once a frame has
+  /// read them (render.nanovdb_lookup=table or accessor, or an atlas that was refused); the brick
+  /// atlas, the default, leaves them on the CPU.
+  bool nano_grids_on_gpu() const;
   /// How many times the camera's air LUT (render.air_lut) has been built.
   int air_lut_builds() const;
   /// Distinct GL programs linked so far (render.compiled_modes: one set per set of modes seen).
