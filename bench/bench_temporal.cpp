@@ -103,7 +103,7 @@ int main(int argc, char** argv) {
       t.temporal = true;
       GpuTimings full = best_of(r, vol, s, cam, sun, w, h, repeat);
       GpuTimings temporal = best_of(r, vol, t, cam, sun, w, h, repeat);
-      std::printf("| %d | %.1f | %.1f | %.2fx | %.1f | %.1f | %.2fx |\n", steps, full.total_ms, temporal.total_ms,
+      std::printf("| %d | %.2f | %.2f | %.2fx | %.2f | %.2f | %.2fx |\n", steps, full.total_ms, temporal.total_ms,
                   full.total_ms / temporal.total_ms, full.cloud_ms, temporal.cloud_ms, full.cloud_ms / temporal.cloud_ms);
       if (steps == 64) per_pass = {full, temporal};
     }
@@ -111,7 +111,7 @@ int main(int argc, char** argv) {
     for (int k = 0; k < 2; ++k) {
       std::cout << (k ? "\n  temporal:" : "\n  full:");
       for (const auto& [name, ms] : per_pass[k].passes)
-        if (ms > 0.05) std::printf(" %s %.1f", name.c_str(), ms);
+        if (ms > 0.005) std::printf(" %s %.2f", name.c_str(), ms);
     }
     std::cout << "\n";
 
@@ -132,7 +132,7 @@ int main(int argc, char** argv) {
         still.motion.wind_speed = 0;
         still.motion.flow_speed = 0;
         double a = best_ms(r, vol, still, cam, sun, w, h, repeat), b = best_ms(r, vol, moving, cam, sun, w, h, repeat);
-        std::printf("| %s | %.1f | %.1f | %+.1f%% |\n",
+        std::printf("| %s | %.2f | %.2f | %+.1f%% |\n",
                     same_path ? "wind + flow map (both: per-sample light march, thesis skipping)"
                               : "defaults (still: light volume + distance field)",
                     a, b, 100.0 * (b / a - 1.0));
