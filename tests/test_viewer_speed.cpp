@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -332,11 +333,23 @@ TEST(ViewerSpeed, CompiledModesKeepTheImage) {
   };
   int after_first = 0;
   FrameImages first;
+  // Each frame reports the programs linked since the frame before (the first: the constructor's
+  // too) and their compile time: the count is what the cache grew by, and the time is > 0 exactly
+  // when something was linked.
+  int counted = 0;
+  auto render_counting = [&r, &counted](const FrameSetup& f) {
+    GpuTimings t;
+    r.render(f, &t);
+    EXPECT_EQ(t.programs_linked, r.program_count() - counted);
+    counted = r.program_count();
+    EXPECT_EQ(t.compile_ms > 0, t.programs_linked > 0) << t.compile_ms << " ms for " << t.programs_linked;
+    return t;
+  };
   for (const Case& c : cases) {
-    r.render(frame(c, true));
+    render_counting(frame(c, true));
     FrameImages a = r.read_back();
     if (after_first == 0) first = a;
-    r.render(frame(c, false));
+    render_counting(frame(c, false));
     FrameImages b = r.read_back();
     if (after_first == 0) after_first = r.program_count();
     double scale = std::max(image_stats(b.linear).max, 1e-6);
@@ -349,8 +362,10 @@ TEST(ViewerSpeed, CompiledModesKeepTheImage) {
   const int all = r.program_count();
   EXPECT_GT(all, after_first + 3);
   // ...and going back to the first links nothing new and renders the same picture, bit for bit.
-  r.render(frame(cases[0], true));
+  const GpuTimings again = render_counting(frame(cases[0], true));
   EXPECT_EQ(r.program_count(), all);
+  EXPECT_EQ(again.programs_linked, 0);
+  EXPECT_EQ(again.compile_ms, 0.0);
   EXPECT_EQ(max_abs_diff(first.linear, r.read_back().linear), 0.0);
 }
 
@@ -406,5 +421,9 @@ TEST(ViewerSpeed, TrackKeysCarryTheirOwnSettings) {
   EXPECT_EQ(code, 0) << err2.str();
   // At most 10 m of march: the sphere, 300 m away, is not reached, so no loop trips at all.
   EXPECT_NE(out2.str().find(" 0.0 "), std::string::npos) << out2.str();
+  // The bench says what its renderer spent compiling (a fresh renderer links every program).
+  const size_t at = out2.str().find("GL programs compiled: ");
+  ASSERT_NE(at, std::string::npos) << out2.str();
+  EXPECT_GT(std::atoi(out2.str().c_str() + at + 22), 0) << out2.str().substr(at);
   std::filesystem::remove_all(dir);
 }

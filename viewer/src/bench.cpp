@@ -224,7 +224,7 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
   const bool want_csv = !o.csv.empty();
   if (want_csv) {
     csv << "config,frame,view,gpu_total_ms,gpu_ground_ms,gpu_cloud_ms,gpu_post_ms,wall_ms,loop_trips_per_pixel,"
-           "rmse_vs_baseline,max_diff_vs_baseline,rmse_vs_reference,light_volume_ms,atmosphere_ms\n";
+           "rmse_vs_baseline,max_diff_vs_baseline,rmse_vs_reference,light_volume_ms,atmosphere_ms,compile_ms\n";
   }
   struct Summary {
     double total = 0, cloud = 0, wall = 0, rmse_base = 0, max_diff = 0, rmse_ref = 0, trips = 0;
@@ -274,9 +274,16 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
   std::vector<Image> images(nc * nfr);
   std::vector<double> trips(nc * nfr, 0.0);
   std::vector<double> rebuild_ms(nc, 0.0), tables_ms(nc, 0.0);
+  // GL programs compiled per configuration (its set of render.compiled_modes, and the trip
+  // count's): wall clock, outside every frame time; seconds each on some GPUs' drivers.
+  std::vector<double> compile_ms(nc, 0.0);
+  int linked = 0;
+  auto count_compile = [&](size_t c, const GpuTimings& t) { compile_ms[c] += t.compile_ms, linked += t.programs_linked; };
   for (size_t c = 0; c < nc; ++c) {  // warm-up: compile, first touch
     use_grid(settings[c]);
-    renderer.render(setups[c * nfr]);
+    GpuTimings t;
+    renderer.render(setups[c * nfr], &t);
+    count_compile(c, t);
   }
   for (int r = 0; r < o.bench_repeat; ++r) {
     for (size_t cc = 0; cc < nc; ++cc) {
@@ -289,6 +296,7 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
         auto w0 = std::chrono::steady_clock::now();
         renderer.render(setups[c * nfr + i], &t);
         double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - w0).count();
+        count_compile(c, t);
         // A light volume rebuilt because the previous configuration differed is not this frame's
         // cost with a still sun: timed apart (the light_volume_ms column). So are the atmosphere's
         // tables (its LUTs, and the air LUT, which the track's frames at other camera altitudes
@@ -303,7 +311,10 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
           // Work count, independent of machine load: primary-loop trips per pixel (output=iterations).
           RenderSettings si = setups[c * nfr + i].settings;
           si.output = OutputMode::Iterations;
-          renderer.render(make_frame(grid_for(si), si, setups[c * nfr + i].camera, setups[c * nfr + i].sun, o.width, o.height));
+          GpuTimings ti;
+          renderer.render(make_frame(grid_for(si), si, setups[c * nfr + i].camera, setups[c * nfr + i].sun, o.width, o.height),
+                          &ti);
+          count_compile(c, ti);
           const Image lin = renderer.read_back().linear;
           double sum = 0;
           for (size_t k = 0; k < lin.rgba.size(); k += 4) sum += lin.rgba[k];
@@ -332,7 +343,7 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
             << "," << mean.ground_ms << "," << mean.cloud_ms << "," << mean.post_ms << "," << wall << ","
             << trips[c * nfr + i] << "," << rb << "," << md << ",";
         if (o.bench_reference > 0) csv << rr;
-        csv << "," << rebuild_ms[c] << "," << tables_ms[c] << "\n";
+        csv << "," << rebuild_ms[c] << "," << tables_ms[c] << "," << compile_ms[c] << "\n";
       }
     }
   }
@@ -367,6 +378,10 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
          " max|diff| and RMSE base: display image against the baseline configuration, 0..1 scale";
   if (o.bench_reference > 0) out << ";\n RMSE ref: against the CPU reference at " << o.bench_reference << " steps";
   out << ")\n";
+  double compile_total = 0;
+  for (double ms : compile_ms) compile_total += ms;
+  out << "GL programs compiled: " << linked << " in " << std::fixed << std::setprecision(2) << compile_total / 1000
+      << " s of wall clock, not in the frame times (CSV: compile_ms per configuration)\n" << std::defaultfloat;
   if (want_csv) {
     const std::string csv_text = csv.str();
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN

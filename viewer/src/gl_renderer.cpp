@@ -544,8 +544,12 @@ struct GlRenderer::Impl {
     program_cache.clear();
     for (Pass& p : passes) p.program = 0;
   }
+  // What build_programs linked since render() last asked (GpuTimings::compile_ms, programs_linked).
+  double compile_ms = 0;
+  int programs_linked = 0;
   void build_programs() {
     // Link what the cache lacks; nothing changes unless all succeed.
+    const auto t0 = std::chrono::steady_clock::now();
     std::vector<std::string> keys;
     std::vector<std::pair<std::string, GLuint>> built;
     try {
@@ -563,6 +567,9 @@ struct GlRenderer::Impl {
     }
     for (auto& b : built) program_cache.emplace(std::move(b.first), b.second);
     for (size_t i = 0; i < passes.size(); ++i) passes[i].program = program_cache.at(keys[i]);
+    // (the link status query above waits for the driver, so this is the compile's wall time)
+    if (!built.empty()) compile_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    programs_linked += int(built.size());
   }
   // render.compiled_modes: the programs for this frame's modes (built once per set of values).
   void use_modes(const FrameSetup& f) {
@@ -1066,6 +1073,9 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   if (m.nvdb_on && !atlas) m.ensure_grids();
   m.use_storage(!m.nvdb_on ? 0 : atlas ? 3 : m.nvdb_ssbo ? 1 : 2);
   m.use_modes(f);
+  const double compile_ms = m.compile_ms;
+  const int programs_linked = m.programs_linked;
+  m.compile_ms = 0, m.programs_linked = 0;
   gpu::CloudParams cp = to_gpu(f.params);
   glNamedBufferSubData(m.ubo_cloud, 0, sizeof(cp), &cp);
   const Target& bloom = m.target("bloom_a");
@@ -1237,6 +1247,8 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
        : g == Group::Clouds ? timings->cloud_ms : timings->post_ms) += ms;
     }
     timings->total_ms = double(t.back() - t.front()) * 1e-6;
+    timings->compile_ms = compile_ms;
+    timings->programs_linked = programs_linked;
   }
 }
 

@@ -22,6 +22,12 @@ struct GpuTimings {
   double ground_ms = 0, cloud_ms = 0, post_ms = 0, total_ms = 0;
   double atmosphere_ms = 0;  ///< the atmosphere LUT passes and the air LUT (0 unless an atmosphere.* key, the sun or the camera altitude changed)
   double light_volume_ms = 0;  ///< the light volume's rebuild (0 unless the sun, volume or a lighting key changed)
+  /// Wall-clock time spent compiling and linking GL programs since the previous render() (the
+  /// constructor's and reload_shaders' count toward the next frame), and how many were linked: 0
+  /// unless the renderer needed a program it had not linked (the first frame, a new set of
+  /// render.compiled_modes, a new NanoVDB lookup). Not in total_ms (GPU time).
+  double compile_ms = 0;
+  int programs_linked = 0;
   std::vector<std::pair<std::string, double>> passes;  ///< every pass in order, ms
 };
 
