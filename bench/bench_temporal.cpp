@@ -5,7 +5,7 @@
 //     sequence (so the temporal history is real): RMSE of the display image and the ghosting
 //     pixels (any channel off by more than 0.1) per frame;
 //  3. the cost of the motion (wind + flow map) at time 60 s against still clouds.
-// Usage: bench_temporal VOLUME [--size WxH] [--repeat N] [--frames N] [--csv FILE]
+// Usage: bench_temporal VOLUME [--size WxH] [--repeat N] [--frames N] [--csv FILE] [--set KEY=VALUE]...
 // Prints Markdown tables (scripts/bench_temporal.sh puts them into docs/motion.md).
 #include <algorithm>
 #include <chrono>
@@ -67,14 +67,16 @@ double best_ms(GlRenderer& r, const PreparedVolume& vol, const RenderSettings& s
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::cerr << "usage: bench_temporal VOLUME [--size WxH] [--repeat N] [--frames N] [--csv FILE]\n";
+    std::cerr << "usage: bench_temporal VOLUME [--size WxH] [--repeat N] [--frames N] [--csv FILE] [--set KEY=VALUE]...\n";
     return 1;
   }
   std::string input = argv[1], csv_path;
   int w = 320, h = 180, repeat = 3, track_frames = 48;
+  std::vector<std::string> sets;
   for (int i = 2; i + 1 < argc; i += 2) {
     std::string a = argv[i], v = argv[i + 1];
     if (a == "--size") std::sscanf(v.c_str(), "%dx%d", &w, &h);
+    else if (a == "--set") sets.push_back(v);
     else if (a == "--repeat") repeat = std::max(1, std::atoi(v.c_str()));
     else if (a == "--frames") track_frames = std::max(2, std::atoi(v.c_str()));
     else if (a == "--csv") csv_path = v;
@@ -86,6 +88,7 @@ int main(int argc, char** argv) {
   try {
     HeadlessContext ctx;
     RenderSettings base;
+    for (const std::string& kv : sets) apply_setting(base, kv);  // every configuration starts from these
     PreparedVolume vol = open_input(input, base);
     Camera cam = default_camera(vol, 60, double(w) / h);
     Sun sun = default_sun(cam);

@@ -774,6 +774,16 @@ TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
   CV_EXPECT_OFFSET(ms_octaves);
   CV_EXPECT_OFFSET(ambient_below_color);
   CV_EXPECT_OFFSET(ambient_pad);
+  CV_EXPECT_OFFSET(moved_occ_dims);
+  CV_EXPECT_OFFSET(moved_occ_cell_m);
+  CV_EXPECT_OFFSET(shadow_map_on);
+  CV_EXPECT_OFFSET(shadow_map_nx);
+  CV_EXPECT_OFFSET(shadow_map_nz);
+  CV_EXPECT_OFFSET(shadow_map_texel_m);
+  CV_EXPECT_OFFSET(shadow_map_min_x_m);
+  CV_EXPECT_OFFSET(shadow_map_min_z_m);
+  CV_EXPECT_OFFSET(shadow_map_ground_m);
+  CV_EXPECT_OFFSET(shadow_map_pad);
 #undef CV_EXPECT_OFFSET
   EXPECT_EQ(r.pass_names().front(), "atmosphere_transmittance");  // the LUT precomputes come first
   EXPECT_EQ(r.pass_names().at(1), "atmosphere_multiple_scattering");
@@ -785,9 +795,10 @@ TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
   EXPECT_EQ(r.pass_names().at(6), "atmosphere_orders_multiple");
   EXPECT_EQ(r.pass_names().at(7), "atmosphere_scattering");
   EXPECT_EQ(r.pass_names().at(8), "air_lut");  // reads the LUTs before it
-  EXPECT_EQ(r.pass_names().at(9), "ground");
-  EXPECT_EQ(r.pass_names().at(10), "light_volume");
-  EXPECT_EQ(r.pass_names().at(11), "ms_volume");  // reads the light volume
+  EXPECT_EQ(r.pass_names().at(9), "shadow_map");
+  EXPECT_EQ(r.pass_names().at(10), "ground");  // reads the shadow map
+  EXPECT_EQ(r.pass_names().at(11), "light_volume");
+  EXPECT_EQ(r.pass_names().at(12), "ms_volume");  // reads the light volume
   EXPECT_EQ(r.pass_names().back(), "tonemap");
 }
 

@@ -293,6 +293,137 @@ TEST(ViewerSpeed, LightVolumeRebuildsOnSunChangeNotOnCameraMove) {
   EXPECT_EQ(r.light_volume_builds(), 4) << "off: never built";
 }
 
+// render.shadow_map: the ground's cloud shadow from a 2D map of the ground pass's own march. At a
+// texel centre the lookup is the march; between, bilinear; a ground point outside the map's area
+// sends its sun ray past the march box, where the march gives exactly 1 (so the area is not too
+// small); the map holds a real shadow. A finer map is closer.
+TEST(ViewerSpeed, ShadowMapFollowsTheShadowMarch) {
+  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8, 2);
+  Camera cam = default_camera(vol, 60, 16.0 / 9);
+  double mean_err[2] = {0, 0};
+  for (int scale : {1, 2}) {
+    RenderSettings s = with({"render.shadow_map=true"});
+    s.shadow_map_scale = scale;
+    const Sun sun{210, 40};
+    FrameSetup f = make_frame(vol, s, cam, sun, 16, 9);
+    ASSERT_EQ(f.params.shadow_map_on, 1.0);
+    const std::vector<double> map = build_shadow_map_cpu(vol, f);
+    ASSERT_EQ(map.size(), size_t(f.params.shadow_map_nx * f.params.shadow_map_nz));
+    EXPECT_LT(*std::min_element(map.begin(), map.end()), 0.5) << "the blob casts a shadow";
+    const glm::dvec2 lo(f.params.march_min_m.x + f.params.shadow_map_min_x_m, f.params.march_min_m.z + f.params.shadow_map_min_z_m);
+    const double texel = f.params.shadow_map_texel_m;
+    EXPECT_NEAR(texel, vol.voxel_size * scale, 1e-3);
+    const glm::dvec2 size = glm::dvec2(f.params.shadow_map_nx, f.params.shadow_map_nz) * texel;
+    auto ground = [&](glm::dvec2 xz) { return glm::dvec3(xz.x, f.params.ground_y_m, xz.y); };
+    // Exact at texel centres.
+    for (glm::ivec2 t : {glm::ivec2(0, 0), glm::ivec2(int(f.params.shadow_map_nx) / 2, int(f.params.shadow_map_nz) / 3)}) {
+      const glm::dvec3 c = ground(lo + (glm::dvec2(t) + 0.5) * texel);
+      EXPECT_NEAR(reference_ground_shadow(vol, f, c, &map), reference_ground_shadow(vol, f, c), 1e-6);
+    }
+    // Random ground points over twice the map's area.
+    uint32_t h = 7;
+    std::vector<double> err;
+    int outside = 0;
+    for (int i = 0; i < 4000; ++i) {
+      const glm::dvec2 u(lcg(h) / double(1 << 24), lcg(h) / double(1 << 24));
+      const glm::dvec3 p = ground(lo - 0.5 * size + u * 2.0 * size);
+      const double march = reference_ground_shadow(vol, f, p), look = reference_ground_shadow(vol, f, p, &map);
+      const glm::dvec2 x = (glm::dvec2(p.x, p.z) - lo) / texel;
+      if (x.x < 0 || x.y < 0 || x.x > f.params.shadow_map_nx || x.y > f.params.shadow_map_nz) {
+        ++outside;
+        EXPECT_EQ(march, 1.0) << "a ray from outside the map's area crosses the box at " << x.x << ", " << x.y;
+        EXPECT_EQ(look, 1.0);
+      } else {
+        err.push_back(std::abs(look - march));
+      }
+    }
+    ASSERT_GT(outside, 1000);
+    ASSERT_GT(err.size(), 500u);
+    double mean = 0;
+    for (double e : err) mean += e / double(err.size());
+    std::sort(err.begin(), err.end());
+    const double p99 = err[err.size() * 99 / 100];
+    std::cout << "shadow map scale " << scale << " (" << f.params.shadow_map_nx << " x " << f.params.shadow_map_nz
+              << " texels of " << texel << " m): |T error| mean " << mean << " p99 " << p99 << "\n";
+    mean_err[scale - 1] = mean;
+    // Bounds: measured (0.0007 / 0.0025 mean, 0.018 / 0.071 p99), then about 2x headroom.
+    EXPECT_LT(mean, scale == 1 ? 0.002 : 0.006) << "scale " << scale;
+    EXPECT_LT(p99, scale == 1 ? 0.04 : 0.15) << "scale " << scale;
+  }
+  EXPECT_LT(mean_err[0], mean_err[1]) << "a finer map is closer to the march";
+  // Off in layer mode, with the sun below the horizon and without the ground.
+  const PreparedVolume tiling = prepare_volume(synthetic_volume("noise"), 8);
+  EXPECT_EQ(make_frame(tiling, with({"render.shadow_map=true"}), cam, Sun{210, 40}, 16, 9).params.shadow_map_on, 1.0);
+  EXPECT_EQ(make_frame(tiling, with({"render.shadow_map=true", "render.mode=layer"}), cam, Sun{210, 40}, 16, 9).params.shadow_map_on, 0.0);
+  EXPECT_EQ(make_frame(vol, with({"render.shadow_map=true"}), cam, Sun{210, -5}, 16, 9).params.shadow_map_on, 0.0);
+  EXPECT_EQ(make_frame(vol, with({"render.shadow_map=true", "render.ground=false"}), cam, Sun{210, 40}, 16, 9).params.shadow_map_on, 0.0);
+}
+
+// The shadow map is rebuilt when the sun, the volume, the time (moving clouds) or a lighting key
+// changes, never when only the camera moves; the GL image with it is the CPU reference's, and
+// differs from the per-pixel march only at the shadows' edges.
+TEST(ViewerSpeed, ShadowMapRebuildsOnSunChangeNotOnCameraMove) {
+  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8, 2);
+  gl_context();
+  GlRenderer r{ShaderSource()};
+  r.set_volume(vol);
+  RenderSettings s = with({"render.shadow_map=true", "render.steps=96"});
+  Camera cam = default_camera(vol, 60, 160.0 / 90);
+  const Sun sun{210, 40};
+  FrameSetup f = make_frame(vol, s, cam, sun, 160, 90);
+  r.render(f);
+  EXPECT_EQ(r.shadow_map_builds(), 1);
+  const FrameImages a = r.read_back();
+  const double p = psnr(a.display, render_cpu(vol, f).display);
+  std::cout << "shadow map: PSNR GL vs CPU " << p << " dB\n";
+  EXPECT_GT(p, 50.0);
+  RenderSettings march = s;
+  march.shadow_map = false;
+  const FrameImages m = render_gl(vol, make_frame(vol, march, cam, sun, 160, 90));
+  const double e = rmse(a.display, m.display), d = max_abs_diff(a.display, m.display);
+  std::cout << "shadow map against the per-pixel march: RMSE " << e << ", max |diff| " << d << "\n";
+  EXPECT_GT(d, 0.0) << "the lookup was not used";
+  EXPECT_LT(e, 0.003);
+  Camera moved = cam;
+  for (int i = 1; i <= 3; ++i) {
+    moved.eye += glm::dvec3(37.0 * i, 11.0, -23.0);
+    r.render(make_frame(vol, s, moved, sun, 160, 90));
+  }
+  EXPECT_EQ(r.shadow_map_builds(), 1) << "camera moves alone keep the map";
+  r.render(make_frame(vol, s, moved, Sun{210, 45}, 160, 90));
+  EXPECT_EQ(r.shadow_map_builds(), 2) << "a new sun rebuilds it";
+  RenderSettings denser = s;
+  denser.density = 2;
+  r.render(make_frame(vol, denser, moved, Sun{210, 45}, 160, 90));
+  EXPECT_EQ(r.shadow_map_builds(), 3) << "a lighting key rebuilds it";
+  r.render(make_frame(vol, denser, moved, Sun{210, 45}, 320, 180));
+  EXPECT_EQ(r.shadow_map_builds(), 3) << "a new viewport size does not";
+  RenderSettings moving = denser;
+  apply_setting(moving, "motion.wind_speed=20");
+  for (double t : {10.0, 11.0}) {
+    moving.time = t;
+    FrameSetup fm = make_frame(vol, moving, moved, Sun{210, 45}, 640, 360);
+    ASSERT_EQ(fm.params.shadow_map_on, 1.0);
+    r.render(fm);
+  }
+  EXPECT_EQ(r.shadow_map_builds(), 5) << "moving clouds rebuild it every frame";
+  // ...so they march per pixel instead while the map has over a quarter of the frame's pixels
+  // (125 x 146 texels; 160 x 90 pixels); still clouds always use it.
+  FrameSetup small = make_frame(vol, moving, moved, Sun{210, 45}, 160, 90);
+  EXPECT_GT(small.params.motion_on, 0.5);
+  EXPECT_EQ(small.params.shadow_map_on, 0.0);
+  EXPECT_EQ(make_frame(vol, denser, moved, Sun{210, 45}, 160, 90).params.shadow_map_on, 1.0);
+  r.render(small);
+  EXPECT_EQ(r.shadow_map_builds(), 5);
+  r.set_volume(vol);
+  r.render(make_frame(vol, denser, moved, Sun{210, 45}, 320, 180));
+  EXPECT_EQ(r.shadow_map_builds(), 6) << "a new volume rebuilds it";
+  RenderSettings off = denser;
+  off.shadow_map = false;
+  r.render(make_frame(vol, off, moved, Sun{210, 45}, 320, 180));
+  EXPECT_EQ(r.shadow_map_builds(), 6) << "off: never built";
+}
+
 // A track key may carry its own settings (the view from below marches at most 2133 m); a bad one
 // is refused before OpenGL, naming the key's JSON pointer.
 // render.compiled_modes: the programs compiled for a frame's modes (modes.glsl's macros as
@@ -317,6 +448,7 @@ TEST(ViewerSpeed, CompiledModesKeepTheImage) {
        {"render.skipping=none", "render.density_step=2", "render.ms_volume=true", "render.phase=mie"}, 0},
       {"one octave, two lobes, analytic sky, transmittance output",
        {"render.ms_octaves=1", "render.phase=two-lobe-hg", "render.sky=analytic", "render.output=transmittance"}, 0},
+      {"ground shadow marched per pixel", {"render.shadow_map=false"}, 0},
       {"no light march, Draine, temporal, marched air",
        {"render.light_march=false", "render.phase=draine-hg", "render.temporal=true", "render.air_lut=false"}, 0},
   };

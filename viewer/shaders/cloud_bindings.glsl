@@ -163,6 +163,14 @@ layout(binding = CV_UNIT_LIGHT_VOLUME) uniform sampler3D s_light_volume;  // R32
 int distance_texel(ivec3 cell) { return int(texelFetch(s_distance, cell, 0).r); }
 Number light_volume_texel(ivec3 texel) { return texelFetch(s_light_volume, texel, 0).r; }
 Number light_volume_filtered(vec3 uvw) { return texture(s_light_volume, uvw).r; }
+// The ground shadow map (render.shadow_map): the ground pass's first input, an R32F 3D target of
+// one layer; no other program reads it (ground_radiance runs in the ground pass alone).
+#ifdef CV_GROUND_PASS
+layout(binding = CV_UNIT_PASS_INPUT0) uniform sampler3D s_shadow_map;
+Number shadow_map_texel(ivec2 texel) { return texelFetch(s_shadow_map, ivec3(texel, 0), 0).r; }
+#else
+Number shadow_map_texel(ivec2 texel) { return 1.0; }
+#endif
 layout(binding = CV_UNIT_MS_VOLUME) uniform sampler3D s_ms_volume;  // RGBA32F: fluence, 3 g x flux per unit sun irradiance
 vec4 ms_volume_texel(ivec3 texel) { return texelFetch(s_ms_volume, texel, 0); }
 vec4 ms_volume_filtered(vec3 uvw) { return texture(s_ms_volume, uvw); }

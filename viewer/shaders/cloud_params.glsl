@@ -121,4 +121,16 @@ struct CloudParams {
   // Moving clouds in box mode: occupied() reads the march box's own grid for this time (cells of
   // moved_occ_cell_m metres from march_min_m; FrameSetup::moved_occupancy), no motion lookup.
   vec3 moved_occ_dims;      Number moved_occ_cell_m;
+  // Ground shadow map (render.shadow_map, box mode; lighting.glsl ground_shadow): the clouds'
+  // transmittance toward the sun at the centres of shadow_map_nx x shadow_map_nz ground texels of
+  // shadow_map_texel_m, from (shadow_map_min_x_m, shadow_map_min_z_m) relative to march_min_m: the
+  // part of the ground whose sun rays cross the march box.
+  Number shadow_map_on;     // 1: the ground pass looks its shadow up instead of marching it per pixel
+  Number shadow_map_nx;
+  Number shadow_map_nz;
+  Number shadow_map_texel_m;
+  Number shadow_map_min_x_m;
+  Number shadow_map_min_z_m;
+  Number shadow_map_ground_m;  // the ground's height in the march box (rounded to 1 mm: part of the map's key)
+  Number shadow_map_pad;
 };

@@ -237,6 +237,36 @@ Number sun_shadow_transmittance(vec3 p) {
   return exp(-tau * seg * u_cloud.sigma_t_per_m);
 }
 
+// Ground shadow map (render.shadow_map, box mode): sun_shadow_transmittance at the centres of a
+// grid of ground texels (the shadow_map pass; the CPU reference builds the same grid in double
+// precision), then looked up bilinearly from texel fetches (the same arithmetic on GL and CPU)
+// instead of marching per ground pixel. A point outside the grid's area sends its sun ray past
+// the march box: 1 exactly, as the march gives. The texel centre on the ground, camera-relative:
+vec3 shadow_map_position(ivec2 texel) {
+  return vec3(u_cloud.march_min_m.x + u_cloud.shadow_map_min_x_m + (Number(texel.x) + 0.5) * u_cloud.shadow_map_texel_m,
+              u_cloud.ground_y_m,
+              u_cloud.march_min_m.z + u_cloud.shadow_map_min_z_m + (Number(texel.y) + 0.5) * u_cloud.shadow_map_texel_m);
+}
+
+Number shadow_map_lookup(vec3 p) {
+  ivec2 n = ivec2(int(u_cloud.shadow_map_nx), int(u_cloud.shadow_map_nz));
+  vec2 x = vec2(p.x - u_cloud.march_min_m.x - u_cloud.shadow_map_min_x_m,
+                p.z - u_cloud.march_min_m.z - u_cloud.shadow_map_min_z_m) / u_cloud.shadow_map_texel_m - 0.5;
+  if (x.x < -0.5 || x.y < -0.5 || x.x > Number(n.x) - 0.5 || x.y > Number(n.y) - 0.5) return 1.0;
+  vec2 fl = floor(x);
+  vec2 f = x - fl;
+  ivec2 i0 = clamp(ivec2(fl), ivec2(0), n - 1);
+  ivec2 i1 = clamp(ivec2(fl) + 1, ivec2(0), n - 1);
+  Number a = mix(shadow_map_texel(ivec2(i0.x, i0.y)), shadow_map_texel(ivec2(i1.x, i0.y)), f.x);
+  Number b = mix(shadow_map_texel(ivec2(i0.x, i1.y)), shadow_map_texel(ivec2(i1.x, i1.y)), f.x);
+  return mix(a, b, f.y);
+}
+
+// The clouds' shadow at the ground point p: the map's lookup or the march.
+Number ground_shadow(vec3 p) {
+  return CV_MODE_SHADOW_MAP > 0.5 ? shadow_map_lookup(p) : sun_shadow_transmittance(p);
+}
+
 // Lambertian ground with a gentle 8 km albedo variation (no thin lines: they would alias),
 // lit by the sun (shadowed by the clouds) and the ambient sky.
 vec3 ground_radiance(vec3 p) {
@@ -246,7 +276,7 @@ vec3 ground_radiance(vec3 p) {
   Number wz = u_cloud.camera_world_mod_m.z + p.z;
   Number variation = 0.5 + 0.25 * (sin(wx * (CV_PI / 4096.0)) + sin(wz * (CV_PI / 4096.0)));
   vec3 albedo = vec3(0.10, 0.12, 0.07) * (u_cloud.ground_albedo / 0.18) * (0.9 + 0.2 * variation);
-  Number shadow = mu > 0.0 ? sun_shadow_transmittance(p) : 0.0;
+  Number shadow = mu > 0.0 ? ground_shadow(p) : 0.0;
   vec3 irradiance = sun_color_at(p) * (u_cloud.sun_radiance * mu * shadow)
                   + u_cloud.ambient_color * (u_cloud.ambient_scale * CV_PI);
   return albedo * irradiance / CV_PI;

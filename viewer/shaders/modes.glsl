@@ -15,6 +15,7 @@
 #define CV_MODE_LIGHT u_cloud.light_mode
 #define CV_MODE_DF_LIGHT u_cloud.df_light
 #define CV_MODE_LIGHT_VOLUME u_cloud.light_volume_on
+#define CV_MODE_SHADOW_MAP u_cloud.shadow_map_on
 #define CV_MODE_MS_VOLUME u_cloud.ms_volume_on
 #define CV_MODE_MS_OCTAVES u_cloud.ms_octaves
 #define CV_MODE_PHASE u_cloud.phase_mode

@@ -372,6 +372,9 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
       out << label << "gpu: " << o.width << "x" << o.height << " total " << t.total_ms << " ms (atmosphere LUTs "
           << t.atmosphere_ms << ", ground " << t.ground_ms << ", clouds " << t.cloud_ms << ", post " << t.post_ms
           << ")\n";
+      if (t.shadow_map_ms > 0)
+        out << label << "gpu: ground shadow map " << frame.params.shadow_map_nx << "x" << frame.params.shadow_map_nz
+            << " texels of " << frame.params.shadow_map_texel_m << " m built in " << t.shadow_map_ms << " ms\n";
       if (t.programs_linked > 0)  // the driver's compile is seconds on some GPUs: say where a first frame's time went
         out << label << "gpu: compiled " << t.programs_linked << " GL programs in " << t.compile_ms
             << " ms (wall clock, not in the frame's time; each new set of render.compiled_modes compiles once)\n";

@@ -182,6 +182,8 @@ struct CpuShader {
     return (*light_volume)[(size_t(t.z) * n.y + t.y) * n.x + t.x];
   }
   Number light_volume_filtered(vec3 uvw) { return grid_trilinear(false, uvw).x; }
+  const std::vector<double>* shadow_map = nullptr;  ///< shadow_map_nx x shadow_map_nz texels, x fastest
+  Number shadow_map_texel(ivec2 t) const { return (*shadow_map)[size_t(t.y) * size_t(u_cloud.shadow_map_nx) + size_t(t.x)]; }
   const std::vector<dvec4>* ms_volume = nullptr;  ///< ms_volume_dims cells (ms_volume_texels), x fastest
   vec4 ms_volume_texel(ivec3 t) const {
     const ivec3 n = ivec3(u_cloud.ms_volume_dims);
@@ -262,6 +264,17 @@ const AtmosphereLuts& no_lut() {
 
 }  // namespace
 
+std::vector<double> build_shadow_map_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
+  const ref::CloudParams& P = frame.params;
+  const int nx = int(P.shadow_map_nx), nz = int(P.shadow_map_nz);
+  std::vector<double> t(size_t(std::max(nx, 0)) * size_t(std::max(nz, 0)), 1.0);
+  tbb::parallel_for(0, std::max(nz, 0), [&](int z) {
+    CpuShader sh(P, vol, no_lut(), &frame);
+    for (int x = 0; x < nx; ++x) t[size_t(z) * size_t(nx) + size_t(x)] = sh.sun_shadow_transmittance(sh.shadow_map_position(ivec2(x, z)));
+  });
+  return t;
+}
+
 std::vector<double> build_light_volume_cpu(const PreparedVolume& vol, const ref::CloudParams& params) {
   const glm::ivec3 n = glm::ivec3(params.light_volume_dims);
   std::vector<double> tau(size_t(n.x) * n.y * n.z, 0.0);
@@ -324,6 +337,13 @@ double reference_light_optical_depth(const PreparedVolume& vol, const ref::Cloud
   CpuShader sh(params, vol, no_lut());
   sh.light_volume = light_volume;
   return light_volume ? sh.light_volume_tau(p) : sh.light_optical_depth(p);
+}
+
+double reference_ground_shadow(const PreparedVolume& vol, const FrameSetup& frame, glm::dvec3 p,
+                               const std::vector<double>* shadow_map) {
+  CpuShader sh(frame.params, vol, no_lut(), &frame);
+  sh.shadow_map = shadow_map;
+  return shadow_map ? sh.shadow_map_lookup(p) : sh.sun_shadow_transmittance(p);
 }
 
 glm::dvec3 reference_phase_rgb(const RenderSettings& s, double cos_theta) {
@@ -459,10 +479,14 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
         solve_ms_diffusion(build_ms_source_cpu(vol, P, P.light_volume_on > 0.5 ? &light_volume : nullptr), o),
         o.asymmetry);
   }
+  // The ground shadow map, when on: the texels the shadow_map pass computes, in double precision.
+  std::vector<double> shadow_map;
+  if (P.shadow_map_on > 0.5) shadow_map = build_shadow_map_cpu(vol, frame);
   tbb::parallel_for(0, h, [&](int y) {
     CpuShader sh(P, vol, look.lut, &frame);
     sh.air = &look.air;
     sh.light_volume = &light_volume;
+    sh.shadow_map = &shadow_map;
     sh.ms_volume = &ms_volume;
     for (int x = 0; x < w; ++x) {
       dvec3 rd = sh.pixel_ray(frame.inv_view_proj, dvec2(x + 0.5, y + 0.5), dvec2(w, h));
@@ -703,7 +727,8 @@ glm::dvec3 pathtrace_ray(const PreparedVolume& vol, const FrameSetup& frame, con
 
 FrameImages render_pathtrace(const PreparedVolume& vol, const FrameSetup& frame, const PathTraceOptions& o) {
   const int w = frame.width, h = frame.height;
-  const ref::CloudParams& P = frame.params;
+  ref::CloudParams P = frame.params;
+  P.shadow_map_on = 0;  // the reference marches the ground's shadow per point (render.shadow_map is a speed knob)
   Lookups look(frame);
   PhaseSampler phase(P);
   const double majorant = majorant_of(vol, P);

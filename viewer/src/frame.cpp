@@ -175,6 +175,37 @@ void build_moved_occupancy(const PreparedVolume& vol, const std::vector<glm::dve
   }
 }
 
+// render.shadow_map (box mode): the ground texels whose sun rays cross the march box. A ground
+// point g (box-relative) reaches height y at g.xz + s.xz (y - g.y) / s.y, so its ray meets the box
+// only if that lies in [0, W] for some y of the box above the ground: g.xz within [-max d, W -
+// min d], d(y) = s.xz (y - g.y) / s.y taken at the ends of that height range. Texels are
+// shadow_map_scale voxels wide, doubled until each side has at most kMaxShadowMapSide. Moving
+// clouds rebuild the map every frame, which pays only while it has fewer texels than the frame
+// has ground pixels to march: with more than a quarter of the frame's pixels, they march.
+void set_shadow_map(const RenderSettings& s, int width, int height, ref::CloudParams& p) {
+  p.shadow_map_on = 0;
+  const glm::dvec3 sun = p.sun_dir;
+  // The ground's height in the march box, to 1 mm so a camera move (camera-relative positions)
+  // does not change the map's geometry or key by a rounding.
+  const double gy = std::round((p.ground_y_m - p.march_min_m.y) * 1000.0) / 1000.0;
+  p.shadow_map_ground_m = gy;
+  const double y0 = std::max(0.0, gy), y1 = p.march_size_m.y;
+  if (!s.shadow_map || p.layer_on > 0.5 || p.ground_on < 0.5 || sun.y <= 1e-6 || !(y1 > y0)) return;
+  const glm::dvec2 sxz(sun.x / sun.y, sun.z / sun.y);
+  const glm::dvec2 d0 = sxz * (y0 - gy), d1 = sxz * (y1 - gy);
+  const glm::dvec2 lo = -glm::max(d0, d1), hi = glm::dvec2(p.march_size_m.x, p.march_size_m.z) - glm::min(d0, d1);
+  double texel = p.voxel_size_m * s.shadow_map_scale;
+  auto side = [&](double extent) { return std::max(1.0, std::ceil(extent / texel)); };
+  while (side(hi.x - lo.x) > kMaxShadowMapSide || side(hi.y - lo.y) > kMaxShadowMapSide) texel *= 2;
+  if (p.motion_on > 0.5 && side(hi.x - lo.x) * side(hi.y - lo.y) * 4.0 > double(width) * double(height)) return;
+  p.shadow_map_on = 1;
+  p.shadow_map_texel_m = texel;
+  p.shadow_map_nx = side(hi.x - lo.x);
+  p.shadow_map_nz = side(hi.y - lo.y);
+  p.shadow_map_min_x_m = lo.x;
+  p.shadow_map_min_z_m = lo.y;
+}
+
 }  // namespace
 
 std::vector<glm::dvec3> motion_table_row(const RenderSettings& s, double t) {
@@ -352,6 +383,7 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
     f.motion_table.insert(f.motion_table.end(), f.motion_table.begin(), f.motion_table.end());
     if (!layer) build_moved_occupancy(vol, f.motion_table, p, f.moved_occupancy);
   }
+  set_shadow_map(s, width, height, p);
   f.params = rounded_to_float(p);
   f.view_proj = view_projection(cam, width, height);
   f.inv_view_proj = glm::dmat4(glm::mat4(glm::inverse(f.view_proj)));

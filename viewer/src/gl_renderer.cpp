@@ -86,6 +86,7 @@ const ModeRow kModes[] = {
     {"CV_MODE_LIGHT", [](const ref::CloudParams& p) { return p.light_mode; }},
     {"CV_MODE_DF_LIGHT", [](const ref::CloudParams& p) { return p.df_light; }},
     {"CV_MODE_LIGHT_VOLUME", [](const ref::CloudParams& p) { return p.light_volume_on; }},
+    {"CV_MODE_SHADOW_MAP", [](const ref::CloudParams& p) { return p.shadow_map_on; }},
     {"CV_MODE_MS_VOLUME", [](const ref::CloudParams& p) { return p.ms_volume_on; }},
     {"CV_MODE_MS_OCTAVES", [](const ref::CloudParams& p) { return p.ms_octaves; }},
     {"CV_MODE_PHASE", [](const ref::CloudParams& p) { return p.phase_mode; }},
@@ -139,7 +140,7 @@ struct Target {
   GLuint depth_tex[2] = {0, 0};
 };
 
-enum class Group { Atmosphere, Light, Ground, Clouds, Post };
+enum class Group { Atmosphere, Light, Shadow, Ground, Clouds, Post };
 
 struct Pass {
   std::string name;
@@ -156,6 +157,7 @@ struct Pass {
   bool lut_valid = false;                            // precompute: its target holds the current atmosphere's LUT
   int runs = 0;                                      // precompute: how many times it has run
   bool light_volume = false;                         // runs only when the light volume's inputs changed
+  bool shadow_map = false;                           // runs only when the ground shadow map's inputs changed
   bool ms_volume = false;                            // runs only when the diffusion volume's inputs changed
   bool air_lut = false;                              // runs only when the air LUT's inputs changed
   bool orders_loop = false;                          // precompute: the density orders' loop follows it
@@ -192,6 +194,12 @@ std::vector<Target> make_targets() {
   light.name = "light_volume", light.colors = {GL_R32F};
   light.volume_size = [](const FrameSetup& f) { return glm::ivec3(f.params.light_volume_dims); };
   t.push_back(light);
+  Target shadow;  // the ground's cloud shadow (render.shadow_map): one layer, sized by the frame
+  shadow.name = "shadow_map", shadow.colors = {GL_R32F};
+  shadow.volume_size = [](const FrameSetup& f) {
+    return glm::ivec3(int(f.params.shadow_map_nx), int(f.params.shadow_map_nz), 1);  // (0, 0) when off: 1 texel
+  };
+  t.push_back(shadow);
   Target ms_source;  // the diffusion volume's inputs per cell: mean sigma_t, mean sigma_t * T_sun
   ms_source.name = "ms_source", ms_source.colors = {GL_RG32F};
   ms_source.volume_size = [](const FrameSetup& f) { return glm::ivec3(f.params.ms_volume_dims); };
@@ -288,9 +296,17 @@ std::vector<Pass> make_passes() {
   air.group = Group::Atmosphere, air.air_lut = true;
   air.enabled = [](const FrameSetup& f) { return f.params.air_lut > 0.5; };
   p.push_back(air);
+  // The ground's cloud shadow (lighting.glsl ground_shadow), rebuilt only when the sun, the volume,
+  // the time or a lighting key changes; the ground pass reads it. Timed apart (shadow_map_ms), as
+  // the light volume is: with still clouds and sun it is paid once; moving clouds pay it every frame.
+  Pass shadow;
+  shadow.name = "shadow_map", shadow.vs = "fullscreen.vert", shadow.fs = "shadow_map.frag";
+  shadow.target = "shadow_map", shadow.group = Group::Shadow, shadow.shadow_map = true;
+  shadow.enabled = [](const FrameSetup& f) { return f.params.shadow_map_on > 0.5; };
+  p.push_back(shadow);
   Pass ground;
   ground.name = "ground", ground.vs = "ground.vert", ground.fs = "ground.frag", ground.target = "scene";
-  ground.group = Group::Ground, ground.mesh = true;
+  ground.group = Group::Ground, ground.mesh = true, ground.inputs = {{"shadow_map", 0}};
   ground.clear = {{0.f, 0.f, 0.f, 0.f}, {float(CV_NO_HIT), 0.f, 0.f, 0.f}};
   ground.enabled = [](const FrameSetup& f) { return f.params.ground_on > 0.5; };
   p.push_back(ground);
@@ -387,6 +403,8 @@ struct GlRenderer::Impl {
   int volume_serial = 0;              // counts set_volume calls (part of the light volume's key)
   std::vector<double> light_key;      // what the light volume was built from; empty = not built
   int light_builds = 0;
+  std::vector<double> shadow_key;     // what the ground shadow map was built from; empty = not built
+  int shadow_builds = 0;
   std::vector<double> air_key;        // what the air LUT was built from; empty = not built
   int air_builds = 0;
   int atmo_generation = 0;            // counts the atmosphere LUTs' recomputes (part of the air LUT's key)
@@ -602,6 +620,7 @@ struct GlRenderer::Impl {
     if (viewport_only) return;
     atmo_valid = false;
     light_key.clear();
+    shadow_key.clear();
     air_key.clear();
     ms_key.clear();
   }
@@ -695,6 +714,19 @@ struct GlRenderer::Impl {
             p.exact_filter, p.light_mode, p.light_samples, p.light_step_m, p.light_growth, p.df_light,
             p.light_volume_dims.x, p.light_volume_dims.y, p.light_volume_dims.z, p.curl_amplitude_m,
             p.curl_repeats.x, p.curl_repeats.y, p.curl_repeats.z, p.curl_shift};
+  }
+  // The ground shadow map's key: the light volume's (the sun, the volume, the medium), its grid,
+  // the march box and the ground in it, the shadow march and the motion at this time (all
+  // independent of the camera: shadow_map_ground_m is the ground's height in the march box).
+  std::vector<double> shadow_map_key(const FrameSetup& f) const {
+    const ref::CloudParams& p = f.params;
+    std::vector<double> k = light_volume_key(f);
+    k.insert(k.end(), {p.shadow_map_nx, p.shadow_map_nz, p.shadow_map_texel_m, p.shadow_map_min_x_m, p.shadow_map_min_z_m,
+                       p.shadow_map_ground_m, p.march_size_m.x, p.march_size_m.y, p.march_size_m.z, p.shadow_samples,
+                       p.layer_on, p.motion_on, p.motion_on > 0.5 ? p.time_s : 0.0, p.wind_dir_x, p.wind_dir_z,
+                       p.wind_speed_mps, p.wind_shear, p.flow_speed_hz, p.flow_up_m, p.flow_forward_m, p.skip_distance,
+                       p.df_cell_m, p.df_margin_m, p.moved_occ_cell_m});
+    return k;
   }
   // The diffusion volume's key: the light volume's, its grid, the albedo and the phase function.
   std::vector<double> ms_volume_key(const FrameSetup& f) const {
@@ -1058,6 +1090,7 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
   glTextureParameteri(m.tex_dist, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   m.volume_serial += 1;
   m.light_key.clear();
+  m.shadow_key.clear();
   m.ms_key.clear();
   m.have_volume = true;
   m.history_valid = false;
@@ -1189,6 +1222,16 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   }
   // Never sample the light volume while its pass writes it.
   glBindTextureUnit(CV_UNIT_LIGHT_VOLUME, light_dirty || light.tex[0].empty() ? 0 : light.tex[0][0]);
+  // The ground shadow map: rebuilt when its key changes. Its target always exists (one texel when
+  // off), since the ground pass binds it.
+  Target& smap = m.target("shadow_map");
+  if (m.ensure_volume_target(smap, f)) m.shadow_key.clear();
+  bool shadow_dirty = false;
+  if (f.params.shadow_map_on > 0.5) {
+    std::vector<double> skey = m.shadow_map_key(f);
+    shadow_dirty = skey != m.shadow_key;
+    m.shadow_key = skey;
+  }
   // The diffusion volume: solved again when its key changes.
   bool ms_dirty = false;
   if (f.params.ms_volume_on > 0.5) {
@@ -1210,6 +1253,11 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
         m.run(m.passes[i], f);
         m.light_builds += 1;
         glBindTextureUnit(CV_UNIT_LIGHT_VOLUME, light.tex[0][0]);
+      }
+    } else if (m.passes[i].shadow_map) {
+      if (shadow_dirty) {
+        m.run(m.passes[i], f);
+        m.shadow_builds += 1;
       }
     } else if (m.passes[i].air_lut) {
       if (air_dirty) {
@@ -1243,7 +1291,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
       timings->passes.push_back({m.passes[i].name, ms});
       Group g = m.passes[i].group;
       (g == Group::Atmosphere ? timings->atmosphere_ms : g == Group::Light ? timings->light_volume_ms
-       : g == Group::Ground ? timings->ground_ms
+       : g == Group::Shadow ? timings->shadow_map_ms : g == Group::Ground ? timings->ground_ms
        : g == Group::Clouds ? timings->cloud_ms : timings->post_ms) += ms;
     }
     timings->total_ms = double(t.back() - t.front()) * 1e-6;
@@ -1327,6 +1375,7 @@ std::vector<glm::vec3> GlRenderer::transmittance_dump(const AtmosphereSettings& 
 }
 
 int GlRenderer::light_volume_builds() const { return impl_->light_builds; }
+int GlRenderer::shadow_map_builds() const { return impl_->shadow_builds; }
 bool GlRenderer::nano_grids_on_gpu() const { return impl_->grids_up; }
 int GlRenderer::air_lut_builds() const { return impl_->air_builds; }
 int GlRenderer::program_count() const { return int(impl_->program_cache.size()); }

@@ -128,6 +128,8 @@ std::vector<ParamDef> build() {
                ParamKind::FloatOrAuto, -1e7, 1e7, {}});
   t.push_back(real("ground_albedo", &RenderSettings::ground_albedo, 0, 1, "ground albedo"));
   t.push_back(integer("shadow_samples", &RenderSettings::shadow_samples, 1, 256, "samples of the cloud-shadow march from the ground"));
+  t.push_back(boolean("shadow_map", &RenderSettings::shadow_map, "box mode: the ground's cloud shadow from a 2D map of the same march at texel centres (rebuilt when the sun, the volume, the time or a lighting key changes) instead of marching it per ground pixel; moving clouds, which rebuild it every frame, march per pixel while the map has more texels than a quarter of the frame's pixels"));
+  t.push_back(integer("shadow_map_scale", &RenderSettings::shadow_map_scale, 1, 16, "shadow map texels: this many voxels wide (doubled until at most 2048 per side)"));
   t.push_back(real("exposure", &RenderSettings::exposure, 0, 1e6, "exposure multiplier before tone mapping"));
   t.push_back(enumeration("tonemap", &RenderSettings::tonemap, {"reinhard", "aces", "clamp"}, "tone map: Reinhard L/(1+L), ACES filmic, clamp"));
   t.push_back(real("bloom", &RenderSettings::bloom, 0, 10, "bloom strength (0 = off)"));

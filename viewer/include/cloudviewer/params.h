@@ -22,7 +22,7 @@ using vec4 = glm::dvec4;
 }  // namespace ref
 
 /// Scalars in CloudParams: 34 groups of 16 bytes (std140), each a vec3 + one scalar or four scalars.
-constexpr int kCloudParamsScalars = 140;
+constexpr int kCloudParamsScalars = 148;
 static_assert(sizeof(gpu::CloudParams) == kCloudParamsScalars * 4, "std140 CloudBlock size (no padding)");
 static_assert(sizeof(ref::CloudParams) == kCloudParamsScalars * 8, "double CloudParams size (no padding)");
 static_assert(sizeof(gpu::CloudParams) % 16 == 0, "std140 rounds a struct to 16 bytes");

@@ -22,6 +22,7 @@ struct GpuTimings {
   double ground_ms = 0, cloud_ms = 0, post_ms = 0, total_ms = 0;
   double atmosphere_ms = 0;  ///< the atmosphere LUT passes and the air LUT (0 unless an atmosphere.* key, the sun or the camera altitude changed)
   double light_volume_ms = 0;  ///< the light volume's rebuild (0 unless the sun, volume or a lighting key changed)
+  double shadow_map_ms = 0;  ///< the ground shadow map's rebuild (0 unless the sun, volume, time or a lighting key changed)
   /// Wall-clock time spent compiling and linking GL programs since the previous render() (the
   /// constructor's and reload_shaders' count toward the next frame), and how many were linked: 0
   /// unless the renderer needed a program it had not linked (the first frame, a new set of
@@ -121,6 +122,9 @@ class GlRenderer {
   /// How many times the light volume has been built (render.light_volume): once per change of the
   /// sun, the volume or a lighting key, never for a camera move alone.
   int light_volume_builds() const;
+  /// How many times the ground shadow map has been built (render.shadow_map): once per change of
+  /// the sun, the volume, the time (moving clouds) or a lighting key, never for a camera move alone.
+  int shadow_map_builds() const;
   /// Whether the NanoVDB grids (and their leaf page table) are on the GPU: only once a frame has
   /// read them (render.nanovdb_lookup=table or accessor, or an atlas that was refused); the brick
   /// atlas, the default, leaves them on the CPU.
@@ -172,6 +176,10 @@ FrameImages render_pathtrace(const PreparedVolume& vol, const FrameSetup& frame,
 /// Mean radiance (linear HDR) of `spp` paths along one camera-relative unit ray (for tests).
 glm::dvec3 pathtrace_ray(const PreparedVolume& vol, const FrameSetup& frame, const glm::dvec3& rd, int spp,
                          uint32_t seed = 1);
+/// The ground shadow map (render.shadow_map) as the CPU reference builds it: the clouds'
+/// transmittance toward the sun at every texel centre of the frame's shadow_map_nx x shadow_map_nz
+/// grid (lighting.glsl shadow_map_position), double precision, x fastest.
+std::vector<double> build_shadow_map_cpu(const PreparedVolume& vol, const FrameSetup& frame);
 /// The light volume (render.light_volume) as the CPU reference builds it: light_optical_depth at
 /// every texel centre of a params.light_volume_dims grid over the box, double precision, x fastest.
 std::vector<double> build_light_volume_cpu(const PreparedVolume& vol, const ref::CloudParams& params);
@@ -179,6 +187,10 @@ std::vector<double> build_light_volume_cpu(const PreparedVolume& vol, const ref:
 /// `light_volume` (from build_light_volume_cpu) its trilinear lookup. For tests and measurements.
 double reference_light_optical_depth(const PreparedVolume& vol, const ref::CloudParams& params, glm::dvec3 p,
                                      const std::vector<double>* light_volume = nullptr);
+/// The clouds' shadow at the camera-relative ground point p: the march the ground pass runs per
+/// pixel, or with `shadow_map` (from build_shadow_map_cpu) its bilinear lookup. For tests.
+double reference_ground_shadow(const PreparedVolume& vol, const FrameSetup& frame, glm::dvec3 p,
+                               const std::vector<double>* shadow_map = nullptr);
 
 /// The frame's diffusion grid (params.ms_volume_dims over the box, vacuum beyond it), arrays zeroed.
 MsDiffusionGrid ms_diffusion_grid(const ref::CloudParams& params);

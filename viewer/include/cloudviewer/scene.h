@@ -188,6 +188,9 @@ Camera default_camera(const PreparedVolume& vol, const RenderSettings& s, double
 /// camera-relative view (camera at the origin).
 glm::dmat4 view_projection(const Camera& cam, int width, int height);
 
+/// The ground shadow map (render.shadow_map) has at most this many texels per side: make_frame
+/// doubles the texel until it fits.
+constexpr int kMaxShadowMapSide = 2048;
 /// The light volume (render.light_volume) never has more texels than this: make_frame doubles
 /// render.light_volume_scale until it fits.
 constexpr int kMaxLightVolumeTexels = 1 << 22;

@@ -95,6 +95,8 @@ struct RenderSettings {
   bool ground_height_auto = true;  ///< ground at min(0, volume bottom)
   double ground_albedo = 0.18;
   int shadow_samples = 16;
+  bool shadow_map = true;          ///< box mode: the ground's cloud shadow from a precomputed 2D map (docs/viewer-speed.md)
+  int shadow_map_scale = 1;        ///< its texels: this many voxels wide
   // HDR
   double exposure = 1.5;
   ToneMap tonemap = ToneMap::Reinhard;
