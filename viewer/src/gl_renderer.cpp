@@ -423,7 +423,7 @@ struct GlRenderer::Impl {
   glm::uvec4 nvdb_grid{0u};
   // render.nanovdb_lookup=atlas: the grids' brick atlas (scene.h NanoAtlas), built on the first
   // frame that asks for it; bound at the dense volume's unit, its index at the page table's.
-  PreparedVolume atlas_of;  // what build_nano_atlas reads of the volume (nano, dims, tiles, detail)
+  PreparedVolume atlas_of;  // what build_nano_atlas and ensure_grids read of the volume (nano, dims, tiles, detail)
   GLuint tex_atlas = 0, tex_atlas_index = 0;
   int atlas_state = 0;  // 0 not built, 1 built, -1 refused (beyond kAtlasBudget: the page table instead)
   static constexpr uint64_t kAtlasBudget = uint64_t(1) << 30;
@@ -477,9 +477,8 @@ struct GlRenderer::Impl {
     atlas_state = 0;
   }
   // The grids' buffer (and its buffer texture) and the leaf page table: placeholders (32 bytes,
-  // one texel) until ensure_grids puts the volume's up. Both are immutable storage, so an upload
-  // makes new objects.
-  std::shared_ptr<const cloudgen::NanoVolume> grids_of;  // the volume's grids, kept for ensure_grids
+  // one texel) until ensure_grids puts the volume's grids (atlas_of.nano) up. Both are immutable
+  // storage, so an upload makes new objects.
   bool grids_up = false;
   void make_grid_objects() {
     if (tex_nano) glDeleteTextures(1, &tex_nano);
@@ -496,15 +495,19 @@ struct GlRenderer::Impl {
     const uint32_t placeholder[8] = {};
     glNamedBufferStorage(buf_nano, sizeof placeholder, placeholder, 0);
     glTextureBuffer(tex_nano, GL_RGBA32UI, buf_nano);
-    const uint32_t none[2] = {0, 0};
-    glTextureStorage3D(tex_pages, 1, GL_RG32UI, 1, 1, 1);
-    glTextureSubImage3D(tex_pages, 0, 0, 0, 0, 1, 1, 1, GL_RG_INTEGER, GL_UNSIGNED_INT, none);
+    upload_empty_pages();
     grids_up = false;
     pages_bytes = 0;
   }
+  // A page table of one empty entry (no grid has a table, or none is up yet).
+  void upload_empty_pages() {
+    const uint32_t none[2] = {0, 0};
+    glTextureStorage3D(tex_pages, 1, GL_RG32UI, 1, 1, 1);
+    glTextureSubImage3D(tex_pages, 0, 0, 0, 0, 1, 1, 1, GL_RG_INTEGER, GL_UNSIGNED_INT, none);
+  }
   void ensure_grids() {
-    if (grids_up || !grids_of) return;
-    const cloudgen::NanoVolume& n = *grids_of;
+    if (grids_up || !atlas_of.nano) return;
+    const cloudgen::NanoVolume& n = *atlas_of.nano;
     make_grid_objects();
     GLint max_texels = 0;
     glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
@@ -522,9 +525,7 @@ struct GlRenderer::Impl {
       nvdb_page_origin = glm::ivec3(d.origin[0], d.origin[1], d.origin[2]);
       pages_bytes = rg.size() * 4;
     } else {
-      const uint32_t none[2] = {0, 0};
-      glTextureStorage3D(tex_pages, 1, GL_RG32UI, 1, 1, 1);
-      glTextureSubImage3D(tex_pages, 0, 0, 0, 0, 1, 1, 1, GL_RG_INTEGER, GL_UNSIGNED_INT, none);
+      upload_empty_pages();
     }
     if (glGetError() != GL_NO_ERROR)
       throw GlError("uploading the NanoVDB grids (" + std::to_string(n.bytes() >> 20) + " MiB) failed (out of GPU memory?)");
@@ -1009,10 +1010,7 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
   if (m.tex_occ) glDeleteTextures(1, &m.tex_occ);
   if (m.tex_dist) glDeleteTextures(1, &m.tex_dist);
   m.tex_dist = 0;
-  if (m.tex_nano) glDeleteTextures(1, &m.tex_nano);
-  if (m.buf_nano) glDeleteBuffers(1, &m.buf_nano);
-  if (m.tex_pages) glDeleteTextures(1, &m.tex_pages);
-  m.tex_volume = m.tex_occ = m.buf_nano = m.tex_nano = m.tex_pages = 0;
+  m.tex_volume = m.tex_occ = 0;  // (the grids' objects: upload_grid_placeholders replaces them below)
   glCreateTextures(GL_TEXTURE_3D, 1, &m.tex_volume);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
   m.delete_atlas();
@@ -1021,7 +1019,6 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
   m.atlas_of.dims = vol.dims;
   m.atlas_of.tiles = vol.tiles;
   m.atlas_of.has_detail = vol.has_detail;
-  m.grids_of = vol.nano;
   if (vol.nano) {
     // The grids as they are in memory (NanoVDB is position-independent: offsets are relative);
     // the dense texture becomes one texel the lookups never read.
