@@ -396,6 +396,10 @@ TEST(ViewerSpeed, ShadowMapRebuildsOnSunChangeNotOnCameraMove) {
   denser.density = 2;
   r.render(make_frame(vol, denser, moved, Sun{210, 45}, 160, 90));
   EXPECT_EQ(r.shadow_map_builds(), 3) << "a lighting key rebuilds it";
+  RenderSettings light_keys = denser;
+  light_keys.light_samples = 9;  // the light march's, not the shadow march's
+  r.render(make_frame(vol, light_keys, moved, Sun{210, 45}, 160, 90));
+  EXPECT_EQ(r.shadow_map_builds(), 3) << "a key of the light march alone does not";
   r.render(make_frame(vol, denser, moved, Sun{210, 45}, 320, 180));
   EXPECT_EQ(r.shadow_map_builds(), 3) << "a new viewport size does not";
   RenderSettings moving = denser;

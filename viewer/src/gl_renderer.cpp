@@ -710,18 +710,26 @@ struct GlRenderer::Impl {
   // are in the box's own coordinates): the sun, the volume, the medium and the light march.
   std::vector<double> light_volume_key(const FrameSetup& f) const {
     const ref::CloudParams& p = f.params;
+    std::vector<double> k = sun_medium_key(f);
+    k.insert(k.end(), {p.light_mode, p.light_samples, p.light_step_m, p.light_growth, p.light_volume_dims.x,
+                       p.light_volume_dims.y, p.light_volume_dims.z});
+    return k;
+  }
+  // What every march toward the sun reads, camera excluded: the sun, the volume, the density
+  // (medium, filter, curl distortion) and whether the distance field skips its samples.
+  std::vector<double> sun_medium_key(const FrameSetup& f) const {
+    const ref::CloudParams& p = f.params;
     return {double(volume_serial), p.sun_dir.x, p.sun_dir.y, p.sun_dir.z, p.volume_size_m.x, p.volume_size_m.y,
             p.volume_size_m.z, p.tiles_xz, p.has_detail, p.sigma_t_per_m, p.erosion, p.density_scale,
-            p.exact_filter, p.light_mode, p.light_samples, p.light_step_m, p.light_growth, p.df_light,
-            p.light_volume_dims.x, p.light_volume_dims.y, p.light_volume_dims.z, p.curl_amplitude_m,
-            p.curl_repeats.x, p.curl_repeats.y, p.curl_repeats.z, p.curl_shift};
+            p.exact_filter, p.df_light, p.curl_amplitude_m, p.curl_repeats.x, p.curl_repeats.y, p.curl_repeats.z,
+            p.curl_shift};
   }
-  // The ground shadow map's key: the light volume's (the sun, the volume, the medium), its grid,
+  // The ground shadow map's key: the sun and the medium (not the light march's keys), its grid,
   // the march box and the ground in it, the shadow march and the motion at this time (all
   // independent of the camera: shadow_map_ground_m is the ground's height in the march box).
   std::vector<double> shadow_map_key(const FrameSetup& f) const {
     const ref::CloudParams& p = f.params;
-    std::vector<double> k = light_volume_key(f);
+    std::vector<double> k = sun_medium_key(f);
     k.insert(k.end(), {p.shadow_map_nx, p.shadow_map_nz, p.shadow_map_texel_m, p.shadow_map_min_x_m, p.shadow_map_min_z_m,
                        p.shadow_map_ground_m, p.march_size_m.x, p.march_size_m.y, p.march_size_m.z, p.shadow_samples,
                        p.layer_on, p.motion_on, p.motion_on > 0.5 ? p.time_s : 0.0, p.wind_dir_x, p.wind_dir_z,
