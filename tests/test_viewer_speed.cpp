@@ -426,6 +426,20 @@ TEST(ViewerSpeed, ShadowMapRebuildsOnSunChangeNotOnCameraMove) {
   off.shadow_map = false;
   r.render(make_frame(vol, off, moved, Sun{210, 45}, 320, 180));
   EXPECT_EQ(r.shadow_map_builds(), 6) << "off: never built";
+  // The frame line reports a build when there is one: once over two still frames, never when off.
+  auto reports = [](const char* set) {
+    std::ostringstream out, err;
+    EXPECT_EQ(run_cli({"cloudviewer", "synthetic:blob", "--headless", "--size", "32x18", "--frames", "2", "--fps", "0",
+                       "--set", set, "--out", (std::filesystem::temp_directory_path() / "cv_shadow_%d.png").string()},
+                      out, err), 0) << err.str();
+    int n = 0;
+    for (size_t at = out.str().find("gpu: ground shadow map "); at != std::string::npos;
+         at = out.str().find("gpu: ground shadow map ", at + 1))
+      ++n;
+    return n;
+  };
+  EXPECT_EQ(reports("render.shadow_map=true"), 1);
+  EXPECT_EQ(reports("render.shadow_map=false"), 0);
 }
 
 // A track key may carry its own settings (the view from below marches at most 2133 m); a bad one
