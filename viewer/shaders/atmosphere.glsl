@@ -932,7 +932,12 @@ vec3 compute_irradiance_texel(int texel) {
 vec3 atmosphere_sun_disc(Number alt, vec3 v, vec3 s, vec3 disc_radiance) {
   Number r = u_atmo.bottom_radius_m + clamp(alt, 0.0, 1e9);
   Number alpha = u_atmo.sun_angular_radius;
-  Number angle = acos(clamp(dot(v, s), -1.0, 1.0));
+  Number c = clamp(dot(v, s), -1.0, 1.0);
+  // Away from the disc without the acos (most of the sky): 1 - cos(angle) <= angle^2 / 2, so
+  // 1 - c above (1.2 alpha)^2 / 2 (with 10 % to spare for rounding) means angle > 1.2 alpha, where
+  // the test below returns 0 as well.
+  if (1.0 - c > 0.55 * (1.2 * alpha) * (1.2 * alpha)) return vec3(0.0);
+  Number angle = acos(c);
   if (angle >= alpha * 1.2) return vec3(0.0);
   Number x = min(angle / alpha, 1.0);
   Number limb = 1.0 - 0.6 * (1.0 - sqrt(max(1.0 - x * x, 0.0)));
