@@ -31,28 +31,29 @@ void main() {
     o_depth = texelFetch(s_fresh_depth, px >> 2, 0);
     return;
   }
+  if (u_temporal.x > 0.5 && u_temporal.y > 0.5) {  // nothing moved: last frame's pixel is this pixel
+    o_cloud = texelFetch(s_history, px, 0);
+    o_depth = texelFetch(s_history_depth, px, 0);
+    return;
+  }
   // Fresh texel (i, j) sits at full-resolution pixel 4 (i, j) + off: bilinear between the four
-  // around px.
+  // around px (the spatial upsample), and their range (the closest the sparse samples allow).
   vec2 g = (vec2(px) - vec2(off)) / 4.0;
   ivec2 g0 = ivec2(floor(g));
   vec2 f = g - vec2(g0);
   vec4 spatial = vec4(0.0);
   float spatial_depth = 0.0;
+  vec4 lo = vec4(1e30), hi = vec4(-1e30);
+  float dlo = 1e30, dhi = 0.0, near_cloud = 0.0;
   for (int k = 0; k < 4; ++k) {
     ivec2 o = ivec2(k & 1, k >> 1);
     ivec2 q = clamp(g0 + o, ivec2(0), qn - 1);
     float w = (o.x == 1 ? f.x : 1.0 - f.x) * (o.y == 1 ? f.y : 1.0 - f.y);
-    spatial += w * texelFetch(s_fresh, q, 0);
-    spatial_depth += w * depth_or_far(texelFetch(s_fresh_depth, q, 0).r);
-  }
-  // The range of the four fresh pixels around px (the closest the sparse samples allow).
-  vec4 lo = vec4(1e30), hi = vec4(-1e30);
-  float dlo = 1e30, dhi = 0.0, near_cloud = 0.0;
-  for (int k = 0; k < 4; ++k) {
-    ivec2 q = clamp(g0 + ivec2(k & 1, k >> 1), ivec2(0), qn - 1);
     vec4 v = texelFetch(s_fresh, q, 0);
     float raw = texelFetch(s_fresh_depth, q, 0).r;
     float d = depth_or_far(raw);
+    spatial += w * v;
+    spatial_depth += w * d;
     lo = min(lo, v), hi = max(hi, v);
     dlo = min(dlo, d), dhi = max(dhi, d);
     if (raw > 0.0 && (near_cloud == 0.0 || raw < near_cloud)) near_cloud = raw;
@@ -61,11 +62,6 @@ void main() {
   if (u_temporal.x < 0.5) {
     o_cloud = spatial;
     o_depth = fallback_depth;
-    return;
-  }
-  if (u_temporal.y > 0.5) {  // nothing moved: last frame's pixel is this pixel
-    o_cloud = texelFetch(s_history, px, 0);
-    o_depth = texelFetch(s_history_depth, px, 0);
     return;
   }
   // The distance to reproject at: the cloud this pixel showed last frame (it moves on with the
