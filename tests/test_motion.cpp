@@ -537,6 +537,35 @@ TEST(TemporalUpsampling, CrossMatrixIsTheSeedsAndVisitsEveryPixelOnceIn16Frames)
   }
 }
 
+// The air the sparse pixels pass on (temporal.glsl): carried to its own distance it is what it
+// was; along a uniform medium it is exact at any distance (analytic: T = exp(-sigma t),
+// I = L (1 - T)); through clear air the light grows in proportion to the distance.
+TEST(TemporalUpsampling, AirCarriedToAnotherDistanceIsExactInAUniformMedium) {
+  const glm::dvec3 sigma(2.0e-5, 1.2e-5, 0.6e-5), radiance(0.3, 0.5, 0.9);  // per metre; the air's own light
+  auto uniform = [&](double t, glm::dvec3& i, glm::dvec3& tr) {
+    tr = glm::exp(-sigma * t);
+    i = radiance * (glm::dvec3(1.0) - tr);
+  };
+  for (double t_k : {50.0, 3000.0, 40000.0}) {
+    glm::dvec3 i_k, tr_k;
+    uniform(t_k, i_k, tr_k);
+    for (double t : {t_k, 10.0, 0.5 * t_k, 2.0 * t_k, 90000.0}) {
+      glm::dvec3 i, tr, i_want, tr_want;
+      reference_air_carried(i_k, tr_k, t_k, t, i, tr);
+      uniform(t, i_want, tr_want);
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(tr[c], tr_want[c], 1e-9 * tr_want[c]) << "t_k " << t_k << " t " << t << " channel " << c;
+        EXPECT_NEAR(i[c], i_want[c], 1e-6 * i_want[c]) << "t_k " << t_k << " t " << t << " channel " << c;
+      }
+    }
+  }
+  glm::dvec3 i, tr;  // clear air (T = 1): the light of the air in proportion to the distance
+  reference_air_carried(glm::dvec3(0.01, 0.02, 0.04), glm::dvec3(1.0), 1000.0, 2500.0, i, tr);
+  EXPECT_NEAR(i.x, 0.025, 1e-12);
+  EXPECT_NEAR(i.z, 0.1, 1e-12);
+  EXPECT_EQ(tr, glm::dvec3(1.0));
+}
+
 // A still camera over still clouds: after 16 frames every pixel has been marched once and the
 // history maps pixel to pixel, so the image is the full-resolution render's (the jitter of the
 // frame each pixel was marched in is the only difference). Also after a resize-free settings

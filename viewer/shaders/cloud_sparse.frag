@@ -5,7 +5,10 @@
 // that the resolve reprojects with. With the precomputed sky also the air in front of the
 // background at the same pixel (background_air; smooth, so temporal_compose upsamples it), for
 // each kind of background the block holds: the sky (inscattered light to the top of the air) and
-// the ground (inscattered light and transmittance up to the ground's distance). The kind this pixel
+// the ground (the air's extinction and in-scattering per metre up to the ground, temporal.glsl's
+// air_coefficients), each with a weight of 1 where the block has it and all 0 where it has not, so
+// that a bilinear filter over them and a division by the filtered weight averages only the blocks
+// that hold the kind (a normalised convolution). The kind this pixel
 // does not see is taken at the block's nearest pixel that sees it, when there is one, so every
 // full-resolution pixel finds its own kind in its own block and temporal_compose never marches
 // the air itself (a per-pixel fallback cost every pixel its time on llvmpipe, which runs both
@@ -14,9 +17,9 @@
 layout(binding = CV_UNIT_PASS_INPUT0) uniform sampler2D s_scene_distance;
 layout(location = 0) out vec4 o_cloud;
 layout(location = 1) out vec4 o_depth;
-layout(location = 2) out vec4 o_air;      // ground: inscattered, its distance (0: the block has no ground)
-layout(location = 3) out vec4 o_air_t;    // ground: transmittance to it
-layout(location = 4) out vec4 o_air_sky;  // sky: inscattered, 1 (0: the block has no sky)
+layout(location = 2) out vec4 o_air;      // ground: extinction per metre, 1 (all 0: the block has no ground)
+layout(location = 3) out vec4 o_air_e;    // ground: in-scattering per metre, 1 (all 0: no ground)
+layout(location = 4) out vec4 o_air_sky;  // sky: inscattered, 1 (all 0: the block has no sky)
 // Writes the air in front of the background at distance t along `ray` into the outputs of its
 // kind (the sky when t >= CV_NO_HIT_TEST, else the ground).
 void store_background_air(vec3 ray, float t) {
@@ -25,8 +28,10 @@ void store_background_air(vec3 ray, float t) {
   if (t >= CV_NO_HIT_TEST) {
     o_air_sky = vec4(inscattered, 1.0);
   } else {
-    o_air = vec4(inscattered, t);
-    o_air_t = vec4(transmittance, 0.0);
+    vec3 s = vec3(0.0), e = vec3(0.0);
+    air_coefficients(inscattered, transmittance, t, s, e);
+    o_air = vec4(s, 1.0);
+    o_air_e = vec4(e, 1.0);
   }
 }
 void main() {
@@ -39,7 +44,7 @@ void main() {
   o_cloud = cloud_layer(rd, full, t_scene, t_mean, iterations);
   o_depth = vec4(t_mean, 0.0, 0.0, 0.0);
   o_air = vec4(0.0);
-  o_air_t = vec4(1.0, 1.0, 1.0, 0.0);
+  o_air_e = vec4(0.0);
   o_air_sky = vec4(0.0);
   if (!sky_precomputed()) return;
   store_background_air(rd, t_scene);

@@ -386,6 +386,16 @@ int reference_cross_matrix(int x, int y) {
   return sh.cross_matrix(x, y);
 }
 
+void reference_air_carried(const glm::dvec3& inscattered, const glm::dvec3& transmittance, double t_k, double t,
+                           glm::dvec3& inscattered_t, glm::dvec3& transmittance_t) {
+  ref::CloudParams p{};
+  PreparedVolume empty;
+  CpuShader sh(p, empty, no_lut());
+  glm::dvec3 s(0.0), e(0.0);
+  sh.air_coefficients(inscattered, transmittance, t_k, s, e);
+  sh.air_over_distance(s, e, t, inscattered_t, transmittance_t);
+}
+
 double reference_density(const PreparedVolume& vol, const FrameSetup& frame, const glm::dvec3& p) {
   CpuShader sh(frame.params, vol, no_lut(), &frame);
   return sh.cloud_density(p);

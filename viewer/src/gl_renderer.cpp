@@ -128,6 +128,7 @@ struct Target {
   bool round_up = false;       // ceil(viewport / divisor): every pixel has its block (temporal)
   int fixed_w = 0, fixed_h = 0;  // > 0: a fixed size (LUTs), independent of the viewport
   bool history = false;        // keep the previous frame's copy ("NAME@prev")
+  int linear_from = -1;        // >= 0: attachments from this one on filter linearly (read with texture())
   // A 3D target sized by the frame (the light volume: f.params.light_volume_dims) or fixed (the 4D
   // scattering LUT), one 3D texture per colour attachment; its passes draw once per layer, into
   // that layer of every attachment. (Re)created by render() when the size changes.
@@ -178,9 +179,10 @@ std::vector<Target> make_targets() {
   // Temporal upsampling: this frame's pixel of every 4x4 block, and the resolved full-resolution
   // cloud layer with last frame's copy (both: (L, T) and the cloud distance).
   // The quarter target also holds the air in front of the background at the same pixels: toward
-  // the ground (inscattered + its distance, transmittance) and toward the sky (inscattered).
+  // the ground (extinction and in-scattering per metre) and toward the sky (inscattered), each
+  // with its weight; temporal_compose filters them bilinearly.
   t[6].name = "cloud_quarter", t[6].colors = {GL_RGBA32F, GL_R32F, GL_RGBA32F, GL_RGBA32F, GL_RGBA32F};
-  t[6].divisor = 4, t[6].round_up = true;
+  t[6].divisor = 4, t[6].round_up = true, t[6].linear_from = 2;
   t[7].name = "cloud_layer", t[7].colors = {GL_RGBA32F, GL_R32F}, t[7].history = true;
   Target ms;     // atmosphere LUT Psi_ms(r, mu_s): orders 2..N of the sky's scattering
   ms.name = "multiple_scattering", ms.colors = {GL_RGBA32F};
@@ -640,6 +642,10 @@ struct GlRenderer::Impl {
         std::vector<GLenum> draw;
         for (size_t i = 0; i < t.colors.size(); ++i) {
           t.tex[c].push_back(make_texture_2d(t.colors[i], t.w, t.h));
+          if (t.linear_from >= 0 && int(i) >= t.linear_from) {
+            glTextureParameteri(t.tex[c].back(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+            glTextureParameteri(t.tex[c].back(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+          }
           glNamedFramebufferTexture(t.fbo[c], GLenum(GL_COLOR_ATTACHMENT0 + i), t.tex[c].back(), 0);
           draw.push_back(GLenum(GL_COLOR_ATTACHMENT0 + i));
         }

@@ -214,6 +214,11 @@ glm::dvec3 reference_phase_rgb(const RenderSettings& s, double cos_theta);
 /// as the renderer and the tests use them (the same text the shaders compile).
 int reference_cross_matrix(int x, int y);
 glm::ivec2 reference_cross_matrix_offset(int frame);
+/// temporal.glsl's air as temporal upsampling carries it from a sparse pixel to another: the air
+/// toward distance t_k (in-scattered light, transmittance) turned into extinction and
+/// in-scattering per metre (air_coefficients), then evaluated toward distance t (air_over_distance).
+void reference_air_carried(const glm::dvec3& inscattered, const glm::dvec3& transmittance, double t_k, double t,
+                           glm::dvec3& inscattered_t, glm::dvec3& transmittance_t);
 /// medium.glsl's cloud_density at camera-relative p (metres) with the frame's parameters, motion
 /// included, in double precision (for tests: the moving volume against the static one).
 double reference_density(const PreparedVolume& vol, const FrameSetup& frame, const glm::dvec3& p);
