@@ -43,6 +43,10 @@ constexpr size_t kMaxGrids = 64;
 
 uint64_t round32(uint64_t n) { return (n + 31) / 32 * 32; }
 
+/// The blocks as one byte array: offsets into a grid go from here, not from `front().b` (indexing
+/// past that 32-byte member array is out of bounds, and clang's UBSan says so).
+uint8_t* bytes(std::vector<NanoVolume::Block>& v) { return reinterpret_cast<uint8_t*>(v.data()); }
+
 void zero_inactive(NanoGrid& grid);
 
 /// One OpenVDB float grid as NanoVDB bytes (bounding box and min/max computed, no checksum yet).
@@ -66,8 +70,8 @@ void add_metadata_blind(std::vector<NanoVolume::Block>& buf, const std::string& 
   const uint64_t meta_at = grid_bytes, data_at = meta_at + sizeof(nanovdb::GridBlindMetaData);
   const uint64_t total = round32(data_at + text.size() + 1);
   buf.resize(total / 32);
-  std::memset(buf.front().b + grid_bytes, 0, total - grid_bytes);
-  auto* meta = reinterpret_cast<nanovdb::GridBlindMetaData*>(buf.front().b + meta_at);
+  std::memset(bytes(buf) + grid_bytes, 0, total - grid_bytes);
+  auto* meta = reinterpret_cast<nanovdb::GridBlindMetaData*>(bytes(buf) + meta_at);
   meta->mByteOffset = int64_t(data_at - meta_at);
   meta->mElementCount = text.size() + 1;
   meta->mFlags = 0;
@@ -75,7 +79,7 @@ void add_metadata_blind(std::vector<NanoVolume::Block>& buf, const std::string& 
   meta->mDataClass = nanovdb::GridBlindDataClass::Unknown;
   meta->mDataType = nanovdb::GridType::Unknown;
   std::strncpy(meta->mName, kMetaBlind, nanovdb::GridBlindMetaData::MaxNameSize - 1);
-  std::memcpy(buf.front().b + data_at, text.data(), text.size());
+  std::memcpy(bytes(buf) + data_at, text.data(), text.size());
   auto* grid = reinterpret_cast<nanovdb::GridData*>(buf.front().b);
   grid->mBlindMetadataOffset = int64_t(meta_at);
   grid->mBlindMetadataCount = 1;
@@ -94,7 +98,7 @@ std::string meta_json(const openvdb::GridBase& g) {
   return j.dump();
 }
 
-NanoGrid* grid_at(NanoVolume& n, size_t g) { return reinterpret_cast<NanoGrid*>(n.buffer.front().b + n.grids[g].offset); }
+NanoGrid* grid_at(NanoVolume& n, size_t g) { return reinterpret_cast<NanoGrid*>(bytes(n.buffer) + n.grids[g].offset); }
 const NanoGrid* grid_at(const NanoVolume& n, size_t g) {
   return reinterpret_cast<const NanoGrid*>(n.data() + n.grids[g].offset);
 }
