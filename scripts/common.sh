@@ -7,6 +7,9 @@ cd "$ROOT"
 # the developer's machine): paths are hashed relative to the clone.
 if command -v ccache >/dev/null 2>&1; then
   export CMAKE_C_COMPILER_LAUNCHER=ccache CMAKE_CXX_COMPILER_LAUNCHER=ccache CCACHE_BASEDIR="$ROOT"
+  # ccache 4.7 hashes the -fsanitize-ignorelist= path, not the file: hash its contents too, so an
+  # edit to it recompiles the sanitizer build instead of reusing objects built with the old list.
+  export CCACHE_EXTRAFILES="$ROOT/tests/fuzz/ubsan_ignore.txt"
 fi
 
 log() { printf '\033[1m==> %s\033[0m\n' "$*" >&2; }
