@@ -43,8 +43,8 @@ constexpr size_t kMaxGrids = 64;
 
 uint64_t round32(uint64_t n) { return (n + 31) / 32 * 32; }
 
-/// The blocks as one byte array: offsets into a grid go from here, not from `front().b` (indexing
-/// past that 32-byte member array is out of bounds, and clang's UBSan says so).
+/// A block vector as one byte array, as NanoVolume::data() gives its buffer: offsets go from here,
+/// not from `front().b` (indexing past that 32-byte member array is out of bounds).
 uint8_t* bytes(std::vector<NanoVolume::Block>& v) { return reinterpret_cast<uint8_t*>(v.data()); }
 
 void zero_inactive(NanoGrid& grid);
@@ -57,10 +57,10 @@ std::vector<NanoVolume::Block> convert(const openvdb::FloatGrid& g) {
   std::memset(out.data(), 0, out.size() * 32);
   nanovdb::HostBuffer pool = nanovdb::HostBuffer::createPool(out.size() * 32, out.data());
   auto handle = Converter()(g, nanovdb::StatsMode::All, nanovdb::ChecksumMode::Disable, 0, pool);
-  if (handle.size() != size || handle.data() != out.front().b)
+  if (handle.size() != size || handle.data() != bytes(out))
     throw Error("NanoVDB conversion of grid \"" + g.getName() + "\" did not land in its buffer");
   out.resize(round32(size) / 32);
-  zero_inactive(*reinterpret_cast<NanoGrid*>(out.front().b));
+  zero_inactive(*reinterpret_cast<NanoGrid*>(bytes(out)));
   return out;
 }
 
@@ -80,7 +80,7 @@ void add_metadata_blind(std::vector<NanoVolume::Block>& buf, const std::string& 
   meta->mDataType = nanovdb::GridType::Unknown;
   std::strncpy(meta->mName, kMetaBlind, nanovdb::GridBlindMetaData::MaxNameSize - 1);
   std::memcpy(bytes(buf) + data_at, text.data(), text.size());
-  auto* grid = reinterpret_cast<nanovdb::GridData*>(buf.front().b);
+  auto* grid = reinterpret_cast<nanovdb::GridData*>(bytes(buf));
   grid->mBlindMetadataOffset = int64_t(meta_at);
   grid->mBlindMetadataCount = 1;
   grid->mGridSize = total;
@@ -98,7 +98,7 @@ std::string meta_json(const openvdb::GridBase& g) {
   return j.dump();
 }
 
-NanoGrid* grid_at(NanoVolume& n, size_t g) { return reinterpret_cast<NanoGrid*>(bytes(n.buffer) + n.grids[g].offset); }
+NanoGrid* grid_at(NanoVolume& n, size_t g) { return reinterpret_cast<NanoGrid*>(n.data() + n.grids[g].offset); }
 const NanoGrid* grid_at(const NanoVolume& n, size_t g) {
   return reinterpret_cast<const NanoGrid*>(n.data() + n.grids[g].offset);
 }
@@ -290,7 +290,7 @@ std::vector<std::pair<std::string, std::vector<NanoVolume::Block>>> nano_grids(c
     if (!g) continue;  // only float grids: the viewer's channels
     std::vector<NanoVolume::Block> b = convert(*g);
     if (i == 0) add_metadata_blind(b, meta_json(*g));
-    nanovdb::updateChecksum(*reinterpret_cast<NanoGrid*>(b.front().b), nanovdb::ChecksumMode::Full);
+    nanovdb::updateChecksum(*reinterpret_cast<NanoGrid*>(bytes(b)), nanovdb::ChecksumMode::Full);
     out.push_back({g->getName(), std::move(b)});
   }
   return out;
@@ -515,8 +515,8 @@ NanoVolume parse_nvdb(const uint8_t* data, size_t size, const std::string& name_
           ") runs past the end");
     std::vector<NanoVolume::Block> b(size_t(m.gridSize / 32));
     take(b.data(), m.gridSize, "a grid");
-    check_grid(b.front().b, m.gridSize, name + ": grid \"" + printable(gname) + "\"");
-    zero_inactive(*reinterpret_cast<NanoGrid*>(b.front().b));
+    check_grid(bytes(b), m.gridSize, name + ": grid \"" + printable(gname) + "\"");
+    zero_inactive(*reinterpret_cast<NanoGrid*>(bytes(b)));
     if (gname == "density" && density < 0) density = int(parts.size());
     parts.push_back({gname, std::move(b)});
   }

@@ -44,7 +44,10 @@ struct NanoVolume {
   bool detail_shared_layout = false;
   std::vector<std::pair<std::string, std::string>> metadata;
 
-  const uint8_t* data() const { return buffer.empty() ? nullptr : buffer.front().b; }
+  /// The blocks as one byte array (null when empty): grid offsets count from here. Not from
+  /// `front().b`: arithmetic past that 32-byte member array is out of bounds.
+  const uint8_t* data() const { return buffer.empty() ? nullptr : reinterpret_cast<const uint8_t*>(buffer.data()); }
+  uint8_t* data() { return buffer.empty() ? nullptr : reinterpret_cast<uint8_t*>(buffer.data()); }
   uint64_t bytes() const { return uint64_t(buffer.size()) * sizeof(Block); }
   bool has_detail() const { return detail[0] >= 0 && detail[1] >= 0 && detail[2] >= 0; }
 };
