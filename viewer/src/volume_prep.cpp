@@ -87,36 +87,42 @@ std::vector<uint8_t> occupancy_distance(const std::vector<uint8_t>& occ, const s
   // the wrapped axes keep the thesis's one-cell field.
   const bool wrap = tiles && dims[0] % cell == 0 && dims[2] % cell == 0;
   const bool clamp_one = tiles && !wrap;
-  // L-infinity distance is separable: d(c) = min over o of max_i |c_i - o_i| is computed one axis at
-  // a time, f_a(c) = min over c' on c's line of max(|c_a - c'_a|, f_{a-1}(c')), starting from 0 on
-  // occupied cells and "infinity" elsewhere. Each line is scanned outward until the radius reaches
-  // the best value found, so the cost is the cells times the distances, not the cells times a line.
+  // The L-infinity (chessboard) distance to the nearest occupied cell is the number of king moves
+  // to it (a king move changes each coordinate by at most 1, wrapping in x and z when the tile
+  // wraps), so a breadth-first search from every occupied cell over the 26 neighbours gives it
+  // exactly, in time proportional to the cells (a per-line scan out to each distance cost the cells
+  // times the distances: 6.4 s for the 4 M cells of cumulus-field 512 at 2-voxel cells).
   const int inf = 1 << 20;
-  std::vector<int> f(count), g(count);
-  for (size_t i = 0; i < count; ++i) f[i] = occ[i] ? 0 : inf;
-  auto index = [&](int x, int y, int z) { return (size_t(z) * n[1] + y) * n[0] + x; };
-  for (int axis = 0; axis < 3; ++axis) {
-    const bool axis_wraps = wrap && axis != 1;
+  std::vector<int> f(count, inf);
+  std::vector<uint32_t> queue;
+  queue.reserve(count);
+  for (size_t i = 0; i < count; ++i)
+    if (occ[i]) f[i] = 0, queue.push_back(uint32_t(i));
+  auto step = [&](int c, int d, int axis, bool wraps) {
+    int q = c + d;
     const int len = n[size_t(axis)];
-    for (int z = 0; z < n[2]; ++z)
-      for (int y = 0; y < n[1]; ++y)
-        for (int x = 0; x < n[0]; ++x) {
-          int c[3] = {x, y, z};
-          const int at = c[axis];
-          int best = f[index(x, y, z)];
-          for (int r = 1; r < best && r < len; ++r) {
-            for (int sgn : {-1, 1}) {
-              int q = at + sgn * r;
-              if (axis_wraps) q = ((q % len) + len) % len;
-              else if (q < 0 || q >= len) continue;
-              c[axis] = q;
-              best = std::min(best, std::max(r, f[index(c[0], c[1], c[2])]));
-            }
-            c[axis] = at;
-          }
-          g[index(x, y, z)] = best;
+    if (wraps) return q < 0 ? q + len : q >= len ? q - len : q;
+    return q < 0 || q >= len ? -1 : q;
+  };
+  const size_t plane = size_t(n[0]) * n[1];
+  for (size_t head = 0; head < queue.size(); ++head) {
+    const uint32_t i = queue[head];
+    const int x = int(i % uint32_t(n[0])), y = int(i / uint32_t(n[0]) % uint32_t(n[1])), z = int(i / plane);
+    const int next = f[i] + 1;
+    for (int dz = -1; dz <= 1; ++dz) {
+      const int qz = step(z, dz, 2, wrap);
+      if (qz < 0) continue;
+      for (int dy = -1; dy <= 1; ++dy) {
+        const int qy = step(y, dy, 1, false);
+        if (qy < 0) continue;
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int qx = step(x, dx, 0, wrap);
+          if (qx < 0) continue;
+          const size_t j = size_t(qz) * plane + size_t(qy) * n[0] + size_t(qx);
+          if (f[j] > next) f[j] = next, queue.push_back(uint32_t(j));
         }
-    std::swap(f, g);
+      }
+    }
   }
   for (size_t i = 0; i < count; ++i) out[i] = uint8_t(std::min(f[i], clamp_one && f[i] > 1 ? 1 : 255));
   return out;
