@@ -310,12 +310,17 @@ TEST(ViewerMotion, OccupancySkippingStaysExactWhileMoving) {
 // random points of the march box against the CPU reference's density, for a box cloud and a
 // tileable one, at two times, without shear (a tight grid, where a missing margin shows) and with
 // strong shear (cells that gather many static cells); the grid must also leave cells to skip.
+//
+// Static cells of 4 (and 2) voxels: the moved grid keeps 8-voxel cells and the same large step,
+// proven over 2 (4) static cells of the distance field (frame.cpp moved_reach_cells).
 TEST(ViewerMotion, MovedOccupancyLeavesOutOnlyEmptySpace) {
+  for (int static_cell : {8, 4, 2})
   for (const char* kind : {"blob", "noise"}) {
-    PreparedVolume vol = prepare_volume(synthetic_volume(kind), 8, 1);
+    PreparedVolume vol = prepare_volume(synthetic_volume(kind), static_cell, 1);
     for (glm::dvec2 ts : {glm::dvec2(95, 0), glm::dvec2(95, 3), glm::dvec2(240, 0), glm::dvec2(240, 3)}) {
       const double t = ts.x, shear = ts.y;
-      const std::string at = std::string(kind) + " t " + std::to_string(int(t)) + " shear " + std::to_string(int(shear));
+      const std::string at = std::string(kind) + " cell " + std::to_string(static_cell) + " t " +
+                             std::to_string(int(t)) + " shear " + std::to_string(int(shear));
       RenderSettings s;
       s.steps = 128;
       s.motion.wind_shear = shear;
@@ -325,6 +330,11 @@ TEST(ViewerMotion, MovedOccupancyLeavesOutOnlyEmptySpace) {
       ASSERT_EQ(f.params.motion_on, 1.0);
       const glm::ivec3 n(f.params.moved_occ_dims);
       ASSERT_EQ(f.moved_occupancy.size(), size_t(n.x) * n.y * n.z) << at;
+      EXPECT_NEAR(f.params.moved_occ_cell_m, 8 * vol.voxel_size, 1e-3 * vol.voxel_size) << at;
+      if (static_cell != 8) {  // the same large step as with 8-voxel static cells
+        const FrameSetup f8 = frame_at(prepare_volume(synthetic_volume(kind), 8, 1), s, t);
+        EXPECT_EQ(f.params.large_step_count, f8.params.large_step_count) << at;
+      }
       size_t marked = 0;
       for (uint8_t c : f.moved_occupancy) marked += c;
       EXPECT_GT(marked, 0u) << at;
@@ -377,7 +387,8 @@ TEST(ViewerMotion, MovedOccupancyKeepsItsMarginAtCellFaces) {
   std::fill(v.density.begin(), v.density.end(), 0.f);
   const std::array<std::array<uint32_t, 3>, 3> dots = {{{47, 23, 47}, {56, 16, 39}, {31, 31, 64}}};
   for (const auto& d : dots) v.density[v.index(d[0], d[1], d[2])] = 1.f;
-  PreparedVolume vol = prepare_volume(v, 8, 1);
+  for (int static_cell : {8, 4}) {
+  PreparedVolume vol = prepare_volume(v, static_cell, 1);
   int dense = 0;
   for (int ti = 0; ti < 24; ++ti) {
     RenderSettings s;
@@ -409,13 +420,14 @@ TEST(ViewerMotion, MovedOccupancyKeepsItsMarginAtCellFaces) {
         for (int k = 0; k < 8; ++k) {
           glm::dvec3 q = p + glm::dvec3(k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1) * (0.999 * large);
           if (glm::any(glm::lessThan(q, lo)) || glm::any(glm::greaterThanEqual(q, hi))) continue;
-          ASSERT_TRUE(marked_at(q)) << "t " << t << ": (" << q.x << ", " << q.y << ", " << q.z
-                                    << ") is a large step from density but unmarked";
+          ASSERT_TRUE(marked_at(q)) << "cell " << static_cell << " t " << t << ": (" << q.x << ", " << q.y << ", "
+                                    << q.z << ") is a large step from density but unmarked";
         }
       }
     }
   }
   EXPECT_GT(dense, 2000) << "the samples must find the voxels' density";
+  }
 }
 
 // Time 0 with the default (moving) parameters, and any time with the motion switched off, are the

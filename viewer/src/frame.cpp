@@ -16,7 +16,7 @@ namespace {
 
 // Motion (cloudgen/motion.glsl): the parameters, the box the march must cover at this time and the
 // large step that keeps occupancy skipping exact while the clouds are displaced.
-void apply_motion(const RenderSettings& s, bool baked, double height, ref::CloudParams& p) {
+void apply_motion(const RenderSettings& s, bool baked, double height, double moved_large_steps, ref::CloudParams& p) {
   p.march_min_m = p.volume_min_m;
   p.march_size_m = p.volume_size_m;
   p.time_s = s.time;
@@ -70,6 +70,7 @@ void apply_motion(const RenderSettings& s, bool baked, double height, ref::Cloud
   // of length L, h changes by at most L / H (H: the height the volume spans), so q moves at most
   // L (1 + G / H): shorten the large step by that factor and the proof in make_frame still holds.
   double stretch = 1.0 + slope / height;
+  if (p.layer_on < 0.5) p.large_step_count = moved_large_steps;  // box mode: the moved grid's clearance
   p.large_step_count = std::max(1.0, std::floor(p.large_step_count / stretch));
   double diag = glm::length(p.march_size_m);
   if (p.layer_on < 0.5) p.max_iterations = std::max(p.max_iterations, 4.0 * std::ceil(diag / p.step_m) + 64.0);
@@ -81,18 +82,20 @@ void apply_motion(const RenderSettings& s, bool baked, double height, ref::Cloud
 // interpolated linearly (what both renderers use), so over a cell's heights D stays within the
 // range of the table entries that span them: the static points a cell can show lie in its box
 // moved by that range (grown by half a voxel for rounding). The cell is marked when any static cell
-// there is within one cell of a cell holding density (the distance field's d <= 1; the padded grid
-// when a volume has no field, padding >= 1). Unmarked, p's q is a whole cell from density, so
-// density is 0 at p and, along a large step of L (1 + G / H) < cell - voxel / 2, at every point
-// of it: apply_motion's shortened large step keeps the march exact as before.
-void build_moved_occupancy(const PreparedVolume& vol, const std::vector<glm::dvec3>& table, ref::CloudParams& p,
-                           std::vector<uint8_t>& out) {
-  const double cell = vol.occ_cell * vol.voxel_size;
+// there is within `reach` cells of a cell holding density (the distance field's d <= reach; the
+// padded grid when a volume has no field, padding >= 1, reach 1). Unmarked, p's q is `reach`
+// whole cells from density, so density is 0 at p and, along a large step of L (1 + G / H) <
+// reach x cell - voxel / 2, at every point of it: apply_motion's shortened large step keeps the
+// march exact as before. The moved grid's cells are `reach` static cells wide (see
+// PreparedVolume::moved_reach).
+void build_moved_occupancy(const PreparedVolume& vol, const std::vector<glm::dvec3>& table, int reach,
+                           ref::CloudParams& p, std::vector<uint8_t>& out) {
+  const double static_cell = vol.occ_cell * vol.voxel_size;
+  const double cell = reach * static_cell;
   const glm::dvec3 origin = p.march_min_m - p.volume_min_m;  // the march box's min, volume-local metres
   glm::ivec3 n(1);
   for (int a = 0; a < 3; ++a) n[a] = std::max(1, int(std::ceil(p.march_size_m[a] / cell - 1e-9)));
   const std::array<int, 3>& sn = vol.occ_dims;
-  const bool use_dist = vol.dist.size() == vol.occ.size();
   const double cells = double(n.x) * n.y * n.z;
   if (cells > double(1 << 24) || std::max(n.x, std::max(n.y, n.z)) > 2048) {  // absurd times: no skipping
     p.moved_occ_dims = glm::dvec3(1.0);
@@ -107,8 +110,8 @@ void build_moved_occupancy(const PreparedVolume& vol, const std::vector<glm::dve
   auto h_of = [&](double y_local) { return (vol.origin.y + y_local - vol.height_min) / vol.height_size; };
   // A static axis range [lo, hi] (metres) as cell indices; false when it misses a non-wrapping volume.
   auto span = [&](double lo, double hi, int axis, bool wraps, int& i0, int& i1) {
-    i0 = int(std::floor(lo / cell));
-    i1 = int(std::floor(hi / cell));
+    i0 = int(std::floor(lo / static_cell));
+    i1 = int(std::floor(hi / static_cell));
     if (wraps) {
       if (i1 - i0 >= sn[axis]) i0 = 0, i1 = sn[axis] - 1;
       return true;
@@ -117,19 +120,16 @@ void build_moved_occupancy(const PreparedVolume& vol, const std::vector<glm::dve
     i1 = std::min(i1, sn[axis] - 1);
     return i0 <= i1;
   };
-  // Per static y layer, a summed-area table over (x, z) of the cells near density: a moved cell's
-  // footprint, which long times and strong shear stretch over the whole tile, then costs its y
-  // span times at most four look-ups, not its cells.
+  // Per static y layer, a summed-area table over (x, z) of the cells near density (built with the
+  // grid, PreparedVolume::moved_near_sat): a moved cell's footprint, which long times and strong
+  // shear stretch over the whole tile, then costs its y span times at most four look-ups, not its
+  // cells.
   const int sx = sn[0], sy = sn[1], sz = sn[2];
-  std::vector<uint32_t> sat(size_t(sy) * (sz + 1) * (sx + 1), 0);
-  auto at = [&](int y, int z, int x) -> uint32_t& { return sat[(size_t(y) * (sz + 1) + z) * (sx + 1) + x]; };
-  for (int y = 0; y < sy; ++y)
-    for (int z = 0; z < sz; ++z)
-      for (int x = 0; x < sx; ++x) {
-        const size_t i = (size_t(z) * sy + y) * sx + x;
-        const uint32_t near = use_dist ? vol.dist[i] <= 1 : vol.occ[i] != 0;
-        at(y, z + 1, x + 1) = near + at(y, z, x + 1) + at(y, z + 1, x) - at(y, z, x);
-      }
+  std::vector<uint32_t> local;
+  const size_t sat_size = size_t(sy) * (sz + 1) * (sx + 1);
+  if (reach != vol.moved_reach || vol.moved_near_sat.size() != sat_size) local = moved_near_table(vol, reach);
+  const std::vector<uint32_t>& sat = local.empty() ? vol.moved_near_sat : local;
+  auto at = [&](int y, int z, int x) { return sat[(size_t(y) * (sz + 1) + z) * (sx + 1) + x]; };
   // A span from span() as at most two ranges inside [0, n) (a wrapping axis may run past an end).
   auto pieces = [](int i0, int i1, int len, std::array<std::array<int, 2>, 2>& r) {
     const int a = ((i0 % len) + len) % len, b = a + (i1 - i0);
@@ -254,6 +254,8 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   // In layer mode cells are measured in the smallest world voxel edge (the texture may be stretched
   // vertically); the Earth's curvature bends a large step by d^2/2R, far below half a voxel.
   int k = std::max(1, int(std::floor(0.999 * (cell_m - 0.5 * min_voxel) / dt)));
+  const int reach = layer ? 1 : moved_reach_cells(vol);
+  const int k_moved = std::max(1, int(std::floor(0.999 * (reach * cell_m - 0.5 * min_voxel) / dt)));
   double diag = glm::length(size);
   ref::CloudParams& p = f.params;
   p = ref::CloudParams{};  // zero: layer fields stay 0 in box mode
@@ -377,11 +379,11 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   }
   p.height_min_m = vol.height_min - cam.eye.y;
   p.height_size_m = vol.height_size;
-  apply_motion(s, vol.baked_motion, layer ? size.y : vol.height_size, p);
+  apply_motion(s, vol.baked_motion, layer ? size.y : vol.height_size, k_moved, p);
   if (p.motion_on > 0.5) {
     f.motion_table = motion_table_row(s, s.time);
     f.motion_table.insert(f.motion_table.end(), f.motion_table.begin(), f.motion_table.end());
-    if (!layer) build_moved_occupancy(vol, f.motion_table, p, f.moved_occupancy);
+    if (!layer) build_moved_occupancy(vol, f.motion_table, reach, p, f.moved_occupancy);
   }
   set_shadow_map(s, width, height, p);
   f.params = rounded_to_float(p);

@@ -62,6 +62,8 @@ void finish_occupancy(PreparedVolume& p) {
     holds = cloudgen::nano_occupancy(*p.nano, uint32_t(c), 0, od);
     if (holds.size() != p.occ.size()) holds.assign(p.occ.size(), 1);
     p.dist = occupancy_distance(holds, p.occ_dims, p.tiles, p.dims, p.occ_cell);
+    p.moved_reach = moved_reach_cells(p);
+    p.moved_near_sat = moved_near_table(p, p.moved_reach);
     return;
   }
 #endif
@@ -73,9 +75,37 @@ void finish_occupancy(PreparedVolume& p) {
         if (row[size_t(x) * 4] > 0) cells[x / c] = 1;
     }
   p.dist = occupancy_distance(holds, p.occ_dims, p.tiles, p.dims, p.occ_cell);
+  p.moved_reach = moved_reach_cells(p);
+  p.moved_near_sat = moved_near_table(p, p.moved_reach);
 }
 
+// The moved grid keeps cells of about this many voxels whatever render.occupancy_cell is: finer
+// static cells serve the still frame's distance jumps, but a moved grid as fine would make each
+// moving frame's large steps half (a quarter) as long and its per-frame build 8 (64) times the cells.
+constexpr int kMovedCellVoxels = 8;
+
 }  // namespace
+
+int moved_reach_cells(const PreparedVolume& vol) {
+  if (vol.dist.empty() || vol.dist.size() != vol.occ.size() || vol.occ_cell <= 0) return 1;
+  return std::max(1, kMovedCellVoxels / vol.occ_cell);
+}
+
+std::vector<uint32_t> moved_near_table(const PreparedVolume& vol, int reach) {
+  const bool use_dist = vol.dist.size() == vol.occ.size();
+  const int sx = vol.occ_dims[0], sy = vol.occ_dims[1], sz = vol.occ_dims[2];
+  if (vol.occ.size() != size_t(sx) * sy * sz) return {};
+  std::vector<uint32_t> sat(size_t(sy) * (sz + 1) * (sx + 1), 0);
+  auto at = [&](int y, int z, int x) -> uint32_t& { return sat[(size_t(y) * (sz + 1) + z) * (sx + 1) + x]; };
+  for (int y = 0; y < sy; ++y)
+    for (int z = 0; z < sz; ++z)
+      for (int x = 0; x < sx; ++x) {
+        const size_t i = (size_t(z) * sy + y) * sx + x;
+        const uint32_t near = use_dist ? vol.dist[i] <= reach : vol.occ[i] != 0;
+        at(y, z + 1, x + 1) = near + at(y, z, x + 1) + at(y, z + 1, x) - at(y, z, x);
+      }
+  return sat;
+}
 
 std::vector<uint8_t> occupancy_distance(const std::vector<uint8_t>& occ, const std::array<int, 3>& n, bool tiles,
                                         const std::array<int, 3>& dims, int cell) {

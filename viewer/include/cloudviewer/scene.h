@@ -49,6 +49,13 @@ struct PreparedVolume {
   /// cell holding a voxel with density > 0 (the grid before padding; 0 there, capped at 255); see
   /// occupancy_distance. Distance skipping proves density 0 within (d - 1) cells - half a voxel.
   std::vector<uint8_t> dist;
+  /// Moving clouds (box mode) skip through a grid make_frame builds every frame over the march box
+  /// (frame.cpp build_moved_occupancy), whose cells are `moved_reach` static cells wide and marked
+  /// where a static cell they can show lies within `moved_reach` cells of density. Built with the
+  /// grid (moved_near_table): per static y layer, a summed-area table over (x, z) of those cells,
+  /// (occ_dims.z + 1) x (occ_dims.x + 1) entries per layer, so no frame rebuilds it.
+  int moved_reach = 1;
+  std::vector<uint32_t> moved_near_sat;
   double occupied_fraction = 0;
   /// The box the motion measures heights in (y, world metres): the whole preset's when the file
   /// records it (cloudgen's motion.box_min_y / motion.box_height), else this volume's own.
@@ -80,6 +87,13 @@ void build_occupancy(PreparedVolume& p, int occ_cell, int occ_padding);
 /// within d - 1 of a cell at distance d is unoccupied (lighting.glsl's empty_radius).
 std::vector<uint8_t> occupancy_distance(const std::vector<uint8_t>& occ, const std::array<int, 3>& n, bool tiles,
                                         const std::array<int, 3>& dims, int cell);
+
+/// Cells of the moved grid per static cell, kMovedCellVoxels (8) voxels / occ_cell, at least 1; 1
+/// without a distance field (the padded grid then marks what is near density).
+int moved_reach_cells(const PreparedVolume& vol);
+/// PreparedVolume::moved_near_sat for `reach` (the cells with dist <= reach, or occ != 0 without
+/// a distance field).
+std::vector<uint32_t> moved_near_table(const PreparedVolume& vol, int reach);
 
 /// Bytes prepare_volume allocates for a volume of `voxels` voxels (RGBA floats, occupancy).
 uint64_t prepared_bytes(uint64_t voxels);
