@@ -175,7 +175,7 @@ std::vector<Spec> build_table() {
   add("/density_scale", "number", "1.0", 0, 1000, "Multiplier after the threshold (result clamped to [0, 1]).",
       [](Preset& p, const json& j, const Index&) { p.density_scale = j.get<double>(); });
 
-  add("/occupancy/cell", "integer", "8", 1, 256, "Coarse occupancy cell edge in voxels.",
+  add("/occupancy/cell", "integer", "4", 1, 256, "Coarse occupancy cell edge in voxels.",
       [](Preset& p, const json& j, const Index&) { p.occupancy_cell = j.get<uint32_t>(); });
   add("/occupancy/padding", "integer", "2", 0, 16,
       "Dilation in coarse cells (2 = the thesis's double padding, so a large step can't cut a corner).",

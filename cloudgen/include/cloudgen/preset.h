@@ -81,7 +81,7 @@ struct Preset {
   double threshold = 0.3;
   double density_scale = 1.0;
 
-  uint32_t occupancy_cell = 8;
+  uint32_t occupancy_cell = 4;
   uint32_t occupancy_padding = 2;
 
   ExportOptions export_options;  ///< export.vdb.* and export.raw.* keys

@@ -47,7 +47,7 @@ struct RenderSettings {
   bool occupancy = true;           ///< empty-space skipping on (false: none, whatever `skipping` says)
   Skipping skipping = Skipping::Distance;  ///< with occupancy on: thesis (one cell) or distance-field jumps
   bool occupancy_light = false;    ///< the light march also skips empty cells (no measurable gain on llvmpipe)
-  int occupancy_cell = 8;          ///< coarse cell edge in voxels
+  int occupancy_cell = 4;          ///< coarse cell edge in voxels (docs/viewer-speed.md: 4 against 8)
   int occupancy_padding = 2;       ///< dilation in cells (thesis: 2; 1 is enough, see make_frame)
   bool adaptive = false;           ///< step grows with distance
   double adaptive_start = 0;       ///< m; 0 = auto (a quarter of the largest extent)
