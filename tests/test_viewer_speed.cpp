@@ -293,6 +293,66 @@ TEST(ViewerSpeed, LightVolumeRebuildsOnSunChangeNotOnCameraMove) {
   EXPECT_EQ(r.light_volume_builds(), 4) << "off: never built";
 }
 
+// Moving clouds: the light volume spans the march box and is rebuilt every frame from the moving
+// density, where the grid has no more texels than the frame has pixels (make_frame). Then GL and
+// the CPU reference agree, the volume is as close to the per-sample march as a still frame's is to
+// its own, it follows the time (a new time rebuilds it, a camera move alone does not), and a
+// frame smaller than the grid marches per sample.
+TEST(ViewerSpeed, MovingCloudsRebuildTheLightVolumeWhereItPays) {
+  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8, 2);
+  gl_context();
+  GlRenderer r{ShaderSource()};
+  r.set_volume(vol);
+  RenderSettings s = with({"render.light_volume=true", "render.light_volume_scale=4", "render.exact_filter=true",
+                           "render.steps=96", "render.shadow_map=false"});
+  s.motion.wind_speed = 6.0;
+  const int w = 240, h = 135;
+  Camera cam = default_camera(vol, 60, double(w) / h);
+  Sun sun = default_sun(cam);
+  auto frame = [&](const RenderSettings& rs, double t, const Camera& c, int fw, int fh) {
+    RenderSettings x = rs;
+    x.time = t;
+    return make_frame(vol, x, c, sun, fw, fh);
+  };
+  FrameSetup moving = frame(s, 95.0, cam, w, h);
+  ASSERT_EQ(moving.params.motion_on, 1.0);
+  ASSERT_EQ(moving.params.light_volume_on, 1.0) << "a grid smaller than the frame is rebuilt per frame";
+  const glm::dvec3 dims = moving.params.light_volume_dims, still_dims = frame(s, 0.0, cam, w, h).params.light_volume_dims;
+  EXPECT_GT(dims.x * dims.y * dims.z, still_dims.x * still_dims.y * still_dims.z) << "it spans the grown march box";
+  EXPECT_LE(dims.x * dims.y * dims.z, double(w) * h);
+  // The rule: a frame with fewer pixels than the grid's texels marches per sample.
+  const int small_w = 64, small_h = 36;
+  ASSERT_GT(dims.x * dims.y * dims.z, double(small_w) * small_h);
+  EXPECT_EQ(frame(s, 95.0, cam, small_w, small_h).params.light_volume_on, 0.0);
+
+  r.render(moving);
+  EXPECT_EQ(r.light_volume_builds(), 1);
+  FrameImages gl = r.read_back();
+  FrameImages cpu = render_cpu(vol, moving);
+  const double p = psnr(gl.display, cpu.display);
+  EXPECT_GT(p, 50.0) << "GL and the CPU reference build and read the same moving light volume";
+
+  // Against the per-sample march of the same frame, beside the still frame's light volume against its march.
+  RenderSettings march = s;
+  march.light_volume = false;
+  const double moving_err = rmse(cpu.display, render_cpu(vol, frame(march, 95.0, cam, w, h)).display);
+  const double still_err =
+      rmse(render_cpu(vol, frame(s, 0.0, cam, w, h)).display, render_cpu(vol, frame(march, 0.0, cam, w, h)).display);
+  std::cout << "moving light volume: PSNR GL vs CPU " << p << " dB; RMSE against the march " << moving_err
+            << " (still: " << still_err << ")\n";
+  EXPECT_GT(moving_err, 0.0) << "the lookup, not the march, lit the frame";
+  EXPECT_LT(moving_err, 2.0 * still_err + 1e-3);
+
+  Camera moved = cam;
+  moved.eye += glm::dvec3(41.0, 7.0, -29.0);
+  r.render(frame(s, 95.0, moved, w, h));
+  EXPECT_EQ(r.light_volume_builds(), 1) << "a camera move at the same time keeps it";
+  r.render(frame(s, 95.0 + 1.0 / 24.0, moved, w, h));
+  EXPECT_EQ(r.light_volume_builds(), 2) << "the next frame's time rebuilds it";
+  r.render(frame(s, 95.0 + 1.0 / 24.0, moved, small_w, small_h));
+  EXPECT_EQ(r.light_volume_builds(), 2) << "a small frame marches and builds nothing";
+}
+
 // render.shadow_map: the ground's cloud shadow from a 2D map of the ground pass's own march. At a
 // texel centre the lookup is the march; between, bilinear; a ground point outside the map's area
 // sends its sun ray past the march box, where the march gives exactly 1 (so the area is not too

@@ -94,9 +94,11 @@ Number light_optical_depth(vec3 p) {
 // light_volume_dims grid over the box, built once per sun / volume / lighting change (the
 // light_volume pass; the CPU reference builds the same grid in double precision), then looked up
 // trilinearly instead of marching. Box mode only (layer mode's coverage map does not repeat with
-// the texture). The texel's position in camera-relative metres:
+// the texture). The grid spans the march box: the volume's box for still clouds; while they move,
+// the box grown by the motion's reach, and the grid is rebuilt every frame from the moving density
+// (make_frame decides when that pays). The texel's position in camera-relative metres:
 vec3 light_volume_position(ivec3 texel) {
-  return u_cloud.volume_min_m + (vec3(texel) + 0.5) / u_cloud.light_volume_dims * u_cloud.volume_size_m;
+  return u_cloud.march_min_m + (vec3(texel) + 0.5) / u_cloud.light_volume_dims * u_cloud.march_size_m;
 }
 
 // Trilinear from texel fetches, wrapped in x/z for tiling volumes, clamped otherwise (the texture
@@ -118,7 +120,7 @@ vec4 grid_trilinear(bool ms, vec3 uvw) {
 }
 
 Number light_volume_tau(vec3 p) {
-  vec3 uvw = volume_uvw(p);
+  vec3 uvw = (p - u_cloud.march_min_m) / u_cloud.march_size_m;  // volume_uvw(p) while still
   return CV_MODE_EXACT_FILTER > 0.5 ? grid_trilinear(false, uvw).x : light_volume_filtered(uvw);
 }
 

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <stdexcept>
 
 #include <tbb/parallel_for.h>
 
@@ -275,11 +276,14 @@ std::vector<double> build_shadow_map_cpu(const PreparedVolume& vol, const FrameS
   return t;
 }
 
-std::vector<double> build_light_volume_cpu(const PreparedVolume& vol, const ref::CloudParams& params) {
+std::vector<double> build_light_volume_cpu(const PreparedVolume& vol, const ref::CloudParams& params,
+                                           const FrameSetup* frame) {
   const glm::ivec3 n = glm::ivec3(params.light_volume_dims);
   std::vector<double> tau(size_t(n.x) * n.y * n.z, 0.0);
+  if (params.motion_on > 0.5 && (!frame || frame->motion_table.empty()))
+    throw std::invalid_argument("build_light_volume_cpu: moving clouds need the frame's motion table");
   tbb::parallel_for(0, n.z, [&](int z) {
-    CpuShader sh(params, vol, no_lut());
+    CpuShader sh(params, vol, no_lut(), frame);
     for (int y = 0; y < n.y; ++y)
       for (int x = 0; x < n.x; ++x)
         tau[(size_t(z) * n.y + y) * n.x + x] = sh.light_optical_depth(sh.light_volume_position(ivec3(x, y, z)));
@@ -480,7 +484,7 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
   Buffer hdr(w, h);
   // The light volume, when on: the same texels the light_volume pass computes, in double precision.
   std::vector<double> light_volume;
-  if (P.light_volume_on > 0.5) light_volume = build_light_volume_cpu(vol, P);
+  if (P.light_volume_on > 0.5) light_volume = build_light_volume_cpu(vol, P, &frame);
   // The diffusion volume, when on: the same cells the ms_source pass computes, the same solver.
   std::vector<dvec4> ms_volume;
   if (P.ms_volume_on > 0.5) {

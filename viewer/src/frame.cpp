@@ -39,11 +39,11 @@ void apply_motion(const RenderSettings& s, bool baked, double height, double mov
   p.curl_shift = cloudgen::curl_shift(m, s.time, extent.y, p.curl_repeats.y);
   if (p.motion_on < 0.5) return;
   // Moving clouds: the distance field's jumps are proven for the still volume, and the light volume
-  // would need a rebuild every frame; both give way to the thesis scheme (made exact below) and
-  // the per-sample light march.
+  // needs a rebuild every frame; the first gives way to the thesis scheme (made exact below), the
+  // second to the per-sample light march unless make_frame finds the rebuild cheaper.
   p.skip_distance = 0;
   p.df_light = 0;
-  p.light_volume_on = 0;
+  p.light_volume_on = 0;  // make_frame brings it back, rebuilt per frame, where that pays
   p.ms_volume_on = 0;  // the diffusion solve is per still volume too: the octaves light moving clouds
   // D over the height fraction h in [0, 1], sampled finely: its range (the box grows by it) and its
   // steepest slope G = max |dD/dh| (metres per unit h), both padded by a quarter for what falls
@@ -384,6 +384,22 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
     f.motion_table = motion_table_row(s, s.time);
     f.motion_table.insert(f.motion_table.end(), f.motion_table.begin(), f.motion_table.end());
     if (!layer) build_moved_occupancy(vol, f.motion_table, reach, p, f.moved_occupancy);
+  }
+  // Moving clouds (box mode): the light volume over the march box from this frame's moving
+  // density, rebuilt every frame (lighting.glsl light_volume_position), with the still grid's
+  // texel. A rebuild marches toward the sun from every texel, the per-sample march from every
+  // cloud sample of every pixel, so it pays when the grid has no more texels than the frame has
+  // pixels (then one cloud sample per pixel already costs as much); smaller frames, and larger
+  // grids, march per sample as before. The same rule at every size keeps frames of one size alike.
+  if (p.motion_on > 0.5 && !layer && s.light_volume && s.light_march) {
+    const glm::dvec3 texel = p.volume_size_m / p.light_volume_dims;
+    glm::dvec3 dims(1.0);
+    for (int i = 0; i < 3; ++i) dims[i] = std::max(1.0, std::ceil(p.march_size_m[i] / texel[i] - 1e-6));
+    const double texels = dims.x * dims.y * dims.z;
+    if (texels <= double(width) * double(height) && texels <= double(kMaxLightVolumeTexels)) {
+      p.light_volume_on = 1;
+      p.light_volume_dims = dims;
+    }
   }
   set_shadow_map(s, width, height, p);
   f.params = rounded_to_float(p);

@@ -713,13 +713,24 @@ struct GlRenderer::Impl {
     glTextureParameteri(tex_curl, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   }
   // What the light volume depends on, camera excluded (positions are camera-relative, the texels
-  // are in the box's own coordinates): the sun, the volume, the medium and the light march.
+  // are in the march box's own coordinates): the sun, the volume, the medium, the light march and,
+  // while the clouds move, the march box and the motion at this time.
   std::vector<double> light_volume_key(const FrameSetup& f) const {
     const ref::CloudParams& p = f.params;
     std::vector<double> k = sun_medium_key(f);
     k.insert(k.end(), {p.light_mode, p.light_samples, p.light_step_m, p.light_growth, p.light_volume_dims.x,
                        p.light_volume_dims.y, p.light_volume_dims.z});
+    std::vector<double> mk = motion_key(f);
+    k.insert(k.end(), mk.begin(), mk.end());
     return k;
+  }
+  // The march box's size and the motion at this frame's time (its offset from the volume follows
+  // from them), for the passes that march the moving density over the box.
+  std::vector<double> motion_key(const FrameSetup& f) const {
+    const ref::CloudParams& p = f.params;
+    return {p.march_size_m.x, p.march_size_m.y, p.march_size_m.z, p.layer_on, p.motion_on,
+            p.motion_on > 0.5 ? p.time_s : 0.0, p.wind_dir_x, p.wind_dir_z, p.wind_speed_mps, p.wind_shear,
+            p.flow_speed_hz, p.flow_up_m, p.flow_forward_m};
   }
   // What every march toward the sun reads, camera excluded: the sun, the volume, the density
   // (medium, filter, curl distortion) and whether the distance field skips its samples.
@@ -737,10 +748,10 @@ struct GlRenderer::Impl {
     const ref::CloudParams& p = f.params;
     std::vector<double> k = sun_medium_key(f);
     k.insert(k.end(), {p.shadow_map_nx, p.shadow_map_nz, p.shadow_map_texel_m, p.shadow_map_min_x_m, p.shadow_map_min_z_m,
-                       p.shadow_map_ground_m, p.march_size_m.x, p.march_size_m.y, p.march_size_m.z, p.shadow_samples,
-                       p.layer_on, p.motion_on, p.motion_on > 0.5 ? p.time_s : 0.0, p.wind_dir_x, p.wind_dir_z,
-                       p.wind_speed_mps, p.wind_shear, p.flow_speed_hz, p.flow_up_m, p.flow_forward_m, p.skip_distance,
-                       p.df_cell_m, p.df_margin_m, p.moved_occ_cell_m});
+                       p.shadow_map_ground_m, p.shadow_samples, p.skip_distance, p.df_cell_m, p.df_margin_m,
+                       p.moved_occ_cell_m});
+    std::vector<double> mk = motion_key(f);
+    k.insert(k.end(), mk.begin(), mk.end());
     return k;
   }
   // The diffusion volume's key: the light volume's, its grid, the albedo and the phase function.

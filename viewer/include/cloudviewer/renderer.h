@@ -181,8 +181,10 @@ glm::dvec3 pathtrace_ray(const PreparedVolume& vol, const FrameSetup& frame, con
 /// grid (lighting.glsl shadow_map_position), double precision, x fastest.
 std::vector<double> build_shadow_map_cpu(const PreparedVolume& vol, const FrameSetup& frame);
 /// The light volume (render.light_volume) as the CPU reference builds it: light_optical_depth at
-/// every texel centre of a params.light_volume_dims grid over the box, double precision, x fastest.
-std::vector<double> build_light_volume_cpu(const PreparedVolume& vol, const ref::CloudParams& params);
+/// every texel centre of a params.light_volume_dims grid over the march box (the volume's box while
+/// still), double precision, x fastest. Moving clouds need `frame` (its motion table).
+std::vector<double> build_light_volume_cpu(const PreparedVolume& vol, const ref::CloudParams& params,
+                                           const FrameSetup* frame = nullptr);
 /// The optical depth toward the sun at camera-relative p: the per-sample light march, or with
 /// `light_volume` (from build_light_volume_cpu) its trilinear lookup. For tests and measurements.
 double reference_light_optical_depth(const PreparedVolume& vol, const ref::CloudParams& params, glm::dvec3 p,
