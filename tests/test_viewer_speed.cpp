@@ -324,6 +324,10 @@ TEST(ViewerSpeed, MovingCloudsRebuildTheLightVolumeWhereItPays) {
   const int small_w = 64, small_h = 36;
   ASSERT_GT(dims.x * dims.y * dims.z, double(small_w) * small_h);
   EXPECT_EQ(frame(s, 95.0, cam, small_w, small_h).params.light_volume_on, 0.0);
+  RenderSettings temporal = s;
+  temporal.temporal = true;  // marches a sixteenth of the pixels
+  EXPECT_EQ(frame(temporal, 95.0, cam, w, h).params.light_volume_on, 0.0);
+  EXPECT_EQ(frame(temporal, 95.0, cam, 4 * w, 4 * h).params.light_volume_on, 1.0);
 
   r.render(moving);
   EXPECT_EQ(r.light_volume_builds(), 1);

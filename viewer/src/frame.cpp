@@ -388,15 +388,16 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   // Moving clouds (box mode): the light volume over the march box from this frame's moving
   // density, rebuilt every frame (lighting.glsl light_volume_position), with the still grid's
   // texel. A rebuild marches toward the sun from every texel, the per-sample march from every
-  // cloud sample of every pixel, so it pays when the grid has no more texels than the frame has
-  // pixels (then one cloud sample per pixel already costs as much); smaller frames, and larger
-  // grids, march per sample as before. The same rule at every size keeps frames of one size alike.
+  // cloud sample of every pixel, so it pays when the grid has no more texels than the frame
+  // marches pixels (then one cloud sample per pixel already costs as much); smaller frames, and
+  // larger grids, march per sample as before. Temporal upsampling marches one pixel in 16.
   if (p.motion_on > 0.5 && !layer && s.light_volume && s.light_march) {
+    const double marched = double(width) * double(height) / (s.temporal ? 16.0 : 1.0);
     const glm::dvec3 texel = p.volume_size_m / p.light_volume_dims;
     glm::dvec3 dims(1.0);
     for (int i = 0; i < 3; ++i) dims[i] = std::max(1.0, std::ceil(p.march_size_m[i] / texel[i] - 1e-6));
     const double texels = dims.x * dims.y * dims.z;
-    if (texels <= double(width) * double(height) && texels <= double(kMaxLightVolumeTexels)) {
+    if (texels <= marched && texels <= double(kMaxLightVolumeTexels)) {
       p.light_volume_on = 1;
       p.light_volume_dims = dims;
     }
