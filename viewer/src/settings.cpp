@@ -91,7 +91,7 @@ std::vector<ParamDef> build() {
   t.push_back(integer("light_samples", &RenderSettings::light_samples, 1, 128, "samples of the light march"));
   t.push_back(real("light_step", &RenderSettings::light_step, 0, 1e6, "first light step, m (0 = 2.5 voxels)"));
   t.push_back(real("light_growth", &RenderSettings::light_growth, 1, 4, "each light step is this many times the previous"));
-  t.push_back(boolean("light_volume", &RenderSettings::light_volume, "box mode: look the sun's optical depth up in a precomputed 3D texture (rebuilt when the sun, the volume or a lighting key changes) instead of marching toward the sun per sample"));
+  t.push_back(boolean("light_volume", &RenderSettings::light_volume, "box mode: look the sun's optical depth up in a precomputed 3D texture (rebuilt when the sun, the volume or a lighting key changes; moving clouds rebuild it every frame where it has no more texels than the frame marches pixels, else march) instead of marching toward the sun per sample"));
   t.push_back(integer("light_volume_scale", &RenderSettings::light_volume_scale, 1, 16, "light volume texels: the volume's voxels divided by this on each axis (doubled until at most 4 M texels)"));
   t.push_back(enumeration("phase", &RenderSettings::phase, {"none", "hg", "mie", "two-lobe-hg", "draine-hg"},
                           "phase function: none (isotropic), Henyey-Greenstein (render.g), Mie table (cloudgen's "
