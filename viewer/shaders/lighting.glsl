@@ -10,7 +10,19 @@
 // d >= 1 is separated from every cell holding density by d - 1 whole cells, and trilinear density
 // reaches half a voxel (df_margin_m) past such a cell, so no point within (d - 1) * cell - margin of
 // any point of that cell (in L-infinity, so along any straight segment) has density > 0.
+//
+// Moving clouds in box mode read the distance field of make_frame's moved grid (FrameSetup::
+// moved_distance) in cells of moved_occ_cell_m from march_min_m: every point of an unmarked cell
+// is already free of density (the marking took the half voxel in), so no margin there, and the
+// thesis's large step (moved_clearance_m, what the moved grid's marking proves around any point of
+// an unmarked cell) holds from every such point too.
+bool moved_grid() { return CV_MODE_MOTION > 0.5 && !layer_mode(); }
 int empty_cells(vec3 p) {
+  if (moved_grid()) {  // as occupied()
+    ivec3 m = ivec3(floor((p - u_cloud.march_min_m) / u_cloud.moved_occ_cell_m));
+    ivec3 mn = ivec3(u_cloud.moved_occ_dims);
+    return distance_texel(ivec3(clamp_index(m.x, mn.x), clamp_index(m.y, mn.y), clamp_index(m.z, mn.z)));
+  }
   vec3 c = moving_uvw(p, motion_at(p)) * u_cloud.volume_dims / u_cloud.occ_cell_voxels;  // as occupied()
   ivec3 cell = ivec3(floor(c));
   ivec3 n = ivec3(u_cloud.occ_dims);
@@ -27,6 +39,7 @@ int empty_cells(vec3 p) {
 // plus that bend stays within r.
 Number empty_radius(vec3 p) {
   int d = empty_cells(p);
+  if (moved_grid()) return d >= 1 ? max(Number(d - 1) * u_cloud.moved_occ_cell_m, u_cloud.moved_clearance_m) : 0.0;
   if (d <= 1) return 0.0;
   Number r = Number(d - 1) * u_cloud.df_cell_m - u_cloud.df_margin_m;
   if (layer_mode()) r -= r * r / (2.0 * u_cloud.earth_radius_m);

@@ -49,12 +49,14 @@ struct CpuShader {
   const ref::AtmosphereParams& u_atmo;
   const std::vector<dvec3>* motion = nullptr;  // FrameSetup::motion_table (2 rows)
   const std::vector<uint8_t>* moved_occ = nullptr;  // FrameSetup::moved_occupancy (moving clouds, box mode)
+  const std::vector<uint8_t>* moved_dist = nullptr;  // FrameSetup::moved_distance (the same, distance skipping)
   const std::vector<double>* light_volume = nullptr;  ///< light_volume_dims texels, x fastest
 
   CpuShader(const ref::CloudParams& p, const PreparedVolume& v, const AtmosphereLuts& t,
             const FrameSetup* frame = nullptr)
       : u_cloud(p), vol(v), lut(t), u_atmo(t.params),
-        motion(frame ? &frame->motion_table : nullptr), moved_occ(frame ? &frame->moved_occupancy : nullptr) {}
+        motion(frame ? &frame->motion_table : nullptr), moved_occ(frame ? &frame->moved_occupancy : nullptr),
+        moved_dist(frame ? &frame->moved_distance : nullptr) {}
 
   vec3 transmittance_texel(ivec2 t) const { return lut.transmittance[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
   vec3 multiple_scattering_texel(ivec2 t) const {
@@ -176,6 +178,11 @@ struct CpuShader {
     return vol.occ[(size_t(c.z) * vol.occ_dims[1] + c.y) * vol.occ_dims[0] + c.x];
   }
   int distance_texel(ivec3 c) const {
+    if (u_cloud.motion_on > 0.5 && u_cloud.layer_on < 0.5) {  // the moved grid's field (lighting.glsl empty_cells)
+      const ivec3 n = ivec3(u_cloud.moved_occ_dims);
+      if (!moved_dist || moved_dist->size() != size_t(n.x) * n.y * n.z) return 0;  // none given: no jump
+      return (*moved_dist)[(size_t(c.z) * n.y + c.y) * n.x + c.x];
+    }
     return vol.dist[(size_t(c.z) * vol.occ_dims[1] + c.y) * vol.occ_dims[0] + c.x];
   }
   Number light_volume_texel(ivec3 t) const {

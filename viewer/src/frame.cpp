@@ -16,7 +16,8 @@ namespace {
 
 // Motion (cloudgen/motion.glsl): the parameters, the box the march must cover at this time and the
 // large step that keeps occupancy skipping exact while the clouds are displaced.
-void apply_motion(const RenderSettings& s, bool baked, double height, double moved_large_steps, ref::CloudParams& p) {
+void apply_motion(const RenderSettings& s, bool baked, double height, double moved_large_steps, double moved_clearance,
+                  ref::CloudParams& p) {
   p.march_min_m = p.volume_min_m;
   p.march_size_m = p.volume_size_m;
   p.time_s = s.time;
@@ -39,8 +40,9 @@ void apply_motion(const RenderSettings& s, bool baked, double height, double mov
   p.curl_shift = cloudgen::curl_shift(m, s.time, extent.y, p.curl_repeats.y);
   if (p.motion_on < 0.5) return;
   // Moving clouds: the distance field's jumps are proven for the still volume, and the light volume
-  // needs a rebuild every frame; the first gives way to the thesis scheme (made exact below), the
-  // second to the per-sample light march unless make_frame finds the rebuild cheaper.
+  // needs a rebuild every frame; the first gives way to the moved grid's field in box mode (make_frame)
+  // and the thesis scheme (made exact below) in layer mode, the second to the per-sample light march
+  // unless make_frame finds the rebuild cheaper.
   p.skip_distance = 0;
   p.df_light = 0;
   p.light_volume_on = 0;  // make_frame brings it back, rebuilt per frame, where that pays
@@ -72,6 +74,7 @@ void apply_motion(const RenderSettings& s, bool baked, double height, double mov
   double stretch = 1.0 + slope / height;
   if (p.layer_on < 0.5) p.large_step_count = moved_large_steps;  // box mode: the moved grid's clearance
   p.large_step_count = std::max(1.0, std::floor(p.large_step_count / stretch));
+  p.moved_clearance_m = p.layer_on < 0.5 ? moved_clearance / stretch : 0.0;
   double diag = glm::length(p.march_size_m);
   if (p.layer_on < 0.5) p.max_iterations = std::max(p.max_iterations, 4.0 * std::ceil(diag / p.step_m) + 64.0);
 }
@@ -255,7 +258,8 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   // vertically); the Earth's curvature bends a large step by d^2/2R, far below half a voxel.
   int k = std::max(1, int(std::floor(0.999 * (cell_m - 0.5 * min_voxel) / dt)));
   const int reach = layer ? 1 : moved_reach_cells(vol);
-  const int k_moved = std::max(1, int(std::floor(0.999 * (reach * cell_m - 0.5 * min_voxel) / dt)));
+  const double moved_clearance = reach * cell_m - 0.5 * min_voxel;  // from a point of an unmarked moved cell
+  const int k_moved = std::max(1, int(std::floor(0.999 * moved_clearance / dt)));
   double diag = glm::length(size);
   ref::CloudParams& p = f.params;
   p = ref::CloudParams{};  // zero: layer fields stay 0 in box mode
@@ -379,11 +383,21 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   }
   p.height_min_m = vol.height_min - cam.eye.y;
   p.height_size_m = vol.height_size;
-  apply_motion(s, vol.baked_motion, layer ? size.y : vol.height_size, k_moved, p);
+  apply_motion(s, vol.baked_motion, layer ? size.y : vol.height_size, k_moved, moved_clearance, p);
   if (p.motion_on > 0.5) {
     f.motion_table = motion_table_row(s, s.time);
     f.motion_table.insert(f.motion_table.end(), f.motion_table.begin(), f.motion_table.end());
     if (!layer) build_moved_occupancy(vol, f.motion_table, reach, p, f.moved_occupancy);
+    // Distance skipping while the clouds move (box mode): the moved grid's own distance field. Every
+    // point of an unmarked moved cell has density 0 (its static points are more than a cell from
+    // density), so a point in a cell at distance d >= 1 has only unmarked cells within d - 1
+    // cells in L-infinity: no density within (d - 1) moved cells along any straight segment; nor,
+    // by the large step's proof, within moved_clearance_m (lighting.glsl empty_radius).
+    if (!layer && distance) {
+      const glm::ivec3 n(p.moved_occ_dims);
+      f.moved_distance = occupancy_distance(f.moved_occupancy, {n.x, n.y, n.z}, false, {n.x, n.y, n.z}, 1);
+      p.skip_distance = 1;
+    }
   }
   // Moving clouds (box mode): the light volume over the march box from this frame's moving
   // density, rebuilt every frame (lighting.glsl light_volume_position), with the still grid's
