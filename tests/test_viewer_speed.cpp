@@ -45,6 +45,30 @@ double loop_trips(bool on_gl, const PreparedVolume& vol, RenderSettings s, const
 
 uint32_t lcg(uint32_t& h) { return (h = h * 1664525u + 1013904223u) >> 8; }
 
+// 60 voxels of density 1 at random places of a 64^3 box of 10 m voxels (the rest empty): what a
+// skipping radius one voxel too long gets wrong.
+cloudgen::Volume isolated_voxels(uint32_t seed) {
+  cloudgen::Volume sparse;
+  sparse.dims = {64, 64, 64};
+  sparse.voxel_size = 10;
+  sparse.origin = {-320, 200, -320};
+  sparse.density.assign(sparse.voxel_count(), 0.f);
+  uint32_t h = seed;
+  for (int i = 0; i < 60; ++i) {
+    uint32_t x = lcg(h) % 64, y = lcg(h) % 64, z = lcg(h) % 64;
+    sparse.density[sparse.index(x, y, z)] = 1.f;
+  }
+  return sparse;
+}
+
+// A volume, its settings and a camera for the skipping comparisons.
+struct SkipCase {
+  const char* name;
+  PreparedVolume vol;
+  RenderSettings s;
+  Camera cam;
+};
+
 // Brute force: the L-infinity cell distance from every cell to the nearest set cell, wrapping x and
 // z when asked; 255 when there is none (the field's cap).
 std::vector<int> brute_distance(const std::vector<uint8_t>& occ, const std::array<int, 3>& n, bool wrap) {
@@ -118,23 +142,8 @@ TEST(ViewerSpeed, DistanceFieldIsExactAndConservative) {
 // fewer loop trips. The isolated-voxel volume at grazing angles is what a radius one voxel too long
 // gets wrong: a field that claims one more cell than it proves shows up as a difference.
 TEST(ViewerSpeed, DistanceSkippingDoesNotChangeTheImage) {
-  cloudgen::Volume sparse;
-  sparse.dims = {64, 64, 64};
-  sparse.voxel_size = 10;
-  sparse.origin = {-320, 200, -320};
-  sparse.density.assign(sparse.voxel_count(), 0.f);
-  uint32_t h = 12345;
-  for (int i = 0; i < 60; ++i) {
-    uint32_t x = lcg(h) % 64, y = lcg(h) % 64, z = lcg(h) % 64;
-    sparse.density[sparse.index(x, y, z)] = 1.f;
-  }
-  struct Case {
-    const char* name;
-    PreparedVolume vol;
-    RenderSettings s;
-    Camera cam;
-  };
-  std::vector<Case> cases;
+  const cloudgen::Volume sparse = isolated_voxels(12345);
+  std::vector<SkipCase> cases;
   {
     PreparedVolume v = prepare_volume(synthetic_volume("blob"), 8, 2);
     Camera cam = default_camera(v, 60, 160.0 / 90);
@@ -147,7 +156,7 @@ TEST(ViewerSpeed, DistanceSkippingDoesNotChangeTheImage) {
     cam.target = v.center();
     cases.push_back({"isolated voxels", v, with({"render.sigma_t=0.5", "render.steps=256"}), cam});
   }
-  for (const Case& c : cases)
+  for (const SkipCase& c : cases)
     for (bool on_gl : {true, false}) {
       std::string what = std::string(c.name) + (on_gl ? " GL" : " CPU");
       RenderSettings none = c.s, dist = c.s, dist_light = c.s;
@@ -189,23 +198,8 @@ TEST(ViewerSpeed, DistanceSkippingDoesNotChangeTheImage) {
 // no skipping, bit for bit, on GL and the CPU reference, with fewer loop trips than the thesis
 // scheme on the same grid; a field one cell longer than the grid proves changes the image.
 TEST(ViewerSpeed, DistanceSkippingStaysExactWhileMoving) {
-  cloudgen::Volume sparse;
-  sparse.dims = {64, 64, 64};
-  sparse.voxel_size = 10;
-  sparse.origin = {-320, 200, -320};
-  sparse.density.assign(sparse.voxel_count(), 0.f);
-  uint32_t h = 777;
-  for (int i = 0; i < 60; ++i) {
-    uint32_t x = lcg(h) % 64, y = lcg(h) % 64, z = lcg(h) % 64;
-    sparse.density[sparse.index(x, y, z)] = 1.f;
-  }
-  struct Case {
-    const char* name;
-    PreparedVolume vol;
-    RenderSettings s;
-    Camera cam;
-  };
-  std::vector<Case> cases;
+  const cloudgen::Volume sparse = isolated_voxels(777);
+  std::vector<SkipCase> cases;
   {
     PreparedVolume v = prepare_volume(synthetic_volume("blob"), 4, 2);
     RenderSettings s = with({"render.steps=128", "motion.wind_speed=6", "motion.wind_shear=3"});
@@ -221,7 +215,7 @@ TEST(ViewerSpeed, DistanceSkippingStaysExactWhileMoving) {
     cam.target = v.center();
     cases.push_back({"isolated voxels", v, s, cam});
   }
-  for (const Case& c : cases)
+  for (const SkipCase& c : cases)
     for (bool on_gl : {true, false}) {
       std::string what = std::string(c.name) + (on_gl ? " GL" : " CPU");
       RenderSettings none = c.s, dist = c.s, thesis = c.s;
