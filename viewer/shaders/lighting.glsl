@@ -16,13 +16,8 @@
 // is already free of density (the marking took the half voxel in), so no margin there, and the
 // thesis's large step (moved_clearance_m, what the moved grid's marking proves around any point of
 // an unmarked cell) holds from every such point too.
-bool moved_grid() { return CV_MODE_MOTION > 0.5 && !layer_mode(); }
 int empty_cells(vec3 p) {
-  if (moved_grid()) {  // as occupied()
-    ivec3 m = ivec3(floor((p - u_cloud.march_min_m) / u_cloud.moved_occ_cell_m));
-    ivec3 mn = ivec3(u_cloud.moved_occ_dims);
-    return distance_texel(ivec3(clamp_index(m.x, mn.x), clamp_index(m.y, mn.y), clamp_index(m.z, mn.z)));
-  }
+  if (moved_grid()) return distance_texel(moved_cell(p));  // as occupied()
   vec3 c = moving_uvw(p, motion_at(p)) * u_cloud.volume_dims / u_cloud.occ_cell_voxels;  // as occupied()
   ivec3 cell = ivec3(floor(c));
   ivec3 n = ivec3(u_cloud.occ_dims);

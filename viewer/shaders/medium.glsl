@@ -180,12 +180,15 @@ Number cloud_density(vec3 p) {
 // can be displaced from lie within one cell of density (frame.cpp build_moved_occupancy). Marked
 // wherever density, or density a large step away, can be, and no motion-table read (on llvmpipe those reads were nearly all
 // of what moving clouds cost the thesis path: docs/motion.md).
+// The cell of that moved grid holding p (clamped into it), for occupied() and empty_cells().
+bool moved_grid() { return CV_MODE_MOTION > 0.5 && !layer_mode(); }
+ivec3 moved_cell(vec3 p) {
+  ivec3 m = ivec3(floor((p - u_cloud.march_min_m) / u_cloud.moved_occ_cell_m));
+  ivec3 mn = ivec3(u_cloud.moved_occ_dims);
+  return ivec3(clamp_index(m.x, mn.x), clamp_index(m.y, mn.y), clamp_index(m.z, mn.z));
+}
 bool occupied(vec3 p) {
-  if (CV_MODE_MOTION > 0.5 && !layer_mode()) {
-    ivec3 m = ivec3(floor((p - u_cloud.march_min_m) / u_cloud.moved_occ_cell_m));
-    ivec3 mn = ivec3(u_cloud.moved_occ_dims);
-    return occupancy_texel(ivec3(clamp_index(m.x, mn.x), clamp_index(m.y, mn.y), clamp_index(m.z, mn.z))) > 0.5;
-  }
+  if (moved_grid()) return occupancy_texel(moved_cell(p)) > 0.5;
   vec3 c = moving_uvw(p, motion_at(p)) * u_cloud.volume_dims / u_cloud.occ_cell_voxels;
   ivec3 cell = ivec3(floor(c));
   ivec3 n = ivec3(u_cloud.occ_dims);

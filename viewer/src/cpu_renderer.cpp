@@ -169,20 +169,20 @@ struct CpuShader {
 #endif
   }
   bool nanovdb_has_detail() const { return vol.has_detail; }
+  // A moving frame's grids over the march box (box mode; medium.glsl moved_grid): cell c of
+  // `grid`, or `none` when the frame did not give it.
+  bool reads_moved_grid() const { return u_cloud.motion_on > 0.5 && u_cloud.layer_on < 0.5; }
+  int moved_texel(const std::vector<uint8_t>* grid, ivec3 c, int none) const {
+    const ivec3 n = ivec3(u_cloud.moved_occ_dims);
+    if (!grid || grid->size() != size_t(n.x) * n.y * n.z) return none;
+    return (*grid)[(size_t(c.z) * n.y + c.y) * n.x + c.x];
+  }
   Number occupancy_texel(ivec3 c) const {
-    if (u_cloud.motion_on > 0.5 && u_cloud.layer_on < 0.5) {  // the march box's grid of a moving frame (medium.glsl occupied)
-      const ivec3 n = ivec3(u_cloud.moved_occ_dims);
-      if (!moved_occ || moved_occ->size() != size_t(n.x) * n.y * n.z) return 1.0;  // none given: may hold density
-      return (*moved_occ)[(size_t(c.z) * n.y + c.y) * n.x + c.x];
-    }
+    if (reads_moved_grid()) return moved_texel(moved_occ, c, 1);  // none given: may hold density
     return vol.occ[(size_t(c.z) * vol.occ_dims[1] + c.y) * vol.occ_dims[0] + c.x];
   }
   int distance_texel(ivec3 c) const {
-    if (u_cloud.motion_on > 0.5 && u_cloud.layer_on < 0.5) {  // the moved grid's field (lighting.glsl empty_cells)
-      const ivec3 n = ivec3(u_cloud.moved_occ_dims);
-      if (!moved_dist || moved_dist->size() != size_t(n.x) * n.y * n.z) return 0;  // none given: no jump
-      return (*moved_dist)[(size_t(c.z) * n.y + c.y) * n.x + c.x];
-    }
+    if (reads_moved_grid()) return moved_texel(moved_dist, c, 0);  // none given: no jump
     return vol.dist[(size_t(c.z) * vol.occ_dims[1] + c.y) * vol.occ_dims[0] + c.x];
   }
   Number light_volume_texel(ivec3 t) const {

@@ -90,7 +90,7 @@ void apply_motion(const RenderSettings& s, bool baked, double height, double mov
 // whole cells from density, so density is 0 at p and, along a large step of L (1 + G / H) <
 // reach x cell - voxel / 2, at every point of it: apply_motion's shortened large step keeps the
 // march exact as before. The moved grid's cells are `reach` static cells wide (see
-// PreparedVolume::moved_reach).
+// moved_reach_cells).
 void build_moved_occupancy(const PreparedVolume& vol, const std::vector<glm::dvec3>& table, int reach,
                            ref::CloudParams& p, std::vector<uint8_t>& out) {
   const double static_cell = vol.occ_cell * vol.voxel_size;
@@ -130,7 +130,7 @@ void build_moved_occupancy(const PreparedVolume& vol, const std::vector<glm::dve
   const int sx = sn[0], sy = sn[1], sz = sn[2];
   std::vector<uint32_t> local;
   const size_t sat_size = size_t(sy) * (sz + 1) * (sx + 1);
-  if (reach != vol.moved_reach || vol.moved_near_sat.size() != sat_size) local = moved_near_table(vol, reach);
+  if (reach != moved_reach_cells(vol) || vol.moved_near_sat.size() != sat_size) local = moved_near_table(vol, reach);
   const std::vector<uint32_t>& sat = local.empty() ? vol.moved_near_sat : local;
   auto at = [&](int y, int z, int x) { return sat[(size_t(y) * (sz + 1) + z) * (sx + 1) + x]; };
   // A span from span() as at most two ranges inside [0, n) (a wrapping axis may run past an end).

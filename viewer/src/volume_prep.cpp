@@ -62,8 +62,7 @@ void finish_occupancy(PreparedVolume& p) {
     holds = cloudgen::nano_occupancy(*p.nano, uint32_t(c), 0, od);
     if (holds.size() != p.occ.size()) holds.assign(p.occ.size(), 1);
     p.dist = occupancy_distance(holds, p.occ_dims, p.tiles, p.dims, p.occ_cell);
-    p.moved_reach = moved_reach_cells(p);
-    p.moved_near_sat = moved_near_table(p, p.moved_reach);
+    p.moved_near_sat = moved_near_table(p, moved_reach_cells(p));
     return;
   }
 #endif
@@ -75,8 +74,7 @@ void finish_occupancy(PreparedVolume& p) {
         if (row[size_t(x) * 4] > 0) cells[x / c] = 1;
     }
   p.dist = occupancy_distance(holds, p.occ_dims, p.tiles, p.dims, p.occ_cell);
-  p.moved_reach = moved_reach_cells(p);
-  p.moved_near_sat = moved_near_table(p, p.moved_reach);
+  p.moved_near_sat = moved_near_table(p, moved_reach_cells(p));
 }
 
 // The moved grid keeps cells of about this many voxels whatever render.occupancy_cell is: finer

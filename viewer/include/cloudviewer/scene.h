@@ -50,11 +50,10 @@ struct PreparedVolume {
   /// occupancy_distance. Distance skipping proves density 0 within (d - 1) cells - half a voxel.
   std::vector<uint8_t> dist;
   /// Moving clouds (box mode) skip through a grid make_frame builds every frame over the march box
-  /// (frame.cpp build_moved_occupancy), whose cells are `moved_reach` static cells wide and marked
-  /// where a static cell they can show lies within `moved_reach` cells of density. Built with the
-  /// grid (moved_near_table): per static y layer, a summed-area table over (x, z) of those cells,
-  /// (occ_dims.z + 1) x (occ_dims.x + 1) entries per layer, so no frame rebuilds it.
-  int moved_reach = 1;
+  /// (frame.cpp build_moved_occupancy), whose cells are moved_reach_cells(*this) static cells wide
+  /// and marked where a static cell they can show lies within that many cells of density. Built
+  /// with the grid (moved_near_table): per static y layer, a summed-area table over (x, z) of those
+  /// cells, (occ_dims.z + 1) x (occ_dims.x + 1) entries per layer, so no frame rebuilds it.
   std::vector<uint32_t> moved_near_sat;
   double occupied_fraction = 0;
   /// The box the motion measures heights in (y, world metres): the whole preset's when the file
