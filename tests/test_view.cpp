@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "cloudgen/erosion.h"
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
 #include "cloudgen/preset.h"

@@ -15,6 +15,7 @@
 
 #include <gtest/gtest.h>
 
+#include "cloudgen/erosion.h"
 #include "cloudviewer/app.h"
 #include "cloudviewer/errors.h"
 
@@ -250,6 +251,117 @@ TEST(ViewerSpeed, DistanceSkippingStaysExactWhileMoving) {
         EXPECT_GT(max_abs_diff(a.linear, render(on_gl, c.vol, bad).linear), 0.01) << what << ": the check can fail";
       }
     }
+}
+
+// The bound behind the eroded field (cloudgen/erosion.glsl erosion_bound): wherever a trilinear
+// mix of eight texels, seen at a height in [h0, h1], keeps density after erosion, one of the eight
+// has a bound above zero. Random texels, weights and heights, near the threshold on purpose.
+TEST(ViewerSpeed, ErosionBoundHoldsForEveryTrilinearMix) {
+  namespace eg = cloudgen::erosion_glsl;
+  uint32_t h = 99;
+  auto unit = [&h] { return double(lcg(h) % 100001) / 100000.0; };
+  int positive = 0;
+  for (int trial = 0; trial < 200000; ++trial) {
+    const double erosion = 0.05 + 0.9 * unit();
+    const double h0 = 0.3 * unit() - 0.05, h1 = h0 + 0.1 * unit();
+    double base[8], g[8], b[8], a[8], w[8], sum = 0;
+    for (int k = 0; k < 8; ++k) {
+      base[k] = 0.6 * unit(), g[k] = unit(), b[k] = unit(), a[k] = unit();
+      w[k] = unit();
+      sum += w[k];
+    }
+    double mb = 0, mg = 0, mbl = 0, ma = 0, best = -1e9;
+    for (int k = 0; k < 8; ++k) {
+      mb += w[k] / sum * base[k], mg += w[k] / sum * g[k], mbl += w[k] / sum * b[k], ma += w[k] / sum * a[k];
+      best = std::max(best, eg::erosion_bound(base[k], eg::erosion_detail(g[k], b[k], a[k]), h0, h1, erosion));
+    }
+    const double seen = h0 + (h1 - h0) * unit();
+    const double kept = cloudgen::eroded_density(mb, mg, mbl, ma, seen, erosion);
+    if (kept > 0) {
+      ++positive;
+      ASSERT_GT(best, 0.0) << "trial " << trial << ": density " << kept << " after erosion " << erosion
+                           << " at h " << seen << " in [" << h0 << ", " << h1 << "], every texel's bound " << best;
+    }
+  }
+  EXPECT_GT(positive, 1000) << "enough mixes keep density for the check to mean something";
+}
+
+// The eroded distance field (fit_distance_field, docs/viewer-speed.md): cells whose base the
+// erosion removes are empty too, so distance skipping jumps farther, and the image stays the plain
+// march's bit for bit: still and moving (the up flow's height slack), box and layer placement
+// (moving layers skip by the thesis scheme), GL and CPU. A field built for a stronger erosion than the frame's changes the image (the rule is
+// what keeps it exact), and make_frame does not trust a field its settings are not covered by.
+TEST(ViewerSpeed, ErodedFieldSkipsExactly) {
+  struct ErodedCase {
+    const char* name;
+    const char* input;
+    std::vector<const char*> sets;
+    double time;
+  };
+  const std::vector<ErodedCase> cases = {
+      {"blob", "blob", {}, 0},
+      {"blob moving", "blob", {"motion.wind_speed=6", "motion.wind_shear=3", "motion.flow_up=200"}, 40},
+      {"layer", "noise", {"render.mode=layer", "render.steps=64"}, 0},
+  };
+  for (const ErodedCase& c : cases) {
+    RenderSettings s = with({"render.steps=128"});
+    for (const char* a : c.sets) apply_setting(s, a);
+    s.time = c.time;
+    const PreparedVolume base = prepare_volume(synthetic_volume(c.input), 4, 2);
+    ASSERT_EQ(base.dist_rule.erosion, 0.0) << c.name << ": prepare_volume builds the base field";
+    PreparedVolume vol = base;
+    ASSERT_TRUE(fit_distance_field(vol, s)) << c.name;
+    EXPECT_EQ(vol.dist_rule.erosion, s.erosion) << c.name;
+    EXPECT_EQ(vol.dist_rule.height_slack > 0, c.time != 0) << c.name;
+    EXPECT_FALSE(fit_distance_field(vol, s)) << c.name << ": fitted once";
+    size_t held_base = 0, held = 0;
+    for (size_t i = 0; i < vol.dist.size(); ++i) held_base += base.dist[i] == 0, held += vol.dist[i] == 0;
+    std::cout << c.name << ": cells holding density " << held_base << " (base) / " << held << " (eroded)\n";
+    EXPECT_LT(double(held), 0.95 * double(held_base)) << c.name << ": the erosion empties cells";
+    const Camera cam = default_camera(vol, s, 60, 160.0 / 90);
+    const Sun sun = default_sun(cam);
+    for (bool on_gl : {true, false}) {
+      const std::string what = std::string(c.name) + (on_gl ? " GL" : " CPU");
+      RenderSettings none = s, dist = s;
+      none.skipping = Skipping::None;
+      dist.skipping = Skipping::Distance;
+      const FrameSetup fd = make_frame(vol, dist, cam, sun, 160, 90);
+      ASSERT_EQ(fd.params.skip_distance, 1.0) << what;
+      FrameImages a = render(on_gl, vol, make_frame(vol, none, cam, sun, 160, 90));
+      FrameImages b = render(on_gl, vol, fd);
+      EXPECT_GT(image_stats(a.display).stddev, 0.01) << what << ": a picture to compare";
+      EXPECT_EQ(max_abs_diff(a.linear, b.linear), 0.0) << what;
+      EXPECT_EQ(max_abs_diff(a.display, b.display), 0.0) << what;
+      const double t_base = loop_trips(on_gl, base, dist, cam, 160, 90), t_eroded = loop_trips(on_gl, vol, dist, cam, 160, 90);
+      std::cout << what << ": loop trips with the base / eroded field " << t_base << " / " << t_eroded << "\n";
+      EXPECT_LT(t_eroded, 0.97 * t_base) << what;
+      if (c.time == 0) {
+        // Sensitivity: a field built for erosion 0.8 and trusted at 0.35 skips density.
+        PreparedVolume lie = vol;
+        FieldRule strong = vol.dist_rule;
+        strong.erosion = 0.8;
+        build_distance_field(lie, strong);
+        lie.dist_rule = FieldRule{};
+        EXPECT_GT(max_abs_diff(a.linear, render(on_gl, lie, make_frame(lie, dist, cam, sun, 160, 90)).linear), 0.01)
+            << what << ": the check can fail";
+      }
+    }
+    // Less erosion than the field assumed, or curl moving the detail: not covered, so the frame skips
+    // by the thesis scheme, and fit_distance_field rebuilds.
+    RenderSettings weaker = s, curl = s;
+    weaker.erosion = 0.2;
+    curl.motion.curl_amplitude = 100;
+    EXPECT_EQ(make_frame(vol, weaker, cam, sun, 16, 9).params.skip_distance, 0.0) << c.name;
+    EXPECT_EQ(make_frame(vol, curl, cam, sun, 16, 9).params.skip_distance, 0.0) << c.name;
+    RenderSettings stronger = s;
+    stronger.erosion = 0.5;
+    EXPECT_EQ(make_frame(vol, stronger, cam, sun, 16, 9).params.skip_distance, 1.0) << c.name << ": still exact";
+    PreparedVolume refit = vol;
+    EXPECT_TRUE(fit_distance_field(refit, weaker)) << c.name;
+    EXPECT_EQ(make_frame(refit, weaker, cam, sun, 16, 9).params.skip_distance, 1.0) << c.name;
+    EXPECT_TRUE(fit_distance_field(refit, curl)) << c.name;
+    EXPECT_EQ(refit.dist_rule.erosion, 0.0) << c.name << ": curl: the base field";
+  }
 }
 
 // The light volume's optical depth against the per-sample light march (CPU, double precision), at

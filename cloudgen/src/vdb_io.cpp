@@ -19,6 +19,7 @@
 #include <set>
 #include <sstream>
 
+#include "cloudgen/erosion.h"
 #include "cloudgen/io.h"
 #include "cloudgen/motion.h"
 #include "cloudgen/view.h"

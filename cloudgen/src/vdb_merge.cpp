@@ -9,6 +9,7 @@
 
 #include <algorithm>
 
+#include "cloudgen/erosion.h"
 #include "cloudgen/motion.h"
 #include "cloudgen/scale.h"
 #include "cloudgen/view.h"

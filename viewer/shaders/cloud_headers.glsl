@@ -13,6 +13,7 @@
 #include "phase_lobes.glsl"
 #include "phase.glsl"
 #include "cloud_type.glsl"
+#include "erosion.glsl"
 #include "motion.glsl"
 #include "curl_distortion.glsl"
 #include "medium.glsl"

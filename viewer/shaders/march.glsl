@@ -4,6 +4,7 @@
 //   common.glsl     hashing and jitter, index wrapping, ray intersections, pixel rays
 //   phase.glsl      phase functions
 //   cloud_type.glsl cloud-type height gradients (cloudgen/include/cloudgen, shared with cloudgen)
+//   erosion.glsl    detail erosion and its bound (cloudgen, shared with its bake and the distance field)
 //   medium.glsl     density, box and layer placement, occupancy
 //   lighting.glsl   distance-field radius, Beer-Lambert, powder, step integration, light march and
 //                   light volume, ground lighting

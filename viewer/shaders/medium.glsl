@@ -4,7 +4,7 @@
 // the tileable texture repeats over a cloud layer between two altitudes over a curved Earth, a 2D
 // coverage map says where clouds are and the cloud-type height gradient (cloudgen's
 // cloud_type.glsl, shared with cloudgen) shapes their profile.
-// Needs common.glsl, cloud_type.glsl, `u_cloud` and the lookups volume_texel, volume_filtered,
+// Needs common.glsl, cloud_type.glsl, erosion.glsl, `u_cloud` and the lookups volume_texel, volume_filtered,
 // occupancy_texel, coverage_texel and coverage_size (see march.glsl).
 
 // Trilinear filter done by hand from texel fetches: texel centres at (i + 0.5) / n, x and z
@@ -159,13 +159,11 @@ Number cloud_density(vec3 p) {
       vec4 w = CV_MODE_EXACT_FILTER > 0.5 ? volume_trilinear(q) : volume_filtered(q);
       dv = vec3(w.y, w.z, w.w);
     }
-    Number detail = dot(dv, vec3(0.625, 0.25, 0.125));
-    // Wispy (inverted detail) near the cloud base, billowy higher up (Schneider 2015): a rule of
-    // the altitude, so taken where the sample is seen, not where the moving cloud came from (a
-    // baked motion frame, which moves the channels, then erodes exactly like the moving volume).
-    detail = mix(1.0 - detail, detail, clamp(seen_h * 5.0, 0.0, 1.0));
-    Number e = erosion * detail;
-    base = clamp((base - e) / max(1.0 - e, 1e-4), 0.0, 1.0);
+    // Wispy (inverted detail) near the cloud base, billowy higher up (cloudgen/erosion.glsl): a
+    // rule of the altitude, so taken where the sample is seen, not where the moving cloud came from
+    // (a baked motion frame, which moves the channels, then erodes exactly like the moving volume).
+    Number e = erosion_threshold(erosion_detail(dv.x, dv.y, dv.z), seen_h, erosion);
+    base = eroded_base(base, e);
   }
   return max(base, 0.0) * u_cloud.density_scale;
 }

@@ -344,6 +344,9 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
     // Frame i: the clouds' time advances 1/fps per frame, the jitter (and temporal) pattern by one.
     s.time = o.settings.time + (o.fps > 0 ? double(i) / o.fps : 0.0);
     s.frame = o.settings.frame + i;
+    // The eroded distance field follows the frame's erosion and motion (a sequence that starts
+    // still and then moves needs the up flow's slack).
+    if (fit_distance_field(vol, s) && renderer) renderer->set_distance_field(vol);
     FrameSetup frame = make_frame(vol, s, cam, sun, o.width, o.height);
     FrameImages img;
     auto r0 = std::chrono::steady_clock::now();

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <iomanip>
 #include <map>
+#include <tuple>
 #include <ostream>
 #include <sstream>
 
@@ -239,18 +240,22 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
   // interleave all configurations in a rotating order, and the fastest round counts (best of N),
   // so a burst of other work slows one sample of each, not one whole configuration.
   const size_t nc = configs.size(), nfr = frames.size();
-  // Configurations may change the occupancy grid (cell, padding): one volume per grid.
-  std::map<std::pair<int, int>, PreparedVolume> grids;
+  // Configurations may change the occupancy grid (cell, padding) and the distance field's rule
+  // (erosion, motion: field_rule): one volume per grid and rule.
+  std::map<std::tuple<int, int, FieldRule>, PreparedVolume> grids;
   auto grid_for = [&](const RenderSettings& s) -> const PreparedVolume& {
-    std::pair<int, int> key{s.occupancy_cell, s.occupancy_padding};
-    if (key == std::make_pair(vol.occ_cell, vol.occ_padding)) return vol;
+    const auto key = std::make_tuple(s.occupancy_cell, s.occupancy_padding, field_rule(vol, s));
+    if (key == std::make_tuple(vol.occ_cell, vol.occ_padding, vol.dist_rule)) return vol;
     auto it = grids.find(key);
     if (it == grids.end()) {
       PreparedVolume copy = vol;
-      build_occupancy(copy, key.first, key.second);
-      out << "occupancy grid of " << key.first << "-voxel cells, padding " << key.second << ": "
-          << std::lround(copy.occupied_fraction * 100) << "% occupied (base grid "
-          << std::lround(vol.occupied_fraction * 100) << "%)\n";
+      const bool cells = s.occupancy_cell != vol.occ_cell || s.occupancy_padding != vol.occ_padding;
+      if (cells) build_occupancy(copy, s.occupancy_cell, s.occupancy_padding);
+      build_distance_field(copy, std::get<2>(key));
+      if (cells)
+        out << "occupancy grid of " << s.occupancy_cell << "-voxel cells, padding " << s.occupancy_padding << ": "
+            << std::lround(copy.occupied_fraction * 100) << "% occupied (base grid "
+            << std::lround(vol.occupied_fraction * 100) << "%)\n";
       it = grids.emplace(key, std::move(copy)).first;
     }
     return it->second;

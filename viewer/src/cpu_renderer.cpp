@@ -217,6 +217,7 @@ struct CpuShader {
 #include "cloudgen/phase_lobes.glsl"
 #include "../shaders/phase.glsl"
 #include "cloudgen/cloud_type.glsl"
+#include "cloudgen/erosion.glsl"
 #include "cloudgen/motion.glsl"
 #include "cloudgen/curl_distortion.glsl"
 #include "../shaders/medium.glsl"

@@ -14,6 +14,10 @@ namespace cloudviewer {
 
 namespace {
 
+// Whether the clouds move in this frame: a time, a motion that moves, and not a baked frame (already
+// displaced).
+bool clouds_move(const RenderSettings& s, bool baked) { return s.time != 0 && cloudgen::motion_moves(s.motion) && !baked; }
+
 // Motion (cloudgen/motion.glsl): the parameters, the box the march must cover at this time and the
 // large step that keeps occupancy skipping exact while the clouds are displaced.
 void apply_motion(const RenderSettings& s, bool baked, double height, double moved_large_steps, double moved_clearance,
@@ -30,7 +34,7 @@ void apply_motion(const RenderSettings& s, bool baked, double height, double mov
   p.flow_speed_hz = m.flow_speed;
   p.flow_up_m = m.flow_up;
   p.flow_forward_m = m.flow_forward;
-  p.motion_on = s.time != 0 && cloudgen::motion_moves(m) && !baked ? 1 : 0;
+  p.motion_on = clouds_move(s, baked) ? 1 : 0;
   // The curl distortion of the detail lookup (cloudgen/curl_distortion.glsl), over the box or the
   // repeating texture; a baked frame already holds it.
   const glm::dvec3 extent = p.layer_on > 0.5 ? glm::dvec3(p.tile_x_m, p.layer_top_m - p.layer_bottom_m, p.tile_z_m)
@@ -91,7 +95,7 @@ void apply_motion(const RenderSettings& s, bool baked, double height, double mov
 // reach x cell - voxel / 2, at every point of it: apply_motion's shortened large step keeps the
 // march exact as before. The moved grid's cells are `reach` static cells wide (see
 // moved_reach_cells).
-void build_moved_occupancy(const PreparedVolume& vol, const std::vector<glm::dvec3>& table, int reach,
+void build_moved_occupancy(const PreparedVolume& vol, const std::vector<glm::dvec3>& table, int reach, bool use_dist,
                            ref::CloudParams& p, std::vector<uint8_t>& out) {
   const double static_cell = vol.occ_cell * vol.voxel_size;
   const double cell = reach * static_cell;
@@ -130,7 +134,8 @@ void build_moved_occupancy(const PreparedVolume& vol, const std::vector<glm::dve
   const int sx = sn[0], sy = sn[1], sz = sn[2];
   std::vector<uint32_t> local;
   const size_t sat_size = size_t(sy) * (sz + 1) * (sx + 1);
-  if (reach != moved_reach_cells(vol) || vol.moved_near_sat.size() != sat_size) local = moved_near_table(vol, reach);
+  if (!use_dist || reach != moved_reach_cells(vol) || vol.moved_near_sat.size() != sat_size)
+    local = moved_near_table(vol, reach, use_dist);
   const std::vector<uint32_t>& sat = local.empty() ? vol.moved_near_sat : local;
   auto at = [&](int y, int z, int x) { return sat[(size_t(y) * (sz + 1) + z) * (sx + 1) + x]; };
   // A span from span() as at most two ranges inside [0, n) (a wrapping axis may run past an end).
@@ -229,6 +234,32 @@ void set_phase_params(ref::CloudParams& p, const RenderSettings& s) {
   p.draine_g_hg = fit.g_hg, p.draine_g_d = fit.g_d, p.draine_alpha = fit.alpha, p.draine_w_d = fit.w_d;
 }
 
+FieldRule field_rule(const PreparedVolume& vol, const RenderSettings& s) {
+  FieldRule r;
+  const double curl = vol.baked_motion ? 0.0 : s.motion.curl_amplitude;  // as apply_motion
+  if (!s.eroded_field || !vol.has_detail || !(s.erosion > 0) || curl != 0 || vol.nano) return r;
+  r.erosion = s.erosion;
+  r.layer = s.mode == PlaceMode::Layer;
+  if (clouds_move(s, vol.baked_motion)) {
+    // motion.glsl: the up displacement is h (offset(t) - offset(0)) flow_up with h <= 1 and each
+    // offset in [-1, 1] (a flow map image too), so the seen height moves at most 2 |flow_up| / H.
+    glm::dvec2 alt = r.layer ? layer_altitudes(vol, s) : glm::dvec2(0.0, vol.height_size);
+    r.height_slack = 2.0 * std::abs(s.motion.flow_up) / std::max(alt.y - alt.x, 1e-9);
+  }
+  return r;
+}
+
+bool fit_distance_field(PreparedVolume& vol, const RenderSettings& s) {
+  if (vol.dist.empty()) return false;
+  const FieldRule need = field_rule(vol, s);
+  // Rebuilt when it does not serve the frame, or when the frame erodes and the field does not yet:
+  // a frame that erodes more than the field assumed, or moves less, keeps it (still exact).
+  const bool base_only = !(vol.dist_rule.erosion > 0);
+  if (field_covers(vol.dist_rule, need) && !(base_only && need.erosion > 0)) return false;
+  build_distance_field(vol, need);
+  return true;
+}
+
 FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const Camera& cam,
                       const Sun& sun, int width, int height) {
   FrameSetup f;
@@ -257,7 +288,10 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   // In layer mode cells are measured in the smallest world voxel edge (the texture may be stretched
   // vertically); the Earth's curvature bends a large step by d^2/2R, far below half a voxel.
   int k = std::max(1, int(std::floor(0.999 * (cell_m - 0.5 * min_voxel) / dt)));
-  const int reach = layer ? 1 : moved_reach_cells(vol);
+  // The distance field serves this frame only if it was built for an erosion and motion no
+  // stronger than the frame's (field_covers); otherwise the thesis scheme on the padded grid.
+  const bool field_ok = !vol.dist.empty() && field_covers(vol.dist_rule, field_rule(vol, s));
+  const int reach = layer || !field_ok ? 1 : moved_reach_cells(vol);
   const double moved_clearance = reach * cell_m - 0.5 * min_voxel;  // from a point of an unmarked moved cell
   const int k_moved = std::max(1, int(std::floor(0.999 * moved_clearance / dt)));
   double diag = glm::length(size);
@@ -293,7 +327,7 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   p.adaptive_start_m = s.adaptive_start > 0 ? s.adaptive_start : 0.25 * max_extent;
   p.adaptive_growth_per_m = s.adaptive_growth > 0 ? s.adaptive_growth : 4.0 / max_extent;
   const bool skipping = s.occupancy && s.skipping != Skipping::None;
-  const bool distance = skipping && s.skipping == Skipping::Distance && !vol.dist.empty();
+  const bool distance = skipping && s.skipping == Skipping::Distance && field_ok;
   p.occupancy_skip = skipping ? 1 : 0;
   p.skip_distance = distance ? 1 : 0;
   // The distance field's empty radius (march.glsl, empty_radius): d cells of the smallest world
@@ -387,7 +421,7 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   if (p.motion_on > 0.5) {
     f.motion_table = motion_table_row(s, s.time);
     f.motion_table.insert(f.motion_table.end(), f.motion_table.begin(), f.motion_table.end());
-    if (!layer) build_moved_occupancy(vol, f.motion_table, reach, p, f.moved_occupancy);
+    if (!layer) build_moved_occupancy(vol, f.motion_table, reach, field_ok, p, f.moved_occupancy);
     // Distance skipping while the clouds move (box mode): the moved grid's own distance field. Every
     // point of an unmarked moved cell has density 0 (its static points are more than a cell from
     // density), so a point in a cell at distance d >= 1 has only unmarked cells within d - 1

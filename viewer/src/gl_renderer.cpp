@@ -400,6 +400,7 @@ struct GlRenderer::Impl {
   std::vector<Target> targets = make_targets();
   std::vector<Pass> passes = make_passes();
   GLuint tex_volume = 0, tex_occ = 0, tex_dist = 0, tex_mie = 0, tex_coverage = 0, tex_motion = 0, tex_curl = 0;
+  glm::ivec3 dist_dims{0};  // the distance field texture's cells (set_distance_field re-uploads into it)
   GLuint tex_moved_occ = 0;           // FrameSetup::moved_occupancy (R8), bound for occupied() while clouds move
   GLuint tex_moved_dist = 0;          // FrameSetup::moved_distance (R8UI), bound for empty_cells() likewise
   glm::ivec3 moved_occ_dims{0, 0, 0};  // its allocated size
@@ -1105,12 +1106,10 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
   // The distance field (integer cells, texelFetch only).
   glCreateTextures(GL_TEXTURE_3D, 1, &m.tex_dist);
   glTextureStorage3D(m.tex_dist, 1, GL_R8UI, vol.occ_dims[0], vol.occ_dims[1], vol.occ_dims[2]);
-  std::vector<uint8_t> dist = vol.dist;
-  dist.resize(vol.occ.size(), 1);  // a volume prepared without the field: the thesis's one cell
-  glTextureSubImage3D(m.tex_dist, 0, 0, 0, 0, vol.occ_dims[0], vol.occ_dims[1], vol.occ_dims[2], GL_RED_INTEGER,
-                      GL_UNSIGNED_BYTE, dist.data());
   glTextureParameteri(m.tex_dist, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTextureParameteri(m.tex_dist, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  m.dist_dims = glm::ivec3(vol.occ_dims[0], vol.occ_dims[1], vol.occ_dims[2]);
+  set_distance_field(vol);
   m.volume_serial += 1;
   m.light_key.clear();
   m.shadow_key.clear();
@@ -1118,6 +1117,16 @@ void GlRenderer::set_volume(const PreparedVolume& vol) {
   m.have_volume = true;
   m.history_valid = false;
   if (glGetError() != GL_NO_ERROR) throw GlError("uploading the volume textures failed (out of GPU memory?)");
+}
+
+void GlRenderer::set_distance_field(const PreparedVolume& vol) {
+  Impl& m = *impl_;
+  const glm::ivec3 n(vol.occ_dims[0], vol.occ_dims[1], vol.occ_dims[2]);
+  if (!m.tex_dist || n != m.dist_dims) throw GlError("set_distance_field: not the grid set_volume uploaded");
+  std::vector<uint8_t> dist = vol.dist;
+  dist.resize(vol.occ.size(), 1);  // a volume prepared without the field: the thesis's one cell
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTextureSubImage3D(m.tex_dist, 0, 0, 0, 0, n.x, n.y, n.z, GL_RED_INTEGER, GL_UNSIGNED_BYTE, dist.data());
 }
 
 void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {

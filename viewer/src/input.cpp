@@ -79,7 +79,9 @@ PreparedVolume prepare_dense(const cloudgen::Volume& v, const std::string& input
                      std::to_string(v.dims[1]) + "x" + std::to_string(v.dims[2]) + " voxels) needs " + mib(need) +
                      ", more than render.dense_budget=" + mib(dense_budget_bytes(s)) +
                      "; use render.volume=nanovdb or auto, or raise the budget");
-  return prepare_volume(v, s.occupancy_cell, s.occupancy_padding);
+  PreparedVolume p = prepare_volume(v, s.occupancy_cell, s.occupancy_padding);
+  fit_distance_field(p, s);  // the eroded field for the settings the input opens with
+  return p;
 }
 
 }  // namespace
@@ -121,7 +123,9 @@ PreparedVolume open_input(const std::string& input, const RenderSettings& s) {
   }
   return prepare_dense(v, input, s);
 #else
-  return prepare_volume(load_volume(input), s.occupancy_cell, s.occupancy_padding);
+  PreparedVolume p = prepare_volume(load_volume(input), s.occupancy_cell, s.occupancy_padding);
+  fit_distance_field(p, s);
+  return p;
 #endif
 }
 

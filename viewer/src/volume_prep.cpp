@@ -11,6 +11,7 @@
 
 #include "cloudviewer/errors.h"
 #include "cloudviewer/scene.h"
+#include "cloudgen/erosion.h"
 
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
 #include "cloudgen/nvdb.h"
@@ -51,11 +52,32 @@ void finish_occupancy(PreparedVolume& p) {
   size_t count = 0;
   for (uint8_t o : p.occ) count += o ? 1 : 0;
   p.occupied_fraction = p.occ.empty() ? 0 : double(count) / double(p.occ.size());
+  build_distance_field(p, p.dist_rule);
+}
+
+// Filtered lookups land within a rounding of the convex combination erosion_bound bounds: a texel
+// counts as holding density unless its bound is below minus this (relative to 1 + its base).
+constexpr double kErosionBoundMargin = 1e-4;
+
+// The moved grid keeps cells of about this many voxels whatever render.occupancy_cell is: finer
+// static cells serve the still frame's distance jumps, but a moved grid as fine would make each
+// moving frame's large steps half (a quarter) as long and its per-frame build 8 (64) times the cells.
+constexpr int kMovedCellVoxels = 8;
+
+}  // namespace
+
+bool field_covers(const FieldRule& built, const FieldRule& needed) {
+  if (built.erosion <= 0) return true;  // the base alone: whatever erodes, moves or is placed
+  return needed.erosion >= built.erosion && needed.layer == built.layer && needed.height_slack <= built.height_slack;
+}
+
+void build_distance_field(PreparedVolume& p, const FieldRule& rule) {
   // The distance field counts cells to the nearest cell that holds density (the grid before its
   // padding): the empty radius (lighting.glsl) accounts for trilinear reach itself, so the padding,
   // which only the thesis's one-cell step needs, would shorten every jump by its width.
   const int c = p.occ_cell;
   std::vector<uint8_t> holds(p.occ.size(), 0);
+  p.dist_rule = FieldRule{};
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
   if (p.nano) {  // no dense copy: the cells holding active voxels (a superset of density > 0), unpadded
     std::array<uint32_t, 3> od{};
@@ -66,31 +88,47 @@ void finish_occupancy(PreparedVolume& p) {
     return;
   }
 #endif
+  const bool eroded = rule.erosion > 0 && p.has_detail;
+  if (eroded) p.dist_rule = rule;
   for (int z = 0; z < p.dims[2]; ++z)
     for (int y = 0; y < p.dims[1]; ++y) {
+      // The heights the texels of this row are seen at: their trilinear reach (a voxel either side
+      // of the centre), in the layer's or the box's height fractions, widened by the slack.
+      double h0 = 0, h1 = 0;
+      if (eroded) {
+        if (rule.layer) {
+          h0 = (y - 0.5) / p.dims[1], h1 = (y + 1.5) / p.dims[1];
+        } else {
+          h0 = (p.origin.y + (y - 0.5) * p.voxel_size - p.height_min) / p.height_size;
+          h1 = (p.origin.y + (y + 1.5) * p.voxel_size - p.height_min) / p.height_size;
+        }
+        h0 -= rule.height_slack, h1 += rule.height_slack;
+      }
       const float* row = &p.rgba[((size_t(z) * p.dims[1] + y) * p.dims[0]) * 4];
       uint8_t* cells = &holds[(size_t(z / c) * p.occ_dims[1] + y / c) * p.occ_dims[0]];
-      for (int x = 0; x < p.dims[0]; ++x)
-        if (row[size_t(x) * 4] > 0) cells[x / c] = 1;
+      for (int x = 0; x < p.dims[0]; ++x) {
+        const float* t = row + size_t(x) * 4;
+        const double base = t[0];
+        if (!(base > 0)) continue;
+        if (eroded) {
+          namespace eg = cloudgen::erosion_glsl;
+          const double bound = eg::erosion_bound(base, eg::erosion_detail(t[1], t[2], t[3]), h0, h1, rule.erosion);
+          if (bound < -kErosionBoundMargin * (1.0 + base)) continue;
+        }
+        cells[x / c] = 1;
+      }
     }
   p.dist = occupancy_distance(holds, p.occ_dims, p.tiles, p.dims, p.occ_cell);
   p.moved_near_sat = moved_near_table(p, moved_reach_cells(p));
 }
-
-// The moved grid keeps cells of about this many voxels whatever render.occupancy_cell is: finer
-// static cells serve the still frame's distance jumps, but a moved grid as fine would make each
-// moving frame's large steps half (a quarter) as long and its per-frame build 8 (64) times the cells.
-constexpr int kMovedCellVoxels = 8;
-
-}  // namespace
 
 int moved_reach_cells(const PreparedVolume& vol) {
   if (vol.dist.empty() || vol.dist.size() != vol.occ.size() || vol.occ_cell <= 0) return 1;
   return std::max(1, kMovedCellVoxels / vol.occ_cell);
 }
 
-std::vector<uint32_t> moved_near_table(const PreparedVolume& vol, int reach) {
-  const bool use_dist = vol.dist.size() == vol.occ.size();
+std::vector<uint32_t> moved_near_table(const PreparedVolume& vol, int reach, bool use_dist) {
+  use_dist = use_dist && vol.dist.size() == vol.occ.size();
   const int sx = vol.occ_dims[0], sy = vol.occ_dims[1], sz = vol.occ_dims[2];
   if (vol.occ.size() != size_t(sx) * sy * sz) return {};
   std::vector<uint32_t> sat(size_t(sy) * (sz + 1) * (sx + 1), 0);

@@ -278,6 +278,9 @@ int run_window(const Options& o, std::ostream& out, std::ostream& err) {
     if (fw < 1 || fh < 1) continue;
     settings.frame = frame;
     Camera cam = camera_of(view, o.fov);
+    // The panel and the keys change the erosion and the motion: the field follows (a few ms on the
+    // thesis volume; exact meanwhile, since make_frame never trusts a field that does not cover).
+    if (fit_distance_field(vol, settings)) renderer.set_distance_field(vol);
     FrameSetup fs = make_frame(vol, settings, cam, sun, fw, fh);
     GpuTimings t;
     renderer.render(fs, &t);

@@ -76,18 +76,6 @@ struct Look {
     return (sigma_t > 0 ? sigma_t : default_extinction_per_metre(voxel_size)) * density;
   }
 };
-/// The viewer's erosion of base density `base` by detail channels g, b, a at height fraction `h`
-/// (0 at the bottom of the cloud's box, 1 at its top): viewer/shaders/cloud_functions.glsl's
-/// cloud_density, which applies it only when all three detail channels exist.
-inline double eroded_density(double base, double g, double b, double a, double h, double erosion) {
-  if (!(erosion > 0) || !(base > 0)) return std::max(base, 0.0);
-  double detail = 0.625 * g + 0.25 * b + 0.125 * a;
-  const double t = std::clamp(h * 5.0, 0.0, 1.0);
-  detail = (1.0 - detail) + t * (2.0 * detail - 1.0);  // wispy (inverted) near the base
-  const double e = erosion * detail;
-  return std::clamp((base - e) / std::max(1.0 - e, 1e-4), 0.0, 1.0);
-}
-
 /// The Look after `view.render` (numbers parsed; unknown keys ignored here, the viewer checks them).
 Look look_of_view(const View& v, const std::string& source);
 

@@ -103,6 +103,9 @@ class GlRenderer {
 
   /// Uploads the volume textures and the Mie table.
   void set_volume(const PreparedVolume& vol);
+  /// Uploads only the distance field of the volume set_volume took (fit_distance_field rebuilt it:
+  /// the same cells); the lighting caches and the temporal history stay.
+  void set_distance_field(const PreparedVolume& vol);
   /// Recompiles every program (shader hot reload). Throws ShaderError, keeping the old programs.
   void reload_shaders();
   /// Renders into internal targets; `timings` from GPU timer queries (of this frame).

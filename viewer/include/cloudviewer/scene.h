@@ -33,6 +33,29 @@ cloudgen::Volume load_volume(const std::string& input);
 ///  blob:   96x48x96 voxels of 12 m, fBm-shaped cumulus with height profile and detail.
 cloudgen::Volume synthetic_volume(const std::string& kind);
 
+/// What the distance field's cells assume about the density (docs/viewer-speed.md, "The eroded
+/// field"). With erosion 0 a cell holds density when one of its voxels has base density > 0, which
+/// holds for every setting. With erosion E > 0 only when a voxel's base can exceed the erosion
+/// threshold its detail gives at strength E (cloudgen/erosion.glsl erosion_bound) at a height it
+/// can be seen at: its trilinear reach, widened by `height_slack` (height fractions) for the
+/// motion's up flow. A field built so serves frames that erode at least as much, with no more up
+/// flow, in the same placement (field_covers).
+struct FieldRule {
+  double erosion = 0;       ///< the erosion strength the field assumed (0: the base alone)
+  double height_slack = 0;  ///< how far (height fractions) the seen height may lie from the texel's
+  bool layer = false;       ///< heights are the layer's (texture v), not the box's height_min/size
+  bool operator==(const FieldRule& o) const {
+    return erosion == o.erosion && height_slack == o.height_slack && layer == o.layer;
+  }
+  bool operator<(const FieldRule& o) const {
+    if (erosion != o.erosion) return erosion < o.erosion;
+    if (height_slack != o.height_slack) return height_slack < o.height_slack;
+    return layer < o.layer;
+  }
+};
+/// Whether a field built for `built` is exact for a frame that needs `needed` (field_rule).
+bool field_covers(const FieldRule& built, const FieldRule& needed);
+
 /// Volume in the form both renderers sample: interleaved RGBA floats and the occupancy grid.
 struct PreparedVolume {
   std::array<int, 3> dims{{0, 0, 0}};
@@ -49,6 +72,8 @@ struct PreparedVolume {
   /// cell holding a voxel with density > 0 (the grid before padding; 0 there, capped at 255); see
   /// occupancy_distance. Distance skipping proves density 0 within (d - 1) cells - half a voxel.
   std::vector<uint8_t> dist;
+  /// What `dist` (and moved_near_sat) assumed: the base alone unless fit_distance_field eroded it.
+  FieldRule dist_rule;
   /// Moving clouds (box mode) skip through a grid make_frame builds every frame over the march box
   /// (frame.cpp build_moved_occupancy), whose cells are moved_reach_cells(*this) static cells wide
   /// and marked where a static cell they can show lies within that many cells of density. Built
@@ -78,6 +103,18 @@ PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_p
 /// Rebuilds only the occupancy grid with another cell size / padding (cloudgen::build_occupancy).
 void build_occupancy(PreparedVolume& p, int occ_cell, int occ_padding);
 
+/// Rebuilds the distance field (and moved_near_sat) under `rule` from the dense texels; a NanoVDB
+/// volume keeps the base rule (its cells come from the active voxels).
+void build_distance_field(PreparedVolume& p, const FieldRule& rule);
+/// The rule the frame of settings `s` needs: its erosion when it erodes (the volume has detail,
+/// erosion > 0) and no curl distortion moves the detail away from the base, the motion's up flow
+/// as height slack, the placement.
+FieldRule field_rule(const PreparedVolume& vol, const RenderSettings& s);
+/// Rebuilds the distance field for `s` when its rule does not cover field_rule(vol, s); true when
+/// it did (the renderer then needs set_volume). make_frame never trusts a field that does not
+/// cover its settings: it skips by the thesis scheme instead.
+bool fit_distance_field(PreparedVolume& vol, const RenderSettings& s);
+
 /// The distance field of an occupancy grid of `n` cells (x fastest): for each cell, the L-infinity
 /// (Chebyshev) distance in cells to the nearest occupied cell, exact, 0 on occupied cells, capped at
 /// 255 (also when the grid has none). Wrapped in x and z when `tiles` and the `dims` are whole
@@ -91,8 +128,8 @@ std::vector<uint8_t> occupancy_distance(const std::vector<uint8_t>& occ, const s
 /// without a distance field (the padded grid then marks what is near density).
 int moved_reach_cells(const PreparedVolume& vol);
 /// PreparedVolume::moved_near_sat for `reach` (the cells with dist <= reach, or occ != 0 without
-/// a distance field).
-std::vector<uint32_t> moved_near_table(const PreparedVolume& vol, int reach);
+/// a distance field or with use_dist false).
+std::vector<uint32_t> moved_near_table(const PreparedVolume& vol, int reach, bool use_dist = true);
 
 /// Bytes prepare_volume allocates for a volume of `voxels` voxels (RGBA floats, occupancy).
 uint64_t prepared_bytes(uint64_t voxels);
