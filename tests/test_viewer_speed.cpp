@@ -314,6 +314,9 @@ TEST(ViewerSpeed, ErodedFieldSkipsExactly) {
     EXPECT_EQ(vol.dist_rule.erosion, s.erosion) << c.name;
     EXPECT_EQ(vol.dist_rule.height_slack > 0, c.time != 0) << c.name;
     EXPECT_FALSE(fit_distance_field(vol, s)) << c.name << ": fitted once";
+    RenderSettings off = s;
+    off.eroded_field = false;
+    EXPECT_EQ(field_rule(vol, off).erosion, 0.0) << c.name << ": render.eroded_field=false asks for the base field";
     size_t held_base = 0, held = 0;
     for (size_t i = 0; i < vol.dist.size(); ++i) held_base += base.dist[i] == 0, held += vol.dist[i] == 0;
     std::cout << c.name << ": cells holding density " << held_base << " (base) / " << held << " (eroded)\n";
