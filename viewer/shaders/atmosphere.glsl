@@ -104,8 +104,8 @@ vec3 compute_transmittance_texel(ivec2 texel) {
 // The lookup every later pass uses: transmittance from (r, mu) to the top of the atmosphere,
 // bilinear between the four nearest texels (by hand, so GL and the CPU reference filter alike).
 // Only meaningful for rays that do not hit the ground.
-vec3 transmittance_to_top(Number r, Number mu) {
-  vec2 p = transmittance_uv(r, mu) * vec2(CV_TRANSMITTANCE_W, CV_TRANSMITTANCE_H) - 0.5;
+vec3 transmittance_bilinear(vec2 uv) {
+  vec2 p = uv * vec2(CV_TRANSMITTANCE_W, CV_TRANSMITTANCE_H) - 0.5;
   ivec2 i0 = ivec2(clamp(floor(p.x), 0.0, Number(CV_TRANSMITTANCE_W - 2)),
                    clamp(floor(p.y), 0.0, Number(CV_TRANSMITTANCE_H - 2)));
   vec2 f = clamp(p - vec2(i0), 0.0, 1.0);
@@ -113,6 +113,7 @@ vec3 transmittance_to_top(Number r, Number mu) {
   vec3 b = mix(transmittance_texel(i0 + ivec2(0, 1)), transmittance_texel(i0 + ivec2(1, 1)), f.x);
   return mix(a, b, f.y);
 }
+vec3 transmittance_to_top(Number r, Number mu) { return transmittance_bilinear(transmittance_uv(r, mu)); }
 
 // ------------------------------------------------------------------------------- single scattering
 // Transmittance between (r, mu) and the point at distance d along the ray (inside the atmosphere),
@@ -131,12 +132,13 @@ vec3 transmittance_along(Number r, Number mu, Number d, bool hits_ground) {
 // Sunlight reaching radius r with the sun at cosine mu_s from the zenith: the transmittance to the
 // top times the visible fraction of the sun's disc above the horizon (a smooth set, zero in the
 // Earth's shadow), after Bruneton's GetTransmittanceToSun.
-vec3 transmittance_to_sun(Number r, Number mu_s) {
+Number sun_disc_visible(Number r, Number mu_s) {
   Number sin_h = u_atmo.bottom_radius_m / r;
   Number cos_h = -atmo_safe_sqrt(1.0 - sin_h * sin_h);
   Number a = u_atmo.sun_angular_radius * sin_h;
-  return transmittance_to_top(r, mu_s) * smoothstep(-a, a, mu_s - cos_h);
+  return smoothstep(-a, a, mu_s - cos_h);
 }
+vec3 transmittance_to_sun(Number r, Number mu_s) { return transmittance_to_top(r, mu_s) * sun_disc_visible(r, mu_s); }
 
 // Phase functions (1/sr): Rayleigh and Cornette-Shanks for Mie.
 Number rayleigh_phase(Number nu) { return 3.0 / (16.0 * CV_PI) * (1.0 + nu * nu); }

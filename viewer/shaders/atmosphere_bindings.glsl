@@ -10,6 +10,7 @@ layout(binding = CV_UNIT_SINGLE_MIE) uniform sampler3D s_single_mie;  // RGBA32F
 layout(binding = CV_UNIT_SCATTERING_MULTIPLE) uniform sampler3D s_scattering_multiple;  // RGBA32F, the same
 
 vec3 transmittance_texel(ivec2 texel) { return texelFetch(s_transmittance, texel, 0).rgb; }
+vec3 transmittance_filtered(vec2 uv) { return texture(s_transmittance, uv).rgb; }  // GL_LINEAR, clamped
 vec3 multiple_scattering_texel(ivec2 texel) { return texelFetch(s_multiple_scattering, texel, 0).rgb; }
 vec3 irradiance_texel(int texel) { return texelFetch(s_irradiance, ivec2(texel, 0), 0).rgb; }
 vec3 scattering_texel(ivec3 texel) { return texelFetch(s_scattering, texel, 0).rgb; }

@@ -7,12 +7,18 @@ bool sky_precomputed() { return int(CV_MODE_SKY) == CV_SKY_PRECOMPUTED; }
 
 // Sun colour reaching camera-relative point p (top-of-atmosphere colour u_cloud.sun_color times
 // the transmittance from p to the sun; 0 in the Earth's shadow). The analytic sky: the constant.
+// Every cloud sample that is lit asks for it, so the GPU reads the transmittance LUT through its
+// texture unit (one filtered fetch; render.exact_filter and the CPU reference: the same bilinear
+// by hand from four texels, atmosphere.glsl transmittance_bilinear).
 vec3 sun_color_at(vec3 p) {
   if (!sky_precomputed()) return u_cloud.sun_color;
   vec3 c = p + vec3(0.0, u_atmo.bottom_radius_m + u_cloud.sky_altitude_m, 0.0);  // from the planet's centre
-  Number r = clamp(length(c), u_atmo.bottom_radius_m, u_atmo.top_radius_m);
-  Number mu_s = clamp(dot(c, u_cloud.sun_dir) / max(length(c), 1.0), -1.0, 1.0);
-  return u_cloud.sun_color * transmittance_to_sun(r, mu_s);
+  Number len = length(c);
+  Number r = clamp(len, u_atmo.bottom_radius_m, u_atmo.top_radius_m);
+  Number mu_s = clamp(dot(c, u_cloud.sun_dir) / max(len, 1.0), -1.0, 1.0);
+  vec2 uv = transmittance_uv(r, mu_s);
+  vec3 top = CV_MODE_EXACT_FILTER > 0.5 ? transmittance_bilinear(uv) : transmittance_filtered(uv);
+  return u_cloud.sun_color * top * sun_disc_visible(r, mu_s);
 }
 
 // Where the frame's sky comes from (CV_AIR_*): the camera's air LUT (render.air_lut), the 4D

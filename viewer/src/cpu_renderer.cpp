@@ -59,6 +59,7 @@ struct CpuShader {
         moved_dist(frame ? &frame->moved_distance : nullptr) {}
 
   vec3 transmittance_texel(ivec2 t) const { return lut.transmittance[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
+  vec3 transmittance_filtered(vec2 uv) { return transmittance_bilinear(uv); }  // exact, as the texture unit
   vec3 multiple_scattering_texel(ivec2 t) const {
     return lut.multiple_scattering[size_t(t.y) * CV_MS_LUT_SIZE + size_t(t.x)];
   }

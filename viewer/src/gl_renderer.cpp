@@ -176,6 +176,7 @@ std::vector<Target> make_targets() {
   t[4].name = "final", t[4].colors = {GL_RGBA32F, GL_RGBA32F};                 // display, linear
   t[5].name = "transmittance", t[5].colors = {GL_RGBA32F};                        // atmosphere LUT T(r, mu)
   t[5].fixed_w = CV_TRANSMITTANCE_W, t[5].fixed_h = CV_TRANSMITTANCE_H;
+  t[5].linear_from = 0;  // sun_color_at reads it filtered (texelFetch elsewhere)
   // Temporal upsampling: this frame's pixel of every 4x4 block, and the resolved full-resolution
   // cloud layer with last frame's copy (both: (L, T) and the cloud distance).
   // The quarter target also holds the air in front of the background at the same pixels: toward
