@@ -367,6 +367,54 @@ TEST(ViewerSpeed, ErodedFieldSkipsExactly) {
   }
 }
 
+// With distance skipping the light volume marches only the texels a cloud sample can read (the
+// field proves no density within one texel spacing of the rest: lighting.glsl light_volume_value):
+// the image stays that of no skipping, GL and CPU, still and moving, while texels are spared.
+// Texels wider than the field's cells (light_volume_scale 4, occupancy cells of 2 voxels) put
+// empty radii between nothing and one spacing, where a bound that skips too eagerly shows.
+TEST(ViewerSpeed, LightVolumeMarchesOnlyTheTexelsSamplesRead) {
+  for (double time : {0.0, 40.0}) {
+    const PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 2, 2);
+    RenderSettings s = with({"render.steps=128", "render.light_volume_scale=4", "motion.wind_speed=6"});
+    s.time = time;
+    const Camera cam = default_camera(vol, s, 60, 160.0 / 90);
+    const Sun sun{default_sun(cam).azimuth_deg, 8.0};  // low: long shadows across the box, away from the cloud
+    RenderSettings none = s, dist = s;
+    none.skipping = Skipping::None;
+    dist.skipping = Skipping::Distance;
+    // A moving frame rebuilds the light volume only where that pays: force it here.
+    const FrameSetup fn = make_frame(vol, none, cam, sun, time > 0 ? 1600 : 160, time > 0 ? 900 : 90);
+    FrameSetup fd = make_frame(vol, dist, cam, sun, time > 0 ? 1600 : 160, time > 0 ? 900 : 90);
+    ASSERT_EQ(fd.params.light_volume_on, 1.0) << "t " << time;
+    ASSERT_EQ(fd.params.skip_distance, 1.0) << "t " << time;
+    const std::vector<double> full = build_light_volume_cpu(vol, fn.params, &fn), sparse = build_light_volume_cpu(vol, fd.params, &fd);
+    ASSERT_EQ(full.size(), sparse.size());
+    size_t spared = 0;
+    for (size_t i = 0; i < full.size(); ++i) {
+      if (sparse[i] != full[i]) {
+        ++spared;
+        EXPECT_EQ(sparse[i], 0.0) << "a texel is either marched as before or left at 0";
+      }
+    }
+    size_t zf = 0, zs = 0;
+    for (size_t i = 0; i < full.size(); ++i) zf += full[i] == 0, zs += sparse[i] == 0;
+    std::cout << "t " << time << ": light-volume texels spared " << spared << " of " << full.size() << " zeros " << zf << " / " << zs << "\n";
+    EXPECT_GT(spared, 0u) << "t " << time << ": texels with light on them, left out (most others hold 0 anyway)";
+    for (bool on_gl : {true, false}) {
+      FrameSetup a = make_frame(vol, none, cam, sun, 160, 90), b = make_frame(vol, dist, cam, sun, 160, 90);
+      for (FrameSetup* f : {&a, &b}) {  // the same per-frame grid as above at the test's size
+        f->params.light_volume_on = 1.0;
+        f->params.light_volume_dims = fd.params.light_volume_dims;
+      }
+      a.params = rounded_to_float(a.params), b.params = rounded_to_float(b.params);
+      FrameImages ia = render(on_gl, vol, a), ib = render(on_gl, vol, b);
+      const std::string what = std::string(on_gl ? "GL" : "CPU") + " t " + std::to_string(time);
+      EXPECT_GT(image_stats(ia.display).stddev, 0.01) << what;
+      EXPECT_EQ(max_abs_diff(ia.linear, ib.linear), 0.0) << what;
+    }
+  }
+}
+
 // The light volume's optical depth against the per-sample light march (CPU, double precision), at
 // points inside the cloud: at the volume's resolution (scale 1) and at half of it (scale 2), the
 // mean and the 99th-percentile |tau error| and the transmittance error exp(-tau) it makes.

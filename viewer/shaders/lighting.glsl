@@ -109,6 +109,23 @@ vec3 light_volume_position(ivec3 texel) {
   return u_cloud.march_min_m + (vec3(texel) + 0.5) / u_cloud.light_volume_dims * u_cloud.march_size_m;
 }
 
+// The value a light-volume texel holds: the light march from its centre. Only cloud samples of
+// density > 0 read the grid (the lighting and the diffusion source), each the eight texels whose
+// centres lie within one texel spacing of it along every axis. So with distance skipping on, a
+// texel whose empty radius exceeds that spacing is never read, and keeps 0 instead of a march:
+// the image does not change. A tiling volume's grid wraps in x and z, and the moved grid's field
+// does not: there the texels of the wrapping faces are always marched.
+Number light_volume_value(ivec3 texel) {
+  vec3 p = light_volume_position(texel);
+  if (CV_MODE_SKIP_DISTANCE > 0.5) {
+    vec3 spacing = u_cloud.march_size_m / u_cloud.light_volume_dims;
+    ivec3 n = ivec3(u_cloud.light_volume_dims);
+    bool face = CV_MODE_TILES > 0.5 && (texel.x == 0 || texel.z == 0 || texel.x == n.x - 1 || texel.z == n.z - 1);
+    if (!face && empty_radius(p) > 1.001 * max(spacing.x, max(spacing.y, spacing.z))) return 0.0;
+  }
+  return light_optical_depth(p);
+}
+
 // Trilinear from texel fetches, wrapped in x/z for tiling volumes, clamped otherwise (the texture
 // unit's GL_LINEAR with the light volume's wrap modes; exact_filter and the CPU reference), of the
 // light volume (ms = false: its value in x) or the multiple-scattering volume (ms = true).

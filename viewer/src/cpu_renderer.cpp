@@ -295,7 +295,7 @@ std::vector<double> build_light_volume_cpu(const PreparedVolume& vol, const ref:
     CpuShader sh(params, vol, no_lut(), frame);
     for (int y = 0; y < n.y; ++y)
       for (int x = 0; x < n.x; ++x)
-        tau[(size_t(z) * n.y + y) * n.x + x] = sh.light_optical_depth(sh.light_volume_position(ivec3(x, y, z)));
+        tau[(size_t(z) * n.y + y) * n.x + x] = sh.light_volume_value(ivec3(x, y, z));
   });
   return tau;
 }

@@ -1128,6 +1128,7 @@ void GlRenderer::set_distance_field(const PreparedVolume& vol) {
   dist.resize(vol.occ.size(), 1);  // a volume prepared without the field: the thesis's one cell
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
   glTextureSubImage3D(m.tex_dist, 0, 0, 0, 0, n.x, n.y, n.z, GL_RED_INTEGER, GL_UNSIGNED_BYTE, dist.data());
+  m.light_key.clear();  // the light volume marches only the texels this field leaves readable
 }
 
 void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
