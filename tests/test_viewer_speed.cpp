@@ -314,6 +314,14 @@ TEST(ViewerSpeed, ErodedFieldSkipsExactly) {
     EXPECT_EQ(vol.dist_rule.erosion, s.erosion) << c.name;
     EXPECT_EQ(vol.dist_rule.height_slack > 0, c.time != 0) << c.name;
     EXPECT_FALSE(fit_distance_field(vol, s)) << c.name << ": fitted once";
+    {  // prepare_volume builds the same field at once, and a rebuild of the grid keeps its rule
+      PreparedVolume fitted = prepare_volume(synthetic_volume(c.input), 4, 2, &s);
+      EXPECT_TRUE(fitted.dist_rule == vol.dist_rule) << c.name;
+      EXPECT_TRUE(fitted.dist == vol.dist) << c.name;
+      build_occupancy(fitted, 4, 2);
+      EXPECT_TRUE(fitted.dist_rule == vol.dist_rule) << c.name << ": build_occupancy keeps the eroded field";
+      EXPECT_TRUE(fitted.dist == vol.dist) << c.name;
+    }
     RenderSettings off = s;
     off.eroded_field = false;
     EXPECT_EQ(field_rule(vol, off).erosion, 0.0) << c.name << ": render.eroded_field=false asks for the base field";

@@ -249,13 +249,15 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
     auto it = grids.find(key);
     if (it == grids.end()) {
       PreparedVolume copy = vol;
-      const bool cells = s.occupancy_cell != vol.occ_cell || s.occupancy_padding != vol.occ_padding;
-      if (cells) build_occupancy(copy, s.occupancy_cell, s.occupancy_padding);
-      build_distance_field(copy, std::get<2>(key));
-      if (cells)
+      copy.dist_rule = std::get<2>(key);  // the field build_occupancy builds with its grid
+      if (s.occupancy_cell == vol.occ_cell && s.occupancy_padding == vol.occ_padding) {
+        build_distance_field(copy, copy.dist_rule);
+      } else {
+        build_occupancy(copy, s.occupancy_cell, s.occupancy_padding);
         out << "occupancy grid of " << s.occupancy_cell << "-voxel cells, padding " << s.occupancy_padding << ": "
             << std::lround(copy.occupied_fraction * 100) << "% occupied (base grid "
             << std::lround(vol.occupied_fraction * 100) << "%)\n";
+      }
       it = grids.emplace(key, std::move(copy)).first;
     }
     return it->second;

@@ -79,9 +79,7 @@ PreparedVolume prepare_dense(const cloudgen::Volume& v, const std::string& input
                      std::to_string(v.dims[1]) + "x" + std::to_string(v.dims[2]) + " voxels) needs " + mib(need) +
                      ", more than render.dense_budget=" + mib(dense_budget_bytes(s)) +
                      "; use render.volume=nanovdb or auto, or raise the budget");
-  PreparedVolume p = prepare_volume(v, s.occupancy_cell, s.occupancy_padding);
-  fit_distance_field(p, s);  // the eroded field for the settings the input opens with
-  return p;
+  return prepare_volume(v, s.occupancy_cell, s.occupancy_padding, &s);  // the field these settings need
 }
 
 }  // namespace
@@ -123,9 +121,7 @@ PreparedVolume open_input(const std::string& input, const RenderSettings& s) {
   }
   return prepare_dense(v, input, s);
 #else
-  PreparedVolume p = prepare_volume(load_volume(input), s.occupancy_cell, s.occupancy_padding);
-  fit_distance_field(p, s);
-  return p;
+  return prepare_volume(load_volume(input), s.occupancy_cell, s.occupancy_padding, &s);
 #endif
 }
 

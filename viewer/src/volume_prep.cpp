@@ -71,7 +71,7 @@ bool field_covers(const FieldRule& built, const FieldRule& needed) {
   return needed.erosion >= built.erosion && needed.layer == built.layer && needed.height_slack <= built.height_slack;
 }
 
-void build_distance_field(PreparedVolume& p, const FieldRule& rule) {
+void build_distance_field(PreparedVolume& p, FieldRule rule) {  // by value: callers pass p.dist_rule
   // The distance field counts cells to the nearest cell that holds density (the grid before its
   // padding): the empty radius (lighting.glsl) accounts for trilinear reach itself, so the padding,
   // which only the thesis's one-cell step needs, would shorten every jump by its width.
@@ -215,7 +215,7 @@ void check_memory(const std::string& what, uint64_t bytes) {
                      " is available (use a smaller resolution)");
 }
 
-PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_padding) {
+PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_padding, const RenderSettings* fit) {
   PreparedVolume p;
   for (int i = 0; i < 3; ++i) {
     if (v.dims[size_t(i)] > 4096)
@@ -273,6 +273,7 @@ PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_p
     for (size_t i = 0; i < n; ++i) density[i] = p.rgba[i * 4];
     occupancy_from(p, occ_cell, occ_padding, std::move(density));
   }
+  if (fit) p.dist_rule = field_rule(p, *fit);  // one build of the field, the one the settings need
   finish_occupancy(p);
   return p;
 }

@@ -99,19 +99,22 @@ struct PreparedVolume {
 /// within `padding` cells (26-neighbourhood, wrapped in x/z when tiling) has density > 0; that
 /// conservativeness is what makes skipping image-neutral (trilinear reads reach half a voxel into
 /// the next cell).
-PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_padding = 2);
+/// With `fit`, the distance field is built once for the rule those settings need (field_rule), as
+/// fit_distance_field would rebuild it; without, for the base alone.
+PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_padding = 2,
+                              const RenderSettings* fit = nullptr);
 /// Rebuilds only the occupancy grid with another cell size / padding (cloudgen::build_occupancy).
 void build_occupancy(PreparedVolume& p, int occ_cell, int occ_padding);
 
 /// Rebuilds the distance field (and moved_near_sat) under `rule` from the dense texels; a NanoVDB
 /// volume keeps the base rule (its cells come from the active voxels).
-void build_distance_field(PreparedVolume& p, const FieldRule& rule);
+void build_distance_field(PreparedVolume& p, FieldRule rule);
 /// The rule the frame of settings `s` needs: its erosion when it erodes (the volume has detail,
 /// erosion > 0) and no curl distortion moves the detail away from the base, the motion's up flow
 /// as height slack, the placement.
 FieldRule field_rule(const PreparedVolume& vol, const RenderSettings& s);
 /// Rebuilds the distance field for `s` when its rule does not cover field_rule(vol, s); true when
-/// it did (the renderer then needs set_volume). make_frame never trusts a field that does not
+/// it did (the renderer then needs set_distance_field). make_frame never trusts a field that does not
 /// cover its settings: it skips by the thesis scheme instead.
 bool fit_distance_field(PreparedVolume& vol, const RenderSettings& s);
 
