@@ -879,3 +879,34 @@ TEST(ViewerSpeed, TrackKeysCarryTheirOwnSettings) {
   EXPECT_GT(std::atoi(out2.str().c_str() + at + 22), 0) << out2.str().substr(at);
   std::filesystem::remove_all(dir);
 }
+
+// common.glsl's wrap_index, compiled here as the CPU reference compiles it: it wraps without an
+// integer division (the march wraps three cells per trip, and SIMD hardware divides integers one
+// lane at a time), so it must still be exactly i mod n. (The GL side, in float, is checked by the
+// tests that compare GL with the CPU reference on tiling volumes with skipping on, whose cells it
+// wraps: DistanceSkippingDoesNotChangeTheImage, ErodedFieldSkipsExactly.)
+#include "../viewer/src/glsl_cpp.h"  // last: defines IN/OUT/INOUT
+namespace glsl_common {
+using namespace glm;
+struct Double {
+  CV_GLSL_DOUBLE_TYPES;
+#include "../viewer/shaders/common.glsl"
+};
+}  // namespace glsl_common
+
+TEST(ViewerSpeed, WrapIndexIsExactWithoutIntegerDivision) {
+  glsl_common::Double d{};
+  long checked = 0;
+  for (int n : {1, 2, 3, 5, 7, 16, 31, 32, 33, 43, 64, 100, 127, 128, 255, 256, 1000, 2048, 4099}) {
+    for (int i = -200000; i <= 200000; ++i) {
+      const int want = ((i % n) + n) % n;
+      const int got = d.wrap_index(i, n);
+      if (got != want) {
+        ADD_FAILURE() << "wrap_index(" << i << ", " << n << ") = " << got << ", want " << want;
+        return;
+      }
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 19L * 400001L);
+}

@@ -17,7 +17,13 @@ Number jitter_offset(ivec2 pixel, int frame) {
 }
 
 // GLSL leaves % undefined for negative operands (C++ truncates): keep both operands non-negative.
-int wrap_index(int i, int n) { return i >= 0 ? i % n : (n - 1) - ((-i - 1) % n); }
+// i mod n in [0, n), without an integer division: SIMD hardware has none (llvmpipe runs one per
+// lane, and the march wraps three cells per trip). The float quotient's floor is off by at most one
+// (|i| < 2^22), which the two selects correct, so the result is exact.
+int wrap_index(int i, int n) {
+  int r = i - n * int(floor(Number(i) / Number(n)));
+  return r < 0 ? r + n : (r >= n ? r - n : r);
+}
 int clamp_index(int i, int n) { return min(max(i, 0), n - 1); }
 
 // Corner k (0..7, x fastest) of a trilinear lookup whose lower corner is i0, over n texels: wrapped

@@ -78,15 +78,22 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, O
   vec3 phases = octave_phases(dot(rd, u_cloud.sun_dir));
   int max_iterations = int(u_cloud.max_iterations);
 
-  bool large_mode = skipping;
-  int n = 0;            // small-step index on the fixed lattice
-  Number t = t0;        // running distance for the adaptive march
-  int since_check = 0;  // small steps since the coarse grid was last read
+  bool large_mode = skipping;  // the last read of the coarse grid proved the space ahead empty
+  bool check = skipping;       // read the coarse grid at this trip's position
+  int n = 0;                   // small-step index on the fixed lattice
+  Number t = t0;               // running distance for the adaptive march
+  int since_check = 0;         // small steps since the coarse grid was last read
   for (int it = 0; it < max_iterations; ++it) {
     if (!adaptive) t = t0 + Number(n) * dt;
     if (t >= t1 || transmittance < u_cloud.transmittance_cutoff) break;
     iterations += 1;
-    if (large_mode) {
+    // One trip reads the coarse grid at most once and takes one sample at most: a trip either
+    // jumps or samples. (SIMD hardware runs a branch that some lanes take for all of them: GPU warps
+    // and llvmpipe's vector lanes alike. A loop body with a second read, or a jump path apart from
+    // the sample path, costs every lane every trip.)
+    bool jumped = false;
+    if (check) {
+      since_check = 0;
       // Thesis: one large step (k small steps, under one cell) per empty cell. Distance: as many
       // small steps as fit in the empty radius (k of them at d = 2), so the samples kept stay on
       // the plain march's lattice.
@@ -98,19 +105,20 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, O
       } else {
         empty = !occupied(rd * t);
       }
-      if (!empty) {
-        // Next to density: small steps. The thesis steps back one large step first; a distance
-        // jump was proven empty over its whole length, so stepping back would re-read zeros.
-        large_mode = false;
-        since_check = 0;
-        if (!distance) {
-          if (adaptive) t = max(t - large, t0); else n = max(n - k, 0);
-        }
-      } else {
+      if (empty) {
+        large_mode = true;
         if (adaptive) t += Number(jump) * dt; else n += jump;
+        jumped = true;
+      } else if (large_mode && !distance) {
+        // Entering an occupied cell from large steps: the thesis steps back one large step and
+        // takes small steps from there. A distance jump was proven empty over its whole length,
+        // so stepping back would re-read zeros.
+        if (adaptive) t = max(t - large, t0); else n = max(n - k, 0);
+        if (!adaptive) t = t0 + Number(n) * dt;
       }
-      continue;
+      large_mode = jumped;
     }
+    if (jumped) continue;
     Number step_len = dt;
     if (adaptive) step_len = dt * (1.0 + u_cloud.adaptive_growth_per_m * max(t - u_cloud.adaptive_start_m, 0.0));
     int lattice_steps = sparse_next ? sparse : 1;
@@ -128,17 +136,11 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, O
     }
     sparse_next = sparse > 1 && density < u_cloud.density_step_below;
     if (adaptive) t += step_len; else n += lattice_steps;
-    if (skipping) {
-      since_check += lattice_steps;
-      // Distance skipping re-reads the field after every empty sample too (one integer fetch, cheaper
-      // than the density's filtered one), so a gap between clouds is jumped as soon as it starts.
-      if (since_check >= k || (distance && density <= 0.0)) {
-        // The small steps add up to one large step: re-read the coarse grid.
-        since_check = 0;
-        Number t_next = adaptive ? t : t0 + Number(n) * dt;
-        if (distance ? empty_radius(rd * t_next) >= dt : !occupied(rd * t_next)) large_mode = true;
-      }
-    }
+    // The small steps add up to one large step: read the coarse grid at the next trip. Distance
+    // skipping reads it after every empty sample too (one integer fetch, cheaper than the density's
+    // filtered one), so a gap between clouds is jumped as soon as it starts.
+    since_check += lattice_steps;
+    check = skipping && (since_check >= k || (distance && density <= 0.0));
   }
   if (transmittance < 1.0) t_mean = t_weighted / (1.0 - transmittance);
   return vec4(radiance, transmittance);
