@@ -16,9 +16,11 @@
 // is already free of density (the marking took the half voxel in), so no margin there, and the
 // thesis's large step (moved_clearance_m, what the moved grid's marking proves around any point of
 // an unmarked cell) holds from every such point too.
-int empty_cells(vec3 p) {
+// `uvw`: moving_uvw(p, motion_at(p)), which the primary march has already found for the sample's
+// density (unused on the moved grid).
+int empty_cells_seen(vec3 p, vec3 uvw) {
   if (moved_grid()) return distance_texel(moved_cell(p));  // as occupied()
-  vec3 c = moving_uvw(p, motion_at(p)) * u_cloud.volume_dims / u_cloud.occ_cell_voxels;  // as occupied()
+  vec3 c = uvw * u_cloud.volume_dims / u_cloud.occ_cell_voxels;  // as occupied()
   ivec3 cell = ivec3(floor(c));
   ivec3 n = ivec3(u_cloud.occ_dims);
   bool tiles = CV_MODE_TILES > 0.5;
@@ -27,19 +29,20 @@ int empty_cells(vec3 p) {
   cell.z = tiles ? wrap_index(cell.z, n.z) : clamp_index(cell.z, n.z);
   return distance_texel(cell);
 }
+int empty_cells(vec3 p) { return empty_cells_seen(p, moved_grid() ? vec3(0.0) : moving_uvw(p, motion_at(p))); }
 
 // The distance from p within which the density is provably 0 (metres; 0 next to density).
 // The bound holds in L-infinity, so along any straight segment. In layer mode a straight ray bends
 // away from the layer's flat texture coordinates by at most r^2 / 2R (layer_altitude): r - r^2 / 2R
 // plus that bend stays within r.
-Number empty_radius(vec3 p) {
-  int d = empty_cells(p);
+Number empty_radius_of(int d) {
   if (moved_grid()) return d >= 1 ? max(Number(d - 1) * u_cloud.moved_occ_cell_m, u_cloud.moved_clearance_m) : 0.0;
   if (d <= 1) return 0.0;
   Number r = Number(d - 1) * u_cloud.df_cell_m - u_cloud.df_margin_m;
   if (layer_mode()) r -= r * r / (2.0 * u_cloud.earth_radius_m);
   return max(r, 0.0);
 }
+Number empty_radius(vec3 p) { return empty_radius_of(empty_cells(p)); }
 
 // Beer-Lambert transmittance of optical depth tau (dimensionless).
 Number beer_lambert(Number tau) { return exp(-tau); }

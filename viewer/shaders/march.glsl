@@ -91,41 +91,49 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, O
     // jumps or samples. (SIMD hardware runs a branch that some lanes take for all of them: GPU warps
     // and llvmpipe's vector lanes alike. A loop body with a second read, or a jump path apart from
     // the sample path, costs every lane every trip.)
-    bool jumped = false;
-    if (check) {
-      since_check = 0;
-      // Thesis: one large step (k small steps, under one cell) per empty cell. Distance: as many
-      // small steps as fit in the empty radius (k of them at d = 2), so the samples kept stay on
-      // the plain march's lattice.
-      int jump = k;
-      bool empty = true;
-      if (distance) {
-        jump = int(floor(0.999 * empty_radius(rd * t) / dt));
-        empty = jump >= 1;
-      } else {
-        empty = !occupied(rd * t);
-      }
-      if (empty) {
-        large_mode = true;
-        if (adaptive) t += Number(jump) * dt; else n += jump;
-        jumped = true;
-      } else if (large_mode && !distance) {
-        // Entering an occupied cell from large steps: the thesis steps back one large step and
-        // takes small steps from there. A distance jump was proven empty over its whole length,
-        // so stepping back would re-read zeros.
-        if (adaptive) t = max(t - large, t0); else n = max(n - k, 0);
-        if (!adaptive) t = t0 + Number(n) * dt;
-      }
-      large_mode = jumped;
-    }
-    if (jumped) continue;
     Number step_len = dt;
     if (adaptive) step_len = dt * (1.0 + u_cloud.adaptive_growth_per_m * max(t - u_cloud.adaptive_start_m, 0.0));
     int lattice_steps = sparse_next ? sparse : 1;
     step_len *= Number(lattice_steps);
     Number seg = min(step_len, t1 - t);
     vec3 p = rd * (t + jitter * seg);
-    Number density = cloud_density(p);
+    // The sample's motion and static volume coordinates serve the density and the field read alike.
+    vec3 motion = motion_at(p);
+    vec3 uvw = moving_uvw(p, motion);
+    bool jumped = false;
+    if (check) {
+      since_check = 0;
+      if (distance) {
+        // The field is read at this trip's sample point: no point within r of it holds density, so
+        // neither does this sample nor the next floor(0.999 r / dt) on the lattice (each a whole
+        // step further along the unit ray; a shorter last segment only brings its sample closer).
+        Number r = empty_radius_of(empty_cells_seen(p, uvw));
+        if (r > 0.0) {
+          int jump = int(floor(0.999 * r / dt)) + 1;
+          if (adaptive) t += Number(jump) * dt; else n += jump;
+          jumped = true;
+        }
+      } else if (!occupied(rd * t)) {
+        // Thesis: one large step (k small steps, under one cell) per empty cell.
+        if (adaptive) t += large; else n += k;
+        jumped = true;
+      } else if (large_mode) {
+        // Entering an occupied cell from large steps: the thesis steps back one large step and
+        // takes small steps from there.
+        if (adaptive) t = max(t - large, t0); else n = max(n - k, 0);
+        if (!adaptive) t = t0 + Number(n) * dt;
+        step_len = dt;
+        if (adaptive) step_len = dt * (1.0 + u_cloud.adaptive_growth_per_m * max(t - u_cloud.adaptive_start_m, 0.0));
+        step_len *= Number(lattice_steps);
+        seg = min(step_len, t1 - t);
+        p = rd * (t + jitter * seg);
+        motion = motion_at(p);
+        uvw = moving_uvw(p, motion);
+      }
+      large_mode = jumped;
+    }
+    if (jumped) continue;
+    Number density = cloud_density_seen(p, motion, uvw);
     if (density > 0.0) {
       Number sigma_t = density * sigma_scale;
       vec3 source = inscattered_radiance(p, rd, phase0, phases);

@@ -131,10 +131,10 @@ vec3 moving_uvw(vec3 p, vec3 motion) { return volume_uvw(p) - motion / volume_uv
 // G/B/A detail fBm (HZD remap), scaled by the density multiplier. Zero outside the box (x and z
 // repeat for tileable volumes). Erosion only lowers density, so the occupancy grid built from R
 // stays conservative.
-Number cloud_density(vec3 p) {
-  vec3 motion = motion_at(p);
+// `motion` and `uvw`: motion_at(p) and moving_uvw(p, motion), which the primary march also needs
+// for its distance-field read at the same point (cloud_density finds them itself).
+Number cloud_density_seen(vec3 p, vec3 motion, vec3 uvw) {
   Number seen_h = height_fraction(p);  // the height where the sample is seen (an altitude rule below)
-  vec3 uvw = moving_uvw(p, motion);
   if (uvw.y < 0.0 || uvw.y > 1.0) return 0.0;
   bool tiles = CV_MODE_TILES > 0.5;
   if (!tiles && (uvw.x < 0.0 || uvw.x > 1.0 || uvw.z < 0.0 || uvw.z > 1.0)) return 0.0;
@@ -166,6 +166,10 @@ Number cloud_density(vec3 p) {
     base = eroded_base(base, e);
   }
   return max(base, 0.0) * u_cloud.density_scale;
+}
+Number cloud_density(vec3 p) {
+  vec3 motion = motion_at(p);
+  return cloud_density_seen(p, motion, moving_uvw(p, motion));
 }
 
 // Occupancy of the coarse cell that holds the static position seen at camera-relative p. The march only asks about
