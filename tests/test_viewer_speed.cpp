@@ -96,7 +96,7 @@ std::vector<int> brute_distance(const std::vector<uint8_t>& occ, const std::arra
 
 // The field is the exact L-infinity distance (so no cell within distance d of a set cell is ever
 // reported farther than d), on small random grids, with and without x/z wrapping; a tiling volume
-// whose cells do not divide it gets at most 1 (the thesis's one cell).
+// whose cells do not divide it is checked in voxels (its last cell is partial).
 TEST(ViewerSpeed, DistanceFieldIsExactAndConservative) {
   uint32_t h = 2024;
   for (int trial = 0; trial < 12; ++trial) {
@@ -121,9 +121,40 @@ TEST(ViewerSpeed, DistanceFieldIsExactAndConservative) {
         EXPECT_GE(farthest, 1);
       }
     }
-    // A partial last cell on a wrapping axis: wrapping is not exact in cells, so the field says 1 at most.
-    std::array<int, 3> odd{{dims[0] - 1, dims[1], dims[2]}};
-    for (uint8_t d : occupancy_distance(occ, n, true, odd, cell)) ASSERT_LE(int(d), 1);
+    // A partial last cell on a wrapping axis (1 to 3 voxels short in x, 0 to 3 in z): counted in
+    // cells a route across the seam is up to one cell too long, so check the field in voxels. No
+    // occupied cell may lie within (d - 1) cells of any point of a cell at distance d (L-infinity,
+    // wrapping at the tile's period), and the field is at least one less than the wrapped count.
+    const std::array<int, 3> odd{{dims[0] - 1 - int(lcg(h) % 3), dims[1], dims[2] - int(lcg(h) % 4)}};
+    const std::vector<uint8_t> field = occupancy_distance(occ, n, true, odd, cell);
+    const std::vector<int> wrapped = brute_distance(occ, n, true);
+    auto gap = [&](int a, int b, int axis) {  // voxels between cell a's and cell b's extents on one axis
+      const int len = odd[size_t(axis)];
+      const int a0 = a * cell, a1 = std::min(a0 + cell, len), b0 = b * cell, b1 = std::min(b0 + cell, len);
+      const int plain = std::max(0, std::max(a0, b0) - std::min(a1, b1));
+      if (axis == 1) return plain;
+      return std::min(plain, std::max(0, std::min(a0, b0) + len - std::max(a1, b1)));
+    };
+    int beyond_one = 0;
+    for (int z = 0; z < n[2]; ++z)
+      for (int y = 0; y < n[1]; ++y)
+        for (int x = 0; x < n[0]; ++x) {
+          const size_t i = (size_t(z) * n[1] + y) * n[0] + x;
+          ASSERT_EQ(field[i] == 0, occ[i] != 0) << "trial " << trial;
+          if (occ[i]) continue;
+          ASSERT_GE(int(field[i]), std::max(1, wrapped[i] - 1)) << "trial " << trial << " cell " << i;
+          beyond_one += field[i] > 1;
+          for (int oz = 0; oz < n[2]; ++oz)
+            for (int oy = 0; oy < n[1]; ++oy)
+              for (int ox = 0; ox < n[0]; ++ox) {
+                if (!occ[(size_t(oz) * n[1] + oy) * n[0] + ox]) continue;
+                const int g = std::max({gap(x, ox, 0), gap(y, oy, 1), gap(z, oz, 2)});
+                ASSERT_LE((int(field[i]) - 1) * cell, g) << "trial " << trial << " cell " << i;
+              }
+        }
+    if (trial == 0) {
+      EXPECT_GT(beyond_one, 0) << "an empty grid is far from everything";
+    }
   }
   // And prepare_volume fills it from the cells holding density (before padding).
   PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8, 2);
@@ -284,6 +315,48 @@ TEST(ViewerSpeed, ErosionBoundHoldsForEveryTrilinearMix) {
     }
   }
   EXPECT_GT(positive, 1000) << "enough mixes keep density for the check to mean something";
+}
+
+// Cells that do not divide a tiling volume leave a partial last cell. The occupancy lookups wrap
+// at the tile's period in voxels (medium.glsl static_cell), not every n cells, and the distance
+// field counts a route across the seam as one cell shorter (occupancy_distance): layer mode, where
+// the texture repeats across the sky, skips exactly with both schemes, and the field still skips.
+// (Before, the thesis scheme read the wrong cells beyond the first repeat and changed the image,
+// and the field was capped at 1, so distance skipping never jumped.)
+TEST(ViewerSpeed, PartialCellsOnATilingVolumeSkipExactly) {
+  const int cell = 5;
+  for (const char* kind : {"noise", "blob"}) {
+    cloudgen::Volume input = synthetic_volume(kind);
+    input.tiles_xz = true;  // the blob repeated across the sky: much empty space between the repeats
+    const PreparedVolume vol = prepare_volume(input, cell, 2);
+    ASSERT_TRUE(vol.tiles);
+    ASSERT_NE(vol.dims[0] % cell, 0) << "a partial last cell";
+    RenderSettings s = with({"render.mode=layer", "render.steps=64"});
+    s.occupancy_cell = cell;
+    const Camera cam = default_camera(vol, s, 60, 160.0 / 90);
+    const Sun sun = default_sun(cam);
+    for (bool on_gl : {true, false}) {
+      const std::string side = std::string(kind) + (on_gl ? " GL" : " CPU");
+      RenderSettings none = s, thesis = s, dist = s;
+      none.skipping = Skipping::None;
+      thesis.skipping = Skipping::Thesis;
+      dist.skipping = Skipping::Distance;
+      const FrameSetup fd = make_frame(vol, dist, cam, sun, 160, 90);
+      ASSERT_EQ(fd.params.skip_distance, 1.0) << side;
+      const FrameImages a = render(on_gl, vol, make_frame(vol, none, cam, sun, 160, 90));
+      EXPECT_GT(image_stats(a.display).stddev, 0.01) << side << ": a picture to compare";
+      // GL's thesis program differs from the plain one by float rounding in layer mode (up to 1e-6
+      // here, as ViewerLayer.GlMatchesCpuAndSkippingIsImageNeutral allows); reading the wrong cells
+      // changed the tiled blob by 0.99 (whole repeats missing).
+      const double thesis_diff = max_abs_diff(a.linear, render(on_gl, vol, make_frame(vol, thesis, cam, sun, 160, 90)).linear);
+      std::cout << side << ": thesis scheme against no skipping, max |diff| " << thesis_diff << "\n";
+      EXPECT_LE(thesis_diff, on_gl ? 1e-5 : 0.0) << side << " thesis";
+      EXPECT_EQ(max_abs_diff(a.linear, render(on_gl, vol, fd).linear), 0.0) << side << " distance";
+      const double t_none = loop_trips(on_gl, vol, none, cam, 160, 90), t_dist = loop_trips(on_gl, vol, dist, cam, 160, 90);
+      std::cout << side << ": loop trips without skipping / with the field " << t_none << " / " << t_dist << "\n";
+      EXPECT_LT(t_dist, 0.8 * t_none) << side << ": the field skips";
+    }
+  }
 }
 
 // The eroded distance field (fit_distance_field, docs/viewer-speed.md): cells whose base the

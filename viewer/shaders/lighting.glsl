@@ -20,14 +20,7 @@
 // density (unused on the moved grid).
 int empty_cells_seen(vec3 p, vec3 uvw) {
   if (moved_grid()) return distance_texel(moved_cell(p));  // as occupied()
-  vec3 c = uvw * u_cloud.volume_dims / u_cloud.occ_cell_voxels;  // as occupied()
-  ivec3 cell = ivec3(floor(c));
-  ivec3 n = ivec3(u_cloud.occ_dims);
-  bool tiles = CV_MODE_TILES > 0.5;
-  cell.x = tiles ? wrap_index(cell.x, n.x) : clamp_index(cell.x, n.x);
-  cell.y = clamp_index(cell.y, n.y);
-  cell.z = tiles ? wrap_index(cell.z, n.z) : clamp_index(cell.z, n.z);
-  return distance_texel(cell);
+  return distance_texel(static_cell(uvw));
 }
 int empty_cells(vec3 p) { return empty_cells_seen(p, moved_grid() ? vec3(0.0) : moving_uvw(p, motion_at(p))); }
 

@@ -189,14 +189,22 @@ ivec3 moved_cell(vec3 p) {
   ivec3 mn = ivec3(u_cloud.moved_occ_dims);
   return ivec3(clamp_index(m.x, mn.x), clamp_index(m.y, mn.y), clamp_index(m.z, mn.z));
 }
+// The static coarse cell holding volume coordinates uvw. A tiling volume repeats every volume_dims
+// voxels (the texture's GL_REPEAT), so x and z wrap there, in voxels, before the cell is found: a
+// cell edge that does not divide the tile leaves a narrower last cell, and wrapping cell indices
+// instead would put every repeat but the first in the wrong cells (the thesis scheme then skipped
+// density in layer mode). Clamped, so a point a rounding outside the grid reads its edge cell.
+ivec3 static_cell(vec3 uvw) {
+  vec3 v = uvw * u_cloud.volume_dims;
+  if (CV_MODE_TILES > 0.5) {
+    v.x -= u_cloud.volume_dims.x * floor(v.x / u_cloud.volume_dims.x);
+    v.z -= u_cloud.volume_dims.z * floor(v.z / u_cloud.volume_dims.z);
+  }
+  ivec3 cell = ivec3(floor(v / u_cloud.occ_cell_voxels));
+  ivec3 n = ivec3(u_cloud.occ_dims);
+  return ivec3(clamp_index(cell.x, n.x), clamp_index(cell.y, n.y), clamp_index(cell.z, n.z));
+}
 bool occupied(vec3 p) {
   if (moved_grid()) return occupancy_texel(moved_cell(p)) > 0.5;
-  vec3 c = moving_uvw(p, motion_at(p)) * u_cloud.volume_dims / u_cloud.occ_cell_voxels;
-  ivec3 cell = ivec3(floor(c));
-  ivec3 n = ivec3(u_cloud.occ_dims);
-  bool tiles = CV_MODE_TILES > 0.5;
-  cell.x = tiles ? wrap_index(cell.x, n.x) : clamp_index(cell.x, n.x);
-  cell.y = clamp_index(cell.y, n.y);
-  cell.z = tiles ? wrap_index(cell.z, n.z) : clamp_index(cell.z, n.z);
-  return occupancy_texel(cell) > 0.5;
+  return occupancy_texel(static_cell(moving_uvw(p, motion_at(p)))) > 0.5;
 }

@@ -148,49 +148,60 @@ std::vector<uint8_t> occupancy_distance(const std::vector<uint8_t>& occ, const s
   const size_t count = size_t(n[0]) * n[1] * n[2];
   std::vector<uint8_t> out(count, 0);
   if (count == 0 || occ.size() != count) return out;
-  // Wrapping across x/z is exact in cells only when the tile is a whole number of cells (a partial
-  // last cell is narrower than one cell, and counting it as one would overstate the distance): else
-  // the wrapped axes keep the thesis's one-cell field.
-  const bool wrap = tiles && dims[0] % cell == 0 && dims[2] % cell == 0;
-  const bool clamp_one = tiles && !wrap;
+  // Wrapping across x/z is exact in cells only when the tile is a whole number of cells. Otherwise
+  // the last cell is partial (narrower than a cell, at least a voxel), so a route across the seam
+  // is up to one cell shorter than its count of cells: such a tile takes the smaller of the field
+  // without wrapping (exact for routes that do not cross) and the wrapped field less one (a lower
+  // bound for routes that do; L-infinity loses at most one cell however many axes it crosses).
+  const bool exact_wrap = tiles && dims[0] % cell == 0 && dims[2] % cell == 0;
+  const bool partial_wrap = tiles && !exact_wrap;
   // The L-infinity (chessboard) distance to the nearest occupied cell is the number of king moves
   // to it (a king move changes each coordinate by at most 1, wrapping in x and z when the tile
   // wraps), so a breadth-first search from every occupied cell over the 26 neighbours gives it
   // exactly, in time proportional to the cells (a per-line scan out to each distance cost the cells
   // times the distances: 6.4 s for the 4 M cells of cumulus-field 512 at 2-voxel cells).
-  const int inf = 1 << 20;
-  std::vector<int> f(count, inf);
-  std::vector<uint32_t> queue;
-  queue.reserve(count);
-  for (size_t i = 0; i < count; ++i)
-    if (occ[i]) f[i] = 0, queue.push_back(uint32_t(i));
-  auto step = [&](int c, int d, int axis, bool wraps) {
-    int q = c + d;
-    const int len = n[size_t(axis)];
-    if (wraps) return q < 0 ? q + len : q >= len ? q - len : q;
-    return q < 0 || q >= len ? -1 : q;
-  };
-  const size_t plane = size_t(n[0]) * n[1];
-  for (size_t head = 0; head < queue.size(); ++head) {
-    const uint32_t i = queue[head];
-    const int x = int(i % uint32_t(n[0])), y = int(i / uint32_t(n[0]) % uint32_t(n[1])), z = int(i / plane);
-    const int next = f[i] + 1;
-    for (int dz = -1; dz <= 1; ++dz) {
-      const int qz = step(z, dz, 2, wrap);
-      if (qz < 0) continue;
-      for (int dy = -1; dy <= 1; ++dy) {
-        const int qy = step(y, dy, 1, false);
-        if (qy < 0) continue;
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int qx = step(x, dx, 0, wrap);
-          if (qx < 0) continue;
-          const size_t j = size_t(qz) * plane + size_t(qy) * n[0] + size_t(qx);
-          if (f[j] > next) f[j] = next, queue.push_back(uint32_t(j));
+  auto king_moves = [&](bool wrap) {
+    const int inf = 1 << 20;
+    std::vector<int> f(count, inf);
+    std::vector<uint32_t> queue;
+    queue.reserve(count);
+    for (size_t i = 0; i < count; ++i)
+      if (occ[i]) f[i] = 0, queue.push_back(uint32_t(i));
+    auto step = [&](int c, int d, int axis, bool wraps) {
+      int q = c + d;
+      const int len = n[size_t(axis)];
+      if (wraps) return q < 0 ? q + len : q >= len ? q - len : q;
+      return q < 0 || q >= len ? -1 : q;
+    };
+    const size_t plane = size_t(n[0]) * n[1];
+    for (size_t head = 0; head < queue.size(); ++head) {
+      const uint32_t i = queue[head];
+      const int x = int(i % uint32_t(n[0])), y = int(i / uint32_t(n[0]) % uint32_t(n[1])), z = int(i / plane);
+      const int next = f[i] + 1;
+      for (int dz = -1; dz <= 1; ++dz) {
+        const int qz = step(z, dz, 2, wrap);
+        if (qz < 0) continue;
+        for (int dy = -1; dy <= 1; ++dy) {
+          const int qy = step(y, dy, 1, false);
+          if (qy < 0) continue;
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int qx = step(x, dx, 0, wrap);
+            if (qx < 0) continue;
+            const size_t j = size_t(qz) * plane + size_t(qy) * n[0] + size_t(qx);
+            if (f[j] > next) f[j] = next, queue.push_back(uint32_t(j));
+          }
         }
       }
     }
+    return f;
+  };
+  std::vector<int> f = king_moves(exact_wrap);
+  if (partial_wrap) {
+    const std::vector<int> wrapped = king_moves(true);
+    for (size_t i = 0; i < count; ++i)
+      if (!occ[i]) f[i] = std::max(1, std::min(f[i], wrapped[i] - 1));  // 0 stays "holds density"
   }
-  for (size_t i = 0; i < count; ++i) out[i] = uint8_t(std::min(f[i], clamp_one && f[i] > 1 ? 1 : 255));
+  for (size_t i = 0; i < count; ++i) out[i] = uint8_t(std::min(f[i], 255));
   return out;
 }
 

@@ -121,9 +121,10 @@ bool fit_distance_field(PreparedVolume& vol, const RenderSettings& s);
 /// The distance field of an occupancy grid of `n` cells (x fastest): for each cell, the L-infinity
 /// (Chebyshev) distance in cells to the nearest occupied cell, exact, 0 on occupied cells, capped at
 /// 255 (also when the grid has none). Wrapped in x and z when `tiles` and the `dims` are whole
-/// multiples of `cell`; a tiling volume whose cells do not divide it gets at most 1 (what the
-/// thesis's large step already assumes). Exactness is what makes distance skipping safe: every cell
-/// within d - 1 of a cell at distance d is unoccupied (lighting.glsl's empty_radius).
+/// multiples of `cell`; a tiling volume whose cells do not divide it has a partial last cell, so
+/// there the field is the smaller of the unwrapped field and the wrapped one less one, at least 1
+/// (a lower bound in voxels). Exactness is what makes distance skipping safe: no occupied cell lies
+/// within (d - 1) cells of any point of a cell at distance d (lighting.glsl's empty_radius).
 std::vector<uint8_t> occupancy_distance(const std::vector<uint8_t>& occ, const std::array<int, 3>& n, bool tiles,
                                         const std::array<int, 3>& dims, int cell);
 
