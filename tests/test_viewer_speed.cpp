@@ -987,3 +987,34 @@ TEST(ViewerSpeed, WrapIndexIsExactWithoutIntegerDivision) {
   }
   EXPECT_EQ(checked, 19L * 400001L);
 }
+
+// render.occupancy_cell is doubled for large volumes (opening and refitting the distance field take
+// time in proportion to the cells): below 4 voxels while the grid would exceed 8 M cells, at any
+// size while it would exceed 32 M; never coarser than needed, never finer than asked.
+TEST(ViewerSpeed, OccupancyCellGrowsWithTheVolumeOnly) {
+  auto cells = [](int c, uint64_t nx, uint64_t ny, uint64_t nz) {
+    const uint64_t u = uint64_t(c);
+    return ((nx + u - 1) / u) * ((ny + u - 1) / u) * ((nz + u - 1) / u);
+  };
+  EXPECT_EQ(occupancy_cell_for(2, 128, 128, 128), 2);     // the thesis volume
+  EXPECT_EQ(occupancy_cell_for(2, 512, 128, 512), 2);     // cumulus-field 512: 4.2 M cells
+  EXPECT_EQ(occupancy_cell_for(2, 1024, 146, 1024), 4);   // cumulus-field 1024: 19 M at 2
+  EXPECT_EQ(occupancy_cell_for(2, 2048, 292, 2048), 4);   // cumulus-field 2048: 19 M at 4
+  EXPECT_EQ(occupancy_cell_for(8, 128, 128, 128), 8);     // never finer than asked
+  uint32_t h = 7;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const uint64_t nx = 1 + lcg(h) % 8192, ny = 1 + lcg(h) % 1024, nz = 1 + lcg(h) % 8192;
+    const int asked = 2 + int(lcg(h) % 15);
+    const int c = occupancy_cell_for(asked, nx, ny, nz);
+    ASSERT_GE(c, asked);
+    ASSERT_LE(cells(c, nx, ny, nz), kMaxOccupancyCells) << nx << "x" << ny << "x" << nz;
+    if (c < 4) {
+      ASSERT_LE(cells(c, nx, ny, nz), kMaxFineOccupancyCells);
+    }
+    if (c > asked) {  // doubled only because the half was too many cells
+      const uint64_t half = cells(c / 2, nx, ny, nz);
+      ASSERT_TRUE(half > kMaxOccupancyCells || (c / 2 < 4 && half > kMaxFineOccupancyCells))
+          << nx << "x" << ny << "x" << nz << " asked " << asked << " got " << c;
+    }
+  }
+}

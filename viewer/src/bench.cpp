@@ -244,17 +244,18 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
   // (erosion, motion: field_rule): one volume per grid and rule.
   std::map<std::tuple<int, int, FieldRule>, PreparedVolume> grids;
   auto grid_for = [&](const RenderSettings& s) -> const PreparedVolume& {
-    const auto key = std::make_tuple(s.occupancy_cell, s.occupancy_padding, field_rule(vol, s));
+    const int cell = occupancy_cell_for(s.occupancy_cell, uint64_t(vol.dims[0]), uint64_t(vol.dims[1]), uint64_t(vol.dims[2]));
+    const auto key = std::make_tuple(cell, s.occupancy_padding, field_rule(vol, s));
     if (key == std::make_tuple(vol.occ_cell, vol.occ_padding, vol.dist_rule)) return vol;
     auto it = grids.find(key);
     if (it == grids.end()) {
       PreparedVolume copy = vol;
       copy.dist_rule = std::get<2>(key);  // the field build_occupancy builds with its grid
-      if (s.occupancy_cell == vol.occ_cell && s.occupancy_padding == vol.occ_padding) {
+      if (cell == vol.occ_cell && s.occupancy_padding == vol.occ_padding) {
         build_distance_field(copy, copy.dist_rule);
       } else {
-        build_occupancy(copy, s.occupancy_cell, s.occupancy_padding);
-        out << "occupancy grid of " << s.occupancy_cell << "-voxel cells, padding " << s.occupancy_padding << ": "
+        build_occupancy(copy, cell, s.occupancy_padding);
+        out << "occupancy grid of " << cell << "-voxel cells, padding " << s.occupancy_padding << ": "
             << std::lround(copy.occupied_fraction * 100) << "% occupied (base grid "
             << std::lround(vol.occupied_fraction * 100) << "%)\n";
       }

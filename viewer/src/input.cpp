@@ -79,7 +79,8 @@ PreparedVolume prepare_dense(const cloudgen::Volume& v, const std::string& input
                      std::to_string(v.dims[1]) + "x" + std::to_string(v.dims[2]) + " voxels) needs " + mib(need) +
                      ", more than render.dense_budget=" + mib(dense_budget_bytes(s)) +
                      "; use render.volume=nanovdb or auto, or raise the budget");
-  return prepare_volume(v, s.occupancy_cell, s.occupancy_padding, &s);  // the field these settings need
+  const int cell = occupancy_cell_for(s.occupancy_cell, v.dims[0], v.dims[1], v.dims[2]);
+  return prepare_volume(v, cell, s.occupancy_padding, &s);  // the field these settings need
 }
 
 }  // namespace
@@ -90,8 +91,8 @@ PreparedVolume open_input(const std::string& input, const RenderSettings& s) {
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
   const bool file = input.rfind("synthetic:", 0) != 0 && std::filesystem::exists(input);
   auto sparse = [&](cloudgen::NanoVolume n) {
-    return prepare_nano(std::make_shared<const cloudgen::NanoVolume>(std::move(n)), s.occupancy_cell,
-                        s.occupancy_padding);
+    const int cell = occupancy_cell_for(s.occupancy_cell, n.dims[0], n.dims[1], n.dims[2]);
+    return prepare_nano(std::make_shared<const cloudgen::NanoVolume>(std::move(n)), cell, s.occupancy_padding);
   };
   if (file && ext == ".nvdb") {
     cloudgen::NanoVolume n = cloudgen::read_nvdb(input);  // sparse either way; densified only for dense
@@ -121,7 +122,8 @@ PreparedVolume open_input(const std::string& input, const RenderSettings& s) {
   }
   return prepare_dense(v, input, s);
 #else
-  return prepare_volume(load_volume(input), s.occupancy_cell, s.occupancy_padding, &s);
+  const cloudgen::Volume v = load_volume(input);
+  return prepare_volume(v, occupancy_cell_for(s.occupancy_cell, v.dims[0], v.dims[1], v.dims[2]), s.occupancy_padding, &s);
 #endif
 }
 

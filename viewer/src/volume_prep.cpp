@@ -205,6 +205,14 @@ std::vector<uint8_t> occupancy_distance(const std::vector<uint8_t>& occ, const s
   return out;
 }
 
+int occupancy_cell_for(int cell, uint64_t nx, uint64_t ny, uint64_t nz) {
+  auto cells = [&](uint64_t c) { return ((nx + c - 1) / c) * ((ny + c - 1) / c) * ((nz + c - 1) / c); };
+  uint64_t c = uint64_t(std::max(cell, 1));
+  while (c < 4 && cells(c) > kMaxFineOccupancyCells) c *= 2;
+  while (c < 1024 && cells(c) > kMaxOccupancyCells) c *= 2;
+  return int(c);
+}
+
 uint64_t prepared_bytes(uint64_t voxels) { return voxels * 16 + voxels / 8; }
 
 uint64_t available_memory_bytes() {

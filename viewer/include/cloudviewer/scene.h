@@ -105,6 +105,18 @@ PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_p
                               const RenderSettings* fit = nullptr);
 /// Rebuilds only the occupancy grid with another cell size / padding (cloudgen::build_occupancy).
 void build_occupancy(PreparedVolume& p, int occ_cell, int occ_padding);
+/// The most coarse cells render.occupancy_cell gets below 4 voxels: 2^23 (8 M). Opening a volume and
+/// refitting its distance field (the panel's erosion) take about 150 ns a cell: cumulus-field 1024
+/// opened in 4.0 s at 2-voxel cells (19 M), 1.0 s at 4.
+constexpr uint64_t kMaxFineOccupancyCells = uint64_t(1) << 23;
+/// The most coarse cells at any size: 2^25 (32 M; the grid and its distance field a byte each, the
+/// field's search 8 bytes a cell while it runs).
+constexpr uint64_t kMaxOccupancyCells = uint64_t(1) << 25;
+/// render.occupancy_cell for a volume of nx x ny x nz voxels: `cell`, doubled while it is under 4
+/// voxels and the grid has more than kMaxFineOccupancyCells cells, then while it has more than
+/// kMaxOccupancyCells (the default 2: 2 on the thesis volume and cumulus-field 512, 4 on
+/// cumulus-field 1024 and 2048).
+int occupancy_cell_for(int cell, uint64_t nx, uint64_t ny, uint64_t nz);
 
 /// Rebuilds the distance field (and moved_near_sat) under `rule` from the dense texels; a NanoVDB
 /// volume keeps the base rule (its cells come from the active voxels).
