@@ -139,7 +139,6 @@ int main(int argc, char** argv) {
         // without the refit the moving frame would skip by the padded grid's one cell.
         PreparedVolume moved = vol;
         fit_distance_field(moved, moving);
-        r.set_distance_field(vol);
         double a = best_ms(r, vol, still, cam, sun, w, h, repeat);
         r.set_distance_field(moved);
         double b = best_ms(r, moved, moving, cam, sun, w, h, repeat);

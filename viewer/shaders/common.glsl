@@ -18,7 +18,7 @@ Number jitter_offset(ivec2 pixel, int frame) {
 
 // GLSL leaves % undefined for negative operands (C++ truncates): keep both operands non-negative.
 // i mod n in [0, n), without an integer division: SIMD hardware has none (llvmpipe runs one per
-// lane, and the march wraps three cells per trip). The float quotient's floor is off by at most one
+// lane), and the exact filters and the layer's coverage lookup wrap texels per sample. The float quotient's floor is off by at most one
 // (|i| < 2^22), which the two selects correct, so the result is exact.
 int wrap_index(int i, int n) {
   int r = i - n * int(floor(Number(i) / Number(n)));

@@ -91,6 +91,21 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, O
     // jumps or samples. (SIMD hardware runs a branch that some lanes take for all of them: GPU warps
     // and llvmpipe's vector lanes alike. A loop body with a second read, or a jump path apart from
     // the sample path, costs every lane every trip.)
+    bool jumped = false;
+    if (check && !distance) {
+      // Thesis: the coarse grid at the segment's start; one large step (k small steps, under one
+      // cell) per empty cell. Entering an occupied cell from large steps, it steps back one large
+      // step and takes small steps from there.
+      since_check = 0;
+      if (!occupied(rd * t)) {
+        if (adaptive) t += large; else n += k;
+        jumped = true;
+      } else if (large_mode) {
+        if (adaptive) t = max(t - large, t0); else n = max(n - k, 0);
+        if (!adaptive) t = t0 + Number(n) * dt;
+      }
+      large_mode = jumped;
+    }
     Number step_len = dt;
     if (adaptive) step_len = dt * (1.0 + u_cloud.adaptive_growth_per_m * max(t - u_cloud.adaptive_start_m, 0.0));
     int lattice_steps = sparse_next ? sparse : 1;
@@ -100,35 +115,16 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, O
     // The sample's motion and static volume coordinates serve the density and the field read alike.
     vec3 motion = motion_at(p);
     vec3 uvw = moving_uvw(p, motion);
-    bool jumped = false;
-    if (check) {
+    if (check && distance) {
+      // Distance: the field is read at this trip's sample point. No point within r of it holds
+      // density, so neither does this sample nor the next floor(0.999 r / dt) on the lattice (each a
+      // whole step further along the unit ray; a shorter last segment only brings its sample closer).
       since_check = 0;
-      if (distance) {
-        // The field is read at this trip's sample point: no point within r of it holds density, so
-        // neither does this sample nor the next floor(0.999 r / dt) on the lattice (each a whole
-        // step further along the unit ray; a shorter last segment only brings its sample closer).
-        Number r = empty_radius_of(empty_cells_seen(p, uvw));
-        if (r > 0.0) {
-          int jump = int(floor(0.999 * r / dt)) + 1;
-          if (adaptive) t += Number(jump) * dt; else n += jump;
-          jumped = true;
-        }
-      } else if (!occupied(rd * t)) {
-        // Thesis: one large step (k small steps, under one cell) per empty cell.
-        if (adaptive) t += large; else n += k;
+      Number r = empty_radius_of(empty_cells_seen(p, uvw));
+      if (r > 0.0) {
+        int jump = int(floor(0.999 * r / dt)) + 1;
+        if (adaptive) t += Number(jump) * dt; else n += jump;
         jumped = true;
-      } else if (large_mode) {
-        // Entering an occupied cell from large steps: the thesis steps back one large step and
-        // takes small steps from there.
-        if (adaptive) t = max(t - large, t0); else n = max(n - k, 0);
-        if (!adaptive) t = t0 + Number(n) * dt;
-        step_len = dt;
-        if (adaptive) step_len = dt * (1.0 + u_cloud.adaptive_growth_per_m * max(t - u_cloud.adaptive_start_m, 0.0));
-        step_len *= Number(lattice_steps);
-        seg = min(step_len, t1 - t);
-        p = rd * (t + jitter * seg);
-        motion = motion_at(p);
-        uvw = moving_uvw(p, motion);
       }
       large_mode = jumped;
     }
