@@ -404,8 +404,11 @@ TEST(ViewerRender, OccupancySkippingDoesNotChangeTheImage) {
   }
 }
 
-// The same check is sensitive: isolated single voxels seen at grazing angles are what a too-small
-// padding misses. Without padding the comparison fails; with padding 1 or 2 it holds.
+// The same check is sensitive: isolated single voxels seen at grazing angles are what a large step
+// longer than the padding's clearance misses. With padding 1 or 2 and the step make_frame derives
+// from it, the comparison holds; with padding 1 and a step three times as long it fails (the
+// thesis's step back catches a step that lands in an occupied block, so what it misses are the
+// short chords through a block's corners). Padding 0 leaves no clearance: the thesis scheme is off.
 TEST(ViewerRender, OccupancyComparisonCatchesMissedIsolatedVoxels) {
   cloudgen::Volume v;
   v.dims = {64, 64, 64};
@@ -418,24 +421,29 @@ TEST(ViewerRender, OccupancyComparisonCatchesMissedIsolatedVoxels) {
     uint32_t x = next() % 64, y = next() % 64, z = next() % 64;
     v.density[v.index(x, y, z)] = 1.f;
   }
-  for (int padding : {0, 1, 2}) {
-    PreparedVolume vol = prepare_volume(v, 4, padding);
-    // The thesis scheme relies on the padding (distance skipping does not: test_viewer_speed.cpp).
-    RenderSettings on = with({"render.sigma_t=0.5", "render.steps=256", "render.ground=false", "render.skipping=thesis"});
-    RenderSettings off = on;
-    off.occupancy = false;
-    Camera cam;
-    cam.eye = vol.center() + glm::dvec3(250, 180, -700);
-    cam.target = vol.center();
+  // The thesis scheme relies on the padding (distance skipping does not: test_viewer_speed.cpp).
+  RenderSettings on = with({"render.sigma_t=0.5", "render.steps=256", "render.ground=false", "render.skipping=thesis"});
+  RenderSettings off = on;
+  off.occupancy = false;
+  Camera cam;
+  cam.eye = glm::dvec3(0, 520, 0) + glm::dvec3(250, 180, -700);
+  cam.target = glm::dvec3(0, 520, 0);
+  EXPECT_EQ(make_frame(prepare_volume(v, 4, 0), on, cam, default_sun(cam), 160, 90).params.occupancy_skip, 0.0)
+      << "padding 0 proves no large step";
+  for (int padding : {1, 2, -1}) {  // -1: padding 1 with three times its large step
+    PreparedVolume vol = prepare_volume(v, 4, std::abs(padding));
+    ASSERT_EQ(vol.center(), glm::dvec3(0, 520, 0));
     for (bool gl : {false, true}) {
-      if (gl && padding == 0) continue;
+      if (gl && padding < 0) continue;
       FrameSetup fon = make_frame(vol, on, cam, default_sun(cam), 160, 90);
       FrameSetup foff = make_frame(vol, off, cam, default_sun(cam), 160, 90);
+      ASSERT_EQ(fon.params.occupancy_skip, 1.0);
+      if (padding < 0) fon.params.large_step_count *= 3;
       double diff = max_abs_diff((gl ? render_gl(vol, fon) : render_cpu(vol, fon)).linear,
                                  (gl ? render_gl(vol, foff) : render_cpu(vol, foff)).linear);
-      std::cout << (gl ? "GL" : "CPU") << " padding " << padding << ": occupied " << vol.occupied_fraction
-                << ", max |diff| " << diff << "\n";
-      if (padding == 0) {
+      std::cout << (gl ? "GL" : "CPU") << " padding " << padding << " (large step " << fon.params.large_step_count
+                << " small steps): occupied " << vol.occupied_fraction << ", max |diff| " << diff << "\n";
+      if (padding < 0) {
         EXPECT_GT(diff, 0.05);  // proves the comparison can fail
       } else {
         EXPECT_LE(diff, 1e-5);

@@ -359,6 +359,77 @@ TEST(ViewerSpeed, PartialCellsOnATilingVolumeSkipExactly) {
   }
 }
 
+// The thesis scheme's large step spans the padding's clearance (frame.cpp make_frame): from any
+// point of an unoccupied cell, no density lies within one large step along every axis at once
+// (L-infinity), for paddings 1 to 3, on a tiling volume whose cells of 4 divide it and on one that
+// leaves a 1-voxel cell at the seam, with density right at the seam. There P cells across the wrap
+// span (P - 1) x 4 + 1 voxels, not P x 4: the clearance that ignores the partial cell must fail the
+// same check (the check can fail; at padding 1 that was the step before, one cell less half a voxel).
+TEST(ViewerSpeed, ThesisLargeStepStaysWithinThePaddingsClearance) {
+  const int cell = 4;
+  for (uint32_t side : {56u, 57u})
+  for (int padding : {1, 2, 3}) {
+    cloudgen::Volume input;
+    input.dims = {side, 12, side};
+    input.voxel_size = 10;
+    input.origin = {-200, 400, -200};
+    input.tiles_xz = true;
+    input.density.assign(input.voxel_count(), 0.f);
+    for (uint32_t a = 10; a < 30; ++a)
+      for (uint32_t y = 3; y < 9; ++y) {
+        input.density[input.index(0, y, a)] = 1.f;  // the planes x = 0 and z = 0, at the seam
+        input.density[input.index(a, y, 0)] = 1.f;
+      }
+    const PreparedVolume vol = prepare_volume(input, cell, padding);
+    RenderSettings s = with({"render.skipping=thesis", "render.steps=256", "render.erosion=0"});
+    s.occupancy_cell = cell;
+    s.occupancy_padding = padding;
+    const Camera cam = default_camera(vol, s, 60, 16.0 / 9);
+    const FrameSetup f = make_frame(vol, s, cam, default_sun(cam), 160, 90);
+    const std::string at = "side " + std::to_string(side) + " padding " + std::to_string(padding);
+    const double dt = f.params.step_m, large = f.params.large_step_count * dt;
+    const double voxel = vol.voxel_size;
+    const bool partial = side % cell != 0;
+    EXPECT_NEAR(large, std::floor(0.999 * ((padding - (partial ? 0.75 : 0.0)) * cell - 0.5) * voxel / dt) * dt, 1e-9)
+        << at << ": the step the padding allows";
+    // Few steps: at padding 1 the seam's clearance (half a voxel) is under one small step (1.8
+    // voxels), and the thesis scheme must stop rather than skip a sample it cannot prove empty.
+    RenderSettings few = s;
+    few.steps = 32;
+    EXPECT_EQ(make_frame(vol, few, cam, default_sun(cam), 160, 90).params.occupancy_skip,
+              partial && padding == 1 ? 0.0 : 1.0) << at << " at 32 steps";
+    const double naive = std::floor(0.999 * (padding * cell - 0.5) * voxel / dt) * dt;
+    const glm::dvec3 lo = f.params.volume_min_m, hi = lo + f.params.volume_size_m;
+    auto unoccupied = [&](glm::dvec3 p) {
+      glm::ivec3 c(glm::floor((p - lo) / voxel / double(cell)));
+      c = glm::clamp(c, glm::ivec3(0), glm::ivec3(vol.occ_dims[0], vol.occ_dims[1], vol.occ_dims[2]) - 1);
+      return vol.occ[(size_t(c.z) * vol.occ_dims[1] + c.y) * vol.occ_dims[0] + c.x] == 0;
+    };
+    uint32_t state = 7;
+    auto next = [&] { return ((state = state * 1664525u + 1013904223u) >> 8) / double(1u << 24); };
+    int tried = 0, naive_hits = 0;
+    for (int i = 0; i < 20000; ++i) {
+      const glm::dvec3 p = lo + (hi - lo) * glm::dvec3(next(), next(), next());
+      if (!unoccupied(p)) continue;
+      ++tried;
+      ASSERT_EQ(reference_density(vol, f, p), 0.0) << at;
+      for (int k = 0; k < 26; ++k) {  // the corners, edges and faces of the L-infinity ball
+        const int j = k < 13 ? k : k + 1;  // 13 is the centre
+        const glm::dvec3 d(j % 3 - 1.0, (j / 3) % 3 - 1.0, j / 9 - 1.0);
+        auto inside = [&](glm::dvec3 q) { return glm::clamp(q, lo, hi - 1e-6 * voxel); };
+        ASSERT_EQ(reference_density(vol, f, inside(p + d * large)), 0.0)
+            << at << ": density one large step from the unoccupied point (" << p.x << ", " << p.y << ", " << p.z
+            << ") m, toward (" << d.x << ", " << d.y << ", " << d.z << ")";
+        if (reference_density(vol, f, inside(p + d * naive)) > 0) ++naive_hits;
+      }
+    }
+    EXPECT_GT(tried, 2000) << at << ": unoccupied space to test";
+    std::cout << at << ": large step " << large / voxel << " voxels; the step blind to the partial cell ("
+              << naive / voxel << ") reaches density from " << naive_hits << " points\n";
+    if (partial) EXPECT_GT(naive_hits, 0) << at << ": the check can fail";
+  }
+}
+
 // The eroded distance field (fit_distance_field, docs/viewer-speed.md): cells whose base the
 // erosion removes are empty too, so distance skipping jumps farther, and the image stays the plain
 // march's bit for bit: still and moving (the up flow's height slack), box and layer placement

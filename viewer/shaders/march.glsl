@@ -45,12 +45,12 @@
 // `jitter` times its length, so the jitter moves samples inside their segment and never changes the
 // covered length: a uniform slab gives exactly exp(-sigma*d) for every jitter and step.
 // Occupancy skipping moves by whole multiples of the small step (the large step is k small steps,
-// just under one coarse cell), so the samples it keeps are the very samples of the plain march and
-// the image does not change; it only skips samples whose density is zero. Distance skipping jumps
-// farther on the same lattice (as far as the distance field proves empty) and takes small steps
-// with the thesis's re-check next to clouds. The density-aware step (density_step > 1) and the
-// early exit (transmittance_cutoff) do change the image: they trade error for time
-// (docs/viewer-speed.md).
+// just under the clearance the grid's padding proves: src/frame.cpp make_frame), so the samples it
+// keeps are the very samples of the plain march and the image does not change; it only skips
+// samples whose density is zero. Distance skipping jumps farther on the same lattice (as far as the
+// distance field proves empty) and takes small steps with the thesis's re-check next to clouds.
+// The density-aware step (density_step > 1) and the early exit (transmittance_cutoff) do change
+// the image: they trade error for time (docs/viewer-speed.md).
 vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, OUT(Number) t_mean) {
   iterations = 0;
   t_mean = 0.0;
@@ -93,9 +93,9 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, O
     // the sample path, costs every lane every trip.)
     bool jumped = false;
     if (check && !distance) {
-      // Thesis: the coarse grid at the segment's start; one large step (k small steps, under one
-      // cell) per empty cell. Entering an occupied cell from large steps, it steps back one large
-      // step and takes small steps from there.
+      // Thesis: the coarse grid at the segment's start; one large step (k small steps, under the
+      // padding's clearance) per empty cell. Entering an occupied cell from large steps, it steps
+      // back one large step and takes small steps from there.
       since_check = 0;
       if (!occupied(rd * t)) {
         if (adaptive) t += large; else n += k;

@@ -77,7 +77,7 @@ void apply_motion(const RenderSettings& s, bool baked, double height, double mov
   // L (1 + G / H): shorten the large step by that factor and the proof in make_frame still holds.
   double stretch = 1.0 + slope / height;
   if (p.layer_on < 0.5) p.large_step_count = moved_large_steps;  // box mode: the moved grid's clearance
-  p.large_step_count = std::max(1.0, std::floor(p.large_step_count / stretch));
+  p.large_step_count = std::floor(p.large_step_count / stretch);  // 0: make_frame stops the thesis scheme
   p.moved_clearance_m = p.layer_on < 0.5 ? moved_clearance / stretch : 0.0;
   double diag = glm::length(p.march_size_m);
   if (p.layer_on < 0.5) p.max_iterations = std::max(p.max_iterations, 4.0 * std::ceil(diag / p.step_m) + 64.0);
@@ -280,20 +280,31 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   double max_extent = std::max(size.x, std::max(size.y, size.z));
   double dt = max_extent / s.steps;
   double cell_m = vol.occ_cell * min_voxel;
-  // Large step: k small steps, just under one coarse cell less half a voxel. Why that is safe with
-  // any padding >= 1: non-zero density (trilinear reaches half a voxel past a non-empty cell) lies
-  // within half a voxel of a non-empty cell, and every unoccupied cell is at least one full cell
-  // away from a non-empty one, so a segment shorter than (cell - voxel/2) that starts and ends in
-  // unoccupied cells cannot touch density. The march checks both ends of every large step.
+  // Large step: k small steps, just under the padding's clearance less half a voxel. Why that is
+  // safe: the grid is the cells holding density dilated by P = occ_padding cells per axis (a box
+  // dilation, wrapped where the volume tiles), so from a point of an unoccupied cell every cell
+  // within P cells along each axis holds no density, and any point less than P cells away in each
+  // axis lies in one of them. Non-zero density (trilinear reaches half a voxel past a non-empty
+  // cell) is thus at least P x cell - voxel/2 away along every axis, and a segment shorter than
+  // that from an unoccupied start cannot touch it. Where a tiling axis ends in a partial cell of
+  // w < cell voxels, P cells across the wrap may span only (P - 1) x cell + w voxels: the clearance
+  // takes the narrowest. (The thesis's own step is one cell on its double padding; the second cell
+  // of padding is clearance the step now uses, 2x longer at the default padding 2.)
   // In layer mode cells are measured in the smallest world voxel edge (the texture may be stretched
   // vertically); the Earth's curvature bends a large step by d^2/2R, far below half a voxel.
-  int k = std::max(1, int(std::floor(0.999 * (cell_m - 0.5 * min_voxel) / dt)));
+  double clearance_voxels = vol.occ_padding * vol.occ_cell;
+  if (vol.tiles || layer)
+    for (int a : {0, 2}) {
+      const int w = vol.dims[size_t(a)] % vol.occ_cell;  // the partial cell at the seam, if any
+      if (w != 0) clearance_voxels = std::min(clearance_voxels, double((vol.occ_padding - 1) * vol.occ_cell + w));
+    }
+  int k = int(std::floor(0.999 * (clearance_voxels - 0.5) * min_voxel / dt));  // 0: see below apply_motion
   // The distance field serves this frame only if it was built for an erosion and motion no
   // stronger than the frame's (field_covers); otherwise the thesis scheme on the padded grid.
   const bool field_ok = !vol.dist.empty() && field_covers(vol.dist_rule, field_rule(vol, s));
   const int reach = layer || !field_ok ? 1 : moved_reach_cells(vol);
   const double moved_clearance = reach * cell_m - 0.5 * min_voxel;  // from a point of an unmarked moved cell
-  const int k_moved = std::max(1, int(std::floor(0.999 * moved_clearance / dt)));
+  const int k_moved = int(std::floor(0.999 * moved_clearance / dt));
   double diag = glm::length(size);
   ref::CloudParams& p = f.params;
   p = ref::CloudParams{};  // zero: layer fields stay 0 in box mode
@@ -432,6 +443,14 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
       f.moved_distance = occupancy_distance(f.moved_occupancy, {n.x, n.y, n.z}, false, {n.x, n.y, n.z}, 1);
       p.skip_distance = 1;
     }
+  }
+  // A clearance shorter than one small step (cells of a voxel or two, a thin partial cell at the
+  // seam, few steps, steep motion) proves nothing about the sample a large step of one small step
+  // skips: the thesis scheme then samples every step. Distance skipping proves its own jumps and
+  // reads the count only as its re-check interval.
+  if (p.large_step_count < 1.0) {
+    if (p.skip_distance < 0.5) p.occupancy_skip = 0;
+    p.large_step_count = 1.0;
   }
   // Moving clouds (box mode): the light volume over the march box from this frame's moving
   // density, rebuilt every frame (lighting.glsl light_volume_position), with the still grid's
