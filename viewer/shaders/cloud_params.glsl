@@ -95,7 +95,7 @@ struct CloudParams {
   Number height_min_m;      // box mode: the box heights are measured in (motion, erosion), min y
   Number height_size_m;     //   relative to the camera, and its height
   Number air_lut;           // 1: the sky and the aerial perspective from the camera's air LUT (render.air_lut)
-  Number height_pad1;
+  Number motion_stretch;    // >= 1: how much faster the static point seen at p moves than p along a ray (make_frame)
   // Multiple scattering by octaves (lighting.glsl inscattered_radiance).
   Number ms_octaves;        // 1 = single scattering only, up to 4
   Number ms_attenuation;    // a: octave weight factor

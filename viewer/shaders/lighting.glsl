@@ -33,7 +33,11 @@ Number empty_radius_of(int d) {
   if (d <= 1) return 0.0;
   Number r = Number(d - 1) * u_cloud.df_cell_m - u_cloud.df_margin_m;
   if (layer_mode()) r -= r * r / (2.0 * u_cloud.earth_radius_m);
-  return max(r, 0.0);
+  // Moving clouds (layer mode) read the field at the static point seen, q = p - D(h(p)), which
+  // moves up to motion_stretch times as fast as p (1 when still): a jump of r / stretch keeps q
+  // within r. (The bend's effect on h, and so on D, is second order: G/H x J^2/2R, metres against
+  // the 0.1% of r the march leaves; the field is at most half a tile across.)
+  return max(r, 0.0) / max(u_cloud.motion_stretch, 1.0);
 }
 Number empty_radius(vec3 p) { return empty_radius_of(empty_cells(p)); }
 

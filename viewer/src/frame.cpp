@@ -35,6 +35,7 @@ void apply_motion(const RenderSettings& s, bool baked, double height, double mov
   p.flow_up_m = m.flow_up;
   p.flow_forward_m = m.flow_forward;
   p.motion_on = clouds_move(s, baked) ? 1 : 0;
+  p.motion_stretch = 1.0;
   // The curl distortion of the detail lookup (cloudgen/curl_distortion.glsl), over the box or the
   // repeating texture; a baked frame already holds it.
   const glm::dvec3 extent = p.layer_on > 0.5 ? glm::dvec3(p.tile_x_m, p.layer_top_m - p.layer_bottom_m, p.tile_z_m)
@@ -45,8 +46,8 @@ void apply_motion(const RenderSettings& s, bool baked, double height, double mov
   if (p.motion_on < 0.5) return;
   // Moving clouds: the distance field's jumps are proven for the still volume, and the light volume
   // needs a rebuild every frame; the first gives way to the moved grid's field in box mode (make_frame)
-  // and the thesis scheme (made exact below) in layer mode, the second to the per-sample light march
-  // unless make_frame finds the rebuild cheaper.
+  // and, in layer mode, to the still field's jumps shortened by the stretch below (make_frame keeps
+  // them on), the second to the per-sample light march unless make_frame finds the rebuild cheaper.
   p.skip_distance = 0;
   p.df_light = 0;
   p.light_volume_on = 0;  // make_frame brings it back, rebuilt per frame, where that pays
@@ -76,6 +77,7 @@ void apply_motion(const RenderSettings& s, bool baked, double height, double mov
   // of length L, h changes by at most L / H (H: the height the volume spans), so q moves at most
   // L (1 + G / H): shorten the large step by that factor and the proof in make_frame still holds.
   double stretch = 1.0 + slope / height;
+  p.motion_stretch = stretch;  // the still field's jumps (lighting.glsl empty_radius_of), same proof
   if (p.layer_on < 0.5) p.large_step_count = moved_large_steps;  // box mode: the moved grid's clearance
   p.large_step_count = std::floor(p.large_step_count / stretch);  // 0: make_frame stops the thesis scheme
   p.moved_clearance_m = p.layer_on < 0.5 ? moved_clearance / stretch : 0.0;
@@ -443,6 +445,11 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
       f.moved_distance = occupancy_distance(f.moved_occupancy, {n.x, n.y, n.z}, false, {n.x, n.y, n.z}, 1);
       p.skip_distance = 1;
     }
+    // Moving layers: the still field, read at the static point seen (as the density is), proves no
+    // density within r of that point; along a jump of J the static point moves at most J x stretch
+    // (apply_motion), so jumps of r / stretch stay exact (lighting.glsl empty_radius_of). The
+    // field must cover the motion's up flow (field_covers: fit_distance_field builds it so).
+    if (layer && distance) p.skip_distance = 1;
   }
   // A clearance shorter than one small step (cells of a voxel or two, a thin partial cell at the
   // seam, few steps, steep motion) proves nothing about the sample a large step of one small step
