@@ -114,8 +114,8 @@ constexpr uint64_t kMaxFineOccupancyCells = uint64_t(1) << 23;
 constexpr uint64_t kMaxOccupancyCells = uint64_t(1) << 25;
 /// render.occupancy_cell for a volume of nx x ny x nz voxels: `cell`, doubled while it is under 4
 /// voxels and the grid has more than kMaxFineOccupancyCells cells, then while it has more than
-/// kMaxOccupancyCells (2 stays 2 on the thesis volume and cumulus-field 512 and becomes 4 on
-/// cumulus-field 1024 and 2048; the default 4 stays 4 on all of them).
+/// kMaxOccupancyCells (the default 2 stays 2 on the thesis volume and cumulus-field 512 and
+/// becomes 4 on cumulus-field 1024 and 2048).
 int occupancy_cell_for(int cell, uint64_t nx, uint64_t ny, uint64_t nz);
 
 /// Rebuilds the distance field (and moved_near_sat) under `rule` from the dense texels; a NanoVDB

@@ -48,7 +48,7 @@ struct RenderSettings {
   Skipping skipping = Skipping::Distance;  ///< with occupancy on: thesis (one cell) or distance-field jumps
   bool occupancy_light = false;    ///< the light march also skips empty cells (no measurable gain on llvmpipe)
   bool eroded_field = true;        ///< the distance field also proves the eroded-away cells empty (docs/viewer-speed.md)
-  int occupancy_cell = 4;          ///< coarse cell edge in voxels, see occupancy_cell_for (docs/viewer-speed.md: not 2)
+  int occupancy_cell = 2;          ///< coarse cell edge in voxels, see occupancy_cell_for (docs/viewer-speed.md)
   int occupancy_padding = 2;       ///< dilation in cells (thesis: 2; 1 is enough, see make_frame)
   bool adaptive = false;           ///< step grows with distance
   double adaptive_start = 0;       ///< m; 0 = auto (a quarter of the largest extent)
