@@ -132,7 +132,5 @@ struct CloudParams {
   Number shadow_map_min_x_m;
   Number shadow_map_min_z_m;
   Number shadow_map_ground_m;  // the ground's height in the march box (rounded to 1 mm: part of the map's key)
-  // Moving clouds in box mode: how far from a point of an unmarked moved cell, along any segment,
-  // the density is proven 0 (the moved grid's reach, over the displacement's stretch; make_frame).
-  Number moved_clearance_m;
+  Number moved_pad0;
 };

@@ -11,29 +11,24 @@
 // reaches half a voxel (df_margin_m) past such a cell, so no point within (d - 1) * cell - margin of
 // any point of that cell (in L-infinity, so along any straight segment) has density > 0.
 //
-// Moving clouds in box mode read the distance field of make_frame's moved grid (FrameSetup::
-// moved_distance) in cells of moved_occ_cell_m from march_min_m: every point of an unmarked cell
-// is already free of density (the marking took the half voxel in), so no margin there, and the
-// thesis's large step (moved_clearance_m, what the moved grid's marking proves around any point of
-// an unmarked cell) holds from every such point too.
+// Moving clouds read the same still field at the static point seen, q = p - D(h(p)), as the
+// density does, box and layer mode alike; empty_radius_of shortens the radius by the motion's
+// stretch. (In box mode q may lie outside the volume: static_cell clamps it onto the nearest cell,
+// and no density point is nearer to q than to that cell, in L-infinity, so its radius holds.)
 // `uvw`: moving_uvw(p, motion_at(p)), which the primary march has already found for the sample's
-// density (unused on the moved grid).
-int empty_cells_seen(vec3 p, vec3 uvw) {
-  if (moved_grid()) return distance_texel(moved_cell(p));  // as occupied()
-  return distance_texel(static_cell(uvw));
-}
-int empty_cells(vec3 p) { return empty_cells_seen(p, moved_grid() ? vec3(0.0) : moving_uvw(p, motion_at(p))); }
+// density.
+int empty_cells_seen(vec3 p, vec3 uvw) { return distance_texel(static_cell(uvw)); }
+int empty_cells(vec3 p) { return empty_cells_seen(p, moving_uvw(p, motion_at(p))); }
 
 // The distance from p within which the density is provably 0 (metres; 0 next to density).
 // The bound holds in L-infinity, so along any straight segment. In layer mode a straight ray bends
 // away from the layer's flat texture coordinates by at most r^2 / 2R (layer_altitude): r - r^2 / 2R
 // plus that bend stays within r.
 Number empty_radius_of(int d) {
-  if (moved_grid()) return d >= 1 ? max(Number(d - 1) * u_cloud.moved_occ_cell_m, u_cloud.moved_clearance_m) : 0.0;
   if (d <= 1) return 0.0;
   Number r = Number(d - 1) * u_cloud.df_cell_m - u_cloud.df_margin_m;
   if (layer_mode()) r -= r * r / (2.0 * u_cloud.earth_radius_m);
-  // Moving clouds (layer mode) read the field at the static point seen, q = p - D(h(p)), which
+  // Moving clouds read the field at the static point seen, q = p - D(h(p)), which
   // moves up to motion_stretch times as fast as p (1 when still): a jump of r / stretch keeps q
   // within r. (The bend's effect on h, and so on D, is second order: G/H x J^2/2R, metres against
   // the 0.1% of r the march leaves; the field is at most half a tile across.)

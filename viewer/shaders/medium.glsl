@@ -182,7 +182,8 @@ Number cloud_density(vec3 p) {
 // can be displaced from lie within one cell of density (frame.cpp build_moved_occupancy). Marked
 // wherever density, or density a large step away, can be, and no motion-table read (on llvmpipe those reads were nearly all
 // of what moving clouds cost the thesis path: docs/motion.md).
-// The cell of that moved grid holding p (clamped into it), for occupied() and empty_cells().
+// The cell of that moved grid holding p (clamped into it), for occupied() (the thesis scheme;
+// distance jumps read the still field at the static point seen, lighting.glsl empty_cells_seen).
 bool moved_grid() { return CV_MODE_MOTION > 0.5 && !layer_mode(); }
 ivec3 moved_cell(vec3 p) {
   ivec3 m = ivec3(floor((p - u_cloud.march_min_m) / u_cloud.moved_occ_cell_m));

@@ -49,14 +49,12 @@ struct CpuShader {
   const ref::AtmosphereParams& u_atmo;
   const std::vector<dvec3>* motion = nullptr;  // FrameSetup::motion_table (2 rows)
   const std::vector<uint8_t>* moved_occ = nullptr;  // FrameSetup::moved_occupancy (moving clouds, box mode)
-  const std::vector<uint8_t>* moved_dist = nullptr;  // FrameSetup::moved_distance (the same, distance skipping)
   const std::vector<double>* light_volume = nullptr;  ///< light_volume_dims texels, x fastest
 
   CpuShader(const ref::CloudParams& p, const PreparedVolume& v, const AtmosphereLuts& t,
             const FrameSetup* frame = nullptr)
       : u_cloud(p), vol(v), lut(t), u_atmo(t.params),
-        motion(frame ? &frame->motion_table : nullptr), moved_occ(frame ? &frame->moved_occupancy : nullptr),
-        moved_dist(frame ? &frame->moved_distance : nullptr) {}
+        motion(frame ? &frame->motion_table : nullptr), moved_occ(frame ? &frame->moved_occupancy : nullptr) {}
 
   vec3 transmittance_texel(ivec2 t) const { return lut.transmittance[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
   vec3 transmittance_filtered(vec2 uv) { return transmittance_bilinear(uv); }  // exact, as the texture unit
@@ -170,7 +168,7 @@ struct CpuShader {
 #endif
   }
   bool nanovdb_has_detail() const { return vol.has_detail; }
-  // A moving frame's grids over the march box (box mode; medium.glsl moved_grid): cell c of
+  // A moving frame's grid over the march box (box mode; medium.glsl moved_grid): cell c of
   // `grid`, or `none` when the frame did not give it.
   bool reads_moved_grid() const { return u_cloud.motion_on > 0.5 && u_cloud.layer_on < 0.5; }
   int moved_texel(const std::vector<uint8_t>* grid, ivec3 c, int none) const {
@@ -183,7 +181,6 @@ struct CpuShader {
     return vol.occ[(size_t(c.z) * vol.occ_dims[1] + c.y) * vol.occ_dims[0] + c.x];
   }
   int distance_texel(ivec3 c) const {
-    if (reads_moved_grid()) return moved_texel(moved_dist, c, 0);  // none given: no jump
     return vol.dist[(size_t(c.z) * vol.occ_dims[1] + c.y) * vol.occ_dims[0] + c.x];
   }
   Number light_volume_texel(ivec3 t) const {

@@ -20,8 +20,7 @@ bool clouds_move(const RenderSettings& s, bool baked) { return s.time != 0 && cl
 
 // Motion (cloudgen/motion.glsl): the parameters, the box the march must cover at this time and the
 // large step that keeps occupancy skipping exact while the clouds are displaced.
-void apply_motion(const RenderSettings& s, bool baked, double height, double moved_large_steps, double moved_clearance,
-                  ref::CloudParams& p) {
+void apply_motion(const RenderSettings& s, bool baked, double height, double moved_large_steps, ref::CloudParams& p) {
   p.march_min_m = p.volume_min_m;
   p.march_size_m = p.volume_size_m;
   p.time_s = s.time;
@@ -80,7 +79,6 @@ void apply_motion(const RenderSettings& s, bool baked, double height, double mov
   p.motion_stretch = stretch;  // the still field's jumps (lighting.glsl empty_radius_of), same proof
   if (p.layer_on < 0.5) p.large_step_count = moved_large_steps;  // box mode: the moved grid's clearance
   p.large_step_count = std::floor(p.large_step_count / stretch);  // 0: make_frame stops the thesis scheme
-  p.moved_clearance_m = p.layer_on < 0.5 ? moved_clearance / stretch : 0.0;
   double diag = glm::length(p.march_size_m);
   if (p.layer_on < 0.5) p.max_iterations = std::max(p.max_iterations, 4.0 * std::ceil(diag / p.step_m) + 64.0);
 }
@@ -430,26 +428,17 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   }
   p.height_min_m = vol.height_min - cam.eye.y;
   p.height_size_m = vol.height_size;
-  apply_motion(s, vol.baked_motion, layer ? size.y : vol.height_size, k_moved, moved_clearance, p);
+  apply_motion(s, vol.baked_motion, layer ? size.y : vol.height_size, k_moved, p);
   if (p.motion_on > 0.5) {
     f.motion_table = motion_table_row(s, s.time);
     f.motion_table.insert(f.motion_table.end(), f.motion_table.begin(), f.motion_table.end());
     if (!layer) build_moved_occupancy(vol, f.motion_table, reach, field_ok, p, f.moved_occupancy);
-    // Distance skipping while the clouds move (box mode): the moved grid's own distance field. Every
-    // point of an unmarked moved cell has density 0 (its static points are more than a cell from
-    // density), so a point in a cell at distance d >= 1 has only unmarked cells within d - 1
-    // cells in L-infinity: no density within (d - 1) moved cells along any straight segment; nor,
-    // by the large step's proof, within moved_clearance_m (lighting.glsl empty_radius).
-    if (!layer && distance) {
-      const glm::ivec3 n(p.moved_occ_dims);
-      f.moved_distance = occupancy_distance(f.moved_occupancy, {n.x, n.y, n.z}, false, {n.x, n.y, n.z}, 1);
-      p.skip_distance = 1;
-    }
-    // Moving layers: the still field, read at the static point seen (as the density is), proves no
-    // density within r of that point; along a jump of J the static point moves at most J x stretch
-    // (apply_motion), so jumps of r / stretch stay exact (lighting.glsl empty_radius_of). The
-    // field must cover the motion's up flow (field_covers: fit_distance_field builds it so).
-    if (layer && distance) p.skip_distance = 1;
+    // Distance skipping while the clouds move, box and layer mode alike: the still field, read at
+    // the static point seen (as the density is), proves no density within r of that point; along
+    // a jump of J the static point moves at most J x stretch (apply_motion), so jumps of
+    // r / stretch stay exact (lighting.glsl empty_radius_of). The field must cover the motion's up
+    // flow (field_covers: fit_distance_field builds it so). The moved grid serves the thesis scheme.
+    if (distance) p.skip_distance = 1;
   }
   // A clearance shorter than one small step (cells of a voxel or two, a thin partial cell at the
   // seam, few steps, steep motion) proves nothing about the sample a large step of one small step

@@ -403,7 +403,6 @@ struct GlRenderer::Impl {
   GLuint tex_volume = 0, tex_occ = 0, tex_dist = 0, tex_mie = 0, tex_coverage = 0, tex_motion = 0, tex_curl = 0;
   glm::ivec3 dist_dims{0};  // the distance field texture's cells (set_distance_field re-uploads into it)
   GLuint tex_moved_occ = 0;           // FrameSetup::moved_occupancy (R8), bound for occupied() while clouds move
-  GLuint tex_moved_dist = 0;          // FrameSetup::moved_distance (R8UI), bound for empty_cells() likewise
   glm::ivec3 moved_occ_dims{0, 0, 0};  // its allocated size
   int volume_serial = 0;              // counts set_volume calls (part of the light volume's key)
   std::vector<double> light_key;      // what the light volume was built from; empty = not built
@@ -994,7 +993,7 @@ GlRenderer::~GlRenderer() {
   m.delete_programs();
   m.delete_targets();
   m.delete_atlas();
-  GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_dist, m.tex_mie, m.tex_coverage, m.tex_motion, m.tex_curl, m.tex_ms, m.tex_moved_occ, m.tex_moved_dist};
+  GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_dist, m.tex_mie, m.tex_coverage, m.tex_motion, m.tex_curl, m.tex_ms, m.tex_moved_occ};
   for (GLuint t : texs)
     if (t) glDeleteTextures(1, &t);
   if (m.tex_nano) glDeleteTextures(1, &m.tex_nano);
@@ -1188,19 +1187,10 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
       glTextureStorage3D(m.tex_moved_occ, 1, GL_R8, n.x, n.y, n.z);
       glTextureParameteri(m.tex_moved_occ, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
       glTextureParameteri(m.tex_moved_occ, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-      if (m.tex_moved_dist) glDeleteTextures(1, &m.tex_moved_dist);
-      glCreateTextures(GL_TEXTURE_3D, 1, &m.tex_moved_dist);
-      glTextureStorage3D(m.tex_moved_dist, 1, GL_R8UI, n.x, n.y, n.z);
-      glTextureParameteri(m.tex_moved_dist, GL_TEXTURE_MIN_FILTER, GL_NEAREST);  // an integer texture is
-      glTextureParameteri(m.tex_moved_dist, GL_TEXTURE_MAG_FILTER, GL_NEAREST);  // incomplete otherwise
       m.moved_occ_dims = n;
     }
     upload_mask(m.tex_moved_occ, n, f.moved_occupancy);
-    if (f.moved_distance.size() == f.moved_occupancy.size())
-      glTextureSubImage3D(m.tex_moved_dist, 0, 0, 0, 0, n.x, n.y, n.z, GL_RED_INTEGER, GL_UNSIGNED_BYTE,
-                          f.moved_distance.data());
   }
-  const bool moved_dist = moved_occ && f.moved_distance.size() == f.moved_occupancy.size();
   m.history_valid = temporal;
   m.history_key = key;
   m.history_eye = f.camera.eye;
@@ -1212,7 +1202,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_ATMOSPHERE, m.ubo_atmo);
   glBindTextureUnit(CV_UNIT_VOLUME, atlas ? m.tex_atlas : m.tex_volume);
   glBindTextureUnit(CV_UNIT_OCCUPANCY, moved_occ ? m.tex_moved_occ : m.tex_occ);
-  glBindTextureUnit(CV_UNIT_DISTANCE, moved_dist ? m.tex_moved_dist : m.tex_dist);
+  glBindTextureUnit(CV_UNIT_DISTANCE, m.tex_dist);
   glBindTextureUnit(CV_UNIT_NANOVDB_GRIDS, m.tex_nano);
   // Beyond a storage block the shaders read the buffer texture; the storage binding then covers
   // only the first 32 bytes (a binding larger than GL_MAX_SHADER_STORAGE_BLOCK_SIZE is an error).

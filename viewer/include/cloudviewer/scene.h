@@ -281,10 +281,6 @@ struct FrameSetup {
   /// cells of params.moved_occ_cell_m from params.march_min_m (x fastest, 0 or 1), which both
   /// renderers' occupied() reads instead of the volume's grid (medium.glsl). Empty otherwise.
   std::vector<uint8_t> moved_occupancy;
-  /// With distance skipping: the distance field of moved_occupancy (L-infinity cells to the nearest
-  /// marked cell, occupancy_distance without wrapping: a ray in box mode never leaves the box),
-  /// which both renderers' empty_radius reads while the clouds move (lighting.glsl). Empty otherwise.
-  std::vector<uint8_t> moved_distance;
 };
 
 /// motion_displacement (cloudgen/motion.glsl) at CV_MOTION_LUT_SIZE evenly spaced heights in
