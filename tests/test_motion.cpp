@@ -314,6 +314,7 @@ TEST(ViewerMotion, OccupancySkippingStaysExactWhileMoving) {
 // Static cells of 4 (and 2) voxels: the moved grid keeps 8-voxel cells and the same large step,
 // proven over 2 (4) static cells of the distance field (frame.cpp moved_reach_cells).
 TEST(ViewerMotion, MovedOccupancyLeavesOutOnlyEmptySpace) {
+  int built = 0;
   for (int static_cell : {8, 4, 2})
   for (const char* kind : {"blob", "noise"}) {
     PreparedVolume vol = prepare_volume(synthetic_volume(kind), static_cell, 1);
@@ -326,8 +327,14 @@ TEST(ViewerMotion, MovedOccupancyLeavesOutOnlyEmptySpace) {
       s.motion.wind_shear = shear;
       s.motion.wind_speed = 6.0;
       s.erosion = 0;
+      s.skipping = Skipping::Thesis;  // the grid's reader (distance skipping leaves it unbuilt)
       FrameSetup f = frame_at(vol, s, t);
       ASSERT_EQ(f.params.motion_on, 1.0);
+      if (f.params.occupancy_skip < 0.5) {  // shear this steep leaves the large step under one small step
+        EXPECT_TRUE(f.moved_occupancy.empty()) << at << ": a grid nothing reads";
+        continue;
+      }
+      ++built;
       const glm::ivec3 n(f.params.moved_occ_dims);
       ASSERT_EQ(f.moved_occupancy.size(), size_t(n.x) * n.y * n.z) << at;
       EXPECT_NEAR(f.params.moved_occ_cell_m, 8 * vol.voxel_size, 1e-3 * vol.voxel_size) << at;
@@ -375,6 +382,37 @@ TEST(ViewerMotion, MovedOccupancyLeavesOutOnlyEmptySpace) {
       EXPECT_GT(dense, 50) << at << ": the samples must reach the cloud";
     }
   }
+  std::cout << "moved grids built in " << built << " of 24 cases\n";
+  EXPECT_GE(built, 12) << "of 24 cases: the thesis scheme must skip in half at least";
+}
+
+// The moved grid is built for its readers only: the thesis scheme's march, and the light march
+// skipping empty cells (render.occupancy_light; while the clouds move it reads the grid under either
+// scheme, apply_motion). Distance skipping alone, the defaults, no skipping and layer mode leave it
+// empty, and their images stay those of no skipping (ViewerSpeed.DistanceSkippingStaysExactWhileMoving).
+TEST(ViewerMotion, MovedGridIsBuiltForItsReadersOnly) {
+  PreparedVolume vol = prepare_volume(synthetic_volume("noise"), 4, 2);  // tiles: layer mode too
+  struct Case { const char* name; Skipping skipping; bool light; bool layer; bool built; };
+  const Case cases[] = {{"distance", Skipping::Distance, false, false, false},
+                        {"distance + occupancy_light", Skipping::Distance, true, false, true},
+                        {"none", Skipping::None, false, false, false},
+                        {"thesis", Skipping::Thesis, false, false, true},
+                        {"thesis + occupancy_light", Skipping::Thesis, true, false, true},
+                        {"thesis, layer mode", Skipping::Thesis, false, true, false}};
+  for (const Case& c : cases) {
+    RenderSettings s;
+    s.steps = 128;
+    s.skipping = c.skipping;
+    s.occupancy_light = c.light;
+    if (c.layer) s.mode = PlaceMode::Layer;
+    FrameSetup f = frame_at(vol, s, 60.0);
+    ASSERT_EQ(f.params.motion_on, 1.0) << c.name;
+    EXPECT_EQ(!f.moved_occupancy.empty(), c.built) << c.name;
+    if (c.built) {
+      const glm::ivec3 n(f.params.moved_occ_dims);
+      EXPECT_EQ(f.moved_occupancy.size(), size_t(n.x) * n.y * n.z) << c.name;
+    }
+  }
 }
 
 // The grid's margin, where random points rarely look: a volume whose only density is three voxels,
@@ -382,6 +420,8 @@ TEST(ViewerMotion, MovedOccupancyLeavesOutOnlyEmptySpace) {
 // moved image, every point a large step from density must lie in a marked cell, at many times (the
 // moved grid's offset against the static cells changes with time) and without shear (the tightest
 // grid). A grid that marked only the cells holding density, or had no half-voxel margin, fails here.
+// Wind alone (no flow map): a steep flow over this small volume would turn the thesis scheme off
+// (its step under one small step), and make_frame builds no grid that nothing reads.
 TEST(ViewerMotion, MovedOccupancyKeepsItsMarginAtCellFaces) {
   cloudgen::Volume v = synthetic_volume("blob");
   std::fill(v.density.begin(), v.density.end(), 0.f);
@@ -395,10 +435,13 @@ TEST(ViewerMotion, MovedOccupancyKeepsItsMarginAtCellFaces) {
     s.steps = 96;
     s.motion.wind_shear = 0.0;
     s.motion.wind_speed = 5.0;
+    s.motion.flow_up = s.motion.flow_forward = 0.0;  // no stretch: the thesis scheme stays on and reads the grid
     s.erosion = 0;
+    s.skipping = Skipping::Thesis;
     const double t = 20.0 + 7.3 * ti;
     FrameSetup f = frame_at(vol, s, t);
     ASSERT_EQ(f.params.motion_on, 1.0);
+    ASSERT_EQ(f.params.occupancy_skip, 1.0) << "t " << t << ": the thesis scheme reads this grid";
     const glm::ivec3 n(f.params.moved_occ_dims);
     ASSERT_EQ(f.moved_occupancy.size(), size_t(n.x) * n.y * n.z);
     const glm::dvec3 lo = f.params.march_min_m, hi = lo + f.params.march_size_m;

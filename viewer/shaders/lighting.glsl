@@ -17,8 +17,8 @@
 // and no density point is nearer to q than to that cell, in L-infinity, so its radius holds.)
 // `uvw`: moving_uvw(p, motion_at(p)), which the primary march has already found for the sample's
 // density.
-int empty_cells_seen(vec3 p, vec3 uvw) { return distance_texel(static_cell(uvw)); }
-int empty_cells(vec3 p) { return empty_cells_seen(p, moving_uvw(p, motion_at(p))); }
+int empty_cells_seen(vec3 uvw) { return distance_texel(static_cell(uvw)); }
+int empty_cells(vec3 p) { return empty_cells_seen(moving_uvw(p, motion_at(p))); }
 
 // The distance from p within which the density is provably 0 (metres; 0 next to density).
 // The bound holds in L-infinity, so along any straight segment. In layer mode a straight ray bends

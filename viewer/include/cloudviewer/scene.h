@@ -279,7 +279,8 @@ struct FrameSetup {
   std::vector<glm::dvec3> motion_table;
   /// Moving clouds in box mode: the occupancy of the march box at this time, params.moved_occ_dims
   /// cells of params.moved_occ_cell_m from params.march_min_m (x fastest, 0 or 1), which both
-  /// renderers' occupied() reads instead of the volume's grid (medium.glsl). Empty otherwise.
+  /// renderers' occupied() reads instead of the volume's grid (medium.glsl). Empty otherwise, and
+  /// when no call reads occupied() (distance skipping without render.occupancy_light: make_frame).
   std::vector<uint8_t> moved_occupancy;
 };
 
