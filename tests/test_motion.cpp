@@ -640,9 +640,19 @@ TEST(TemporalUpsampling, StillViewConvergesToTheFullRenderIn16Frames) {
   full.set_volume(vol);
   temporal.set_volume(vol);
   double first = 0;
+  auto ran = [](const GpuTimings& g, const char* pass) {
+    for (const auto& p : g.passes)
+      if (p.first == pass) return true;
+    return false;
+  };
   for (int f = 0; f < 16; ++f) {
     t.frame = f;
-    temporal.render(make_frame(vol, t, cam, sun, w, h));
+    GpuTimings g;
+    temporal.render(make_frame(vol, t, cam, sun, w, h), &g);
+    // The first frame has no history (the spatial upsample: the resolve); every later one holds it
+    // (nothing moved: the hold pass alone, which the image below checks too).
+    EXPECT_EQ(ran(g, "temporal_resolve"), f == 0) << "frame " << f;
+    EXPECT_EQ(ran(g, "temporal_hold"), f > 0) << "frame " << f;
     if (f == 0) {
       s.frame = 0;
       full.render(make_frame(vol, s, cam, sun, w, h));

@@ -1,14 +1,14 @@
 #version 450 core
 // Temporal upsampling, step 2 (seed 003): the full-resolution cloud layer from this frame's fresh
 // pixels (one per 4x4 block, cloud_sparse.frag) and last frame's result reprojected with the
-// previous view-projection. A pixel marched this frame takes its fresh value. Any other pixel
-// reprojects its cloud point (at the cloud's opacity-weighted depth, moved back by the clouds'
-// own motion since the last frame) into the previous frame, and takes the history there,
-//  - as it is when the camera and the clouds stand still (so a still view converges to the full
-//    render in 16 frames);
-//  - else clamped into the range of the fresh pixels around it (neighbourhood clamping: moving
-//    clouds and parallax cannot leave ghosts), and rejected (disocclusion) when its depth is
-//    outside the fresh neighbours' depths;
+// previous view-projection. A pixel marched this frame takes its fresh value. When the camera
+// and the clouds stand still, every other pixel takes last frame's value as it is (so a still
+// view converges to the full render in 16 frames): temporal_hold.frag, which gl_renderer.cpp runs
+// instead of this pass then. Here (something moved) any other pixel reprojects its cloud point
+// (at the cloud's opacity-weighted depth, moved back by the clouds' own motion since the last
+// frame) into the previous frame, and takes the history there clamped into the range of the
+// fresh pixels around it (neighbourhood clamping: moving clouds and parallax cannot leave
+// ghosts), rejected (disocclusion) when its depth is outside the fresh neighbours' depths;
 // falling back to the bilinear upsample of the fresh pixels when there is no history (the first
 // frame, a resize, a changed setting) or the point was off screen last frame.
 #include "cloud_headers.glsl"
@@ -29,11 +29,6 @@ void main() {
   if ((px.x & 3) == off.x && (px.y & 3) == off.y) {  // marched this frame
     o_cloud = texelFetch(s_fresh, px >> 2, 0);
     o_depth = texelFetch(s_fresh_depth, px >> 2, 0);
-    return;
-  }
-  if (u_temporal.x > 0.5 && u_temporal.y > 0.5) {  // nothing moved: last frame's pixel is this pixel
-    o_cloud = texelFetch(s_history, px, 0);
-    o_depth = texelFetch(s_history_depth, px, 0);
     return;
   }
   // Fresh texel (i, j) sits at full-resolution pixel 4 (i, j) + off: bilinear between the four

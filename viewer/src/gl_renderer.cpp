@@ -164,6 +164,9 @@ struct Pass {
   bool orders_loop = false;                          // precompute: the density orders' loop follows it
   bool driven = false;                               // run by the orders loop, not by the frame's walk
   int blend_attachment = -1;                         // a 3D target's attachment this pass adds into
+  int history_held = -1;                             // temporal: 1 runs only when the history is held
+                                                     // (nothing moved), 0 only when not; -1 either way
+  bool drew = false;                                 // run() drew it this frame (GpuTimings::passes)
   GLuint program = 0;
 };
 
@@ -338,11 +341,17 @@ std::vector<Pass> make_passes() {
   sparse.target = "cloud_quarter", sparse.inputs = {{"scene", 1}}, sparse.group = Group::Clouds;
   sparse.enabled = temporal;
   p.push_back(sparse);
+  // The resolve, or, when nothing moved since the last frame, its held case alone (a program of
+  // its own: llvmpipe would run the reprojection whatever the uniforms say).
   Pass resolve;
   resolve.name = "temporal_resolve", resolve.vs = "fullscreen.vert", resolve.fs = "temporal_resolve.frag";
   resolve.target = "cloud_layer", resolve.group = Group::Clouds, resolve.enabled = temporal;
   resolve.inputs = {{"cloud_quarter", 0}, {"cloud_quarter", 1}, {"cloud_layer@prev", 0}, {"cloud_layer@prev", 1}};
+  resolve.history_held = 0;
+  Pass hold = resolve;
+  hold.name = "temporal_hold", hold.fs = "temporal_hold.frag", hold.history_held = 1;
   p.push_back(resolve);
+  p.push_back(hold);
   Pass over;
   over.name = "temporal_compose", over.vs = "fullscreen.vert", over.fs = "temporal_compose.frag";
   over.target = "hdr", over.group = Group::Clouds, over.enabled = temporal;
@@ -547,6 +556,7 @@ struct GlRenderer::Impl {
   bool have_volume = false;
   // Temporal upsampling: what the history in "cloud_layer@prev" was rendered with.
   bool history_valid = false;
+  bool history_held = false;  // this frame: temporal, history valid, nothing moved (temporal_hold runs)
   std::string history_key;       // settings, sun and size it was rendered with
   glm::dvec3 history_eye{0.0};
   glm::dmat4 history_view_proj{1.0};
@@ -821,6 +831,8 @@ struct GlRenderer::Impl {
       glClearNamedFramebufferfv(t.fbo[0], GL_DEPTH, 0, &one);
     }
     if (p.enabled && !p.enabled(f)) return;
+    if (p.history_held >= 0 && (p.history_held == 1) != history_held) return;
+    p.drew = true;
     if (t.volume_size) {  // one draw per layer of the 3D target (the layer in uniform location 0)
       glUseProgram(p.program);
       set_volume_uniforms(p.program);
@@ -1168,6 +1180,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glm::dmat4 prev = m.history_view_proj * glm::translate(glm::dmat4(1.0), f.camera.eye - m.history_eye);
   fb.prev_view_proj = glm::mat4(valid ? prev : f.view_proj);
   fb.temporal = glm::vec4(valid ? 1.f : 0.f, still ? 1.f : 0.f, float(offset.x), float(offset.y));
+  m.history_held = still;
   if (f.params.motion_on > 0.5) {  // this frame's D(h), and the last frame's for the reprojection
     std::vector<glm::dvec3> rows = f.motion_table;
     if (valid) {
@@ -1276,6 +1289,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   glBindTextureUnit(CV_UNIT_MS_VOLUME, ms_dirty ? 0 : m.tex_ms);
 
   glQueryCounter(m.queries[0], GL_TIMESTAMP);
+  for (Pass& p : m.passes) p.drew = false;
   for (size_t i = 0; i < m.passes.size(); ++i) {
     if (m.passes[i].driven) {
       // run by the orders loop inside its parent pass
@@ -1321,7 +1335,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
     *timings = GpuTimings{};
     for (size_t i = 0; i < m.passes.size(); ++i) {
       double ms = double(t[i + 1] - t[i]) * 1e-6;
-      timings->passes.push_back({m.passes[i].name, ms});
+      if (m.passes[i].drew) timings->passes.push_back({m.passes[i].name, ms});
       Group g = m.passes[i].group;
       (g == Group::Atmosphere ? timings->atmosphere_ms : g == Group::Light ? timings->light_volume_ms
        : g == Group::Shadow ? timings->shadow_map_ms : g == Group::Ground ? timings->ground_ms

@@ -29,7 +29,7 @@ struct GpuTimings {
   /// render.compiled_modes, a new NanoVDB lookup). Not in total_ms (GPU time).
   double compile_ms = 0;
   int programs_linked = 0;
-  std::vector<std::pair<std::string, double>> passes;  ///< every pass in order, ms
+  std::vector<std::pair<std::string, double>> passes;  ///< every pass that drew this frame, in order, ms
 };
 
 /// Where the GLSL comes from: the copies embedded at build time, or a directory (`--shader-dir`).
