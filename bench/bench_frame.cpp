@@ -7,7 +7,6 @@
 #include <benchmark/benchmark.h>
 
 #include <string>
-#include <vector>
 
 #include "cloudviewer/scene.h"
 #include "cloudviewer/settings.h"
