@@ -166,6 +166,8 @@ struct Pass {
   int blend_attachment = -1;                         // a 3D target's attachment this pass adds into
   int history_held = -1;                             // temporal: 1 runs only when the history is held
                                                      // (nothing moved), 0 only when not; -1 either way
+  bool fresh_points = false;                         // one point per pixel marched this frame (temporal:
+                                                     // temporal_points.vert) instead of a full-screen triangle
   bool drew = false;                                 // run() drew it this frame (GpuTimings::passes)
   GLuint program = 0;
 };
@@ -341,15 +343,20 @@ std::vector<Pass> make_passes() {
   sparse.target = "cloud_quarter", sparse.inputs = {{"scene", 1}}, sparse.group = Group::Clouds;
   sparse.enabled = temporal;
   p.push_back(sparse);
-  // The resolve, or, when nothing moved since the last frame, its held case alone (a program of
-  // its own: llvmpipe would run the reprojection whatever the uniforms say).
+  // The resolve and the compose over the background, every pixel. When nothing moved since the
+  // last frame, only the pixels marched in this frame change: the held frame keeps the resolved
+  // layer and the composed image in place (render() does not swap the history then) and draws
+  // those pixels alone, as points, into both (a pass of their own besides: llvmpipe would run the
+  // reprojection whatever the uniforms say).
   Pass resolve;
   resolve.name = "temporal_resolve", resolve.vs = "fullscreen.vert", resolve.fs = "temporal_resolve.frag";
   resolve.target = "cloud_layer", resolve.group = Group::Clouds, resolve.enabled = temporal;
   resolve.inputs = {{"cloud_quarter", 0}, {"cloud_quarter", 1}, {"cloud_layer@prev", 0}, {"cloud_layer@prev", 1}};
   resolve.history_held = 0;
   Pass hold = resolve;
-  hold.name = "temporal_hold", hold.fs = "temporal_hold.frag", hold.history_held = 1;
+  hold.name = "temporal_hold", hold.vs = "temporal_points.vert", hold.fs = "temporal_hold.frag";
+  hold.inputs = {{"cloud_quarter", 0}, {"cloud_quarter", 1}};
+  hold.history_held = 1, hold.fresh_points = true;
   p.push_back(resolve);
   p.push_back(hold);
   Pass over;
@@ -357,7 +364,12 @@ std::vector<Pass> make_passes() {
   over.target = "hdr", over.group = Group::Clouds, over.enabled = temporal;
   over.inputs = {{"cloud_layer", 0}, {"scene", 0}, {"scene", 1}, {"cloud_quarter", 2}, {"cloud_quarter", 3},
                 {"cloud_quarter", 4}};
+  over.history_held = 0;
+  Pass over_held = over;  // the same compose at this frame's pixels, over last frame's image
+  over_held.name = "temporal_hold_compose", over_held.vs = "temporal_points.vert";
+  over_held.history_held = 1, over_held.fresh_points = true;
   p.push_back(over);
+  p.push_back(over_held);
   Pass bright;
   bright.name = "bloom_bright", bright.vs = "fullscreen.vert", bright.fs = "bloom_bright.frag";
   bright.target = "bloom_a", bright.inputs = {{"hdr", 0}}, bright.enabled = bloom_on;
@@ -556,7 +568,8 @@ struct GlRenderer::Impl {
   bool have_volume = false;
   // Temporal upsampling: what the history in "cloud_layer@prev" was rendered with.
   bool history_valid = false;
-  bool history_held = false;  // this frame: temporal, history valid, nothing moved (temporal_hold runs)
+  bool history_held = false;  // this frame: temporal, history valid, nothing moved (temporal_hold and
+                              // temporal_hold_compose run, at this frame's pixels only)
   std::string history_key;       // settings, sun and size it was rendered with
   glm::dvec3 history_eye{0.0};
   glm::dmat4 history_view_proj{1.0};
@@ -874,6 +887,10 @@ struct GlRenderer::Impl {
       glBindVertexArray(vao_ground);
       glDrawArrays(GL_TRIANGLES, layer ? grid_first : quad_first, layer ? grid_count : quad_count);
       glDisable(GL_DEPTH_TEST);
+    } else if (p.fresh_points) {
+      const Target& quarter = target("cloud_quarter");
+      glBindVertexArray(vao_empty);
+      glDrawArrays(GL_POINTS, 0, GLsizei(quarter.w) * quarter.h);
     } else {
       glBindVertexArray(vao_empty);
       glDrawArrays(GL_TRIANGLES, 0, 3);
@@ -956,6 +973,8 @@ struct GlRenderer::Impl {
     glBindTextureUnit(CV_UNIT_ORDERS_DENSITY, 0);
     glBindTextureUnit(CV_UNIT_ORDERS_DENSITY_M, 0);
   }
+  // After every frame: this frame's copy becomes "NAME@prev". A held temporal frame swaps back
+  // first (render()), so that it draws into last frame's copy in place.
   void swap_history() {
     for (Target& t : targets)
       if (t.history) {
@@ -1288,6 +1307,9 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   }
   glBindTextureUnit(CV_UNIT_MS_VOLUME, ms_dirty ? 0 : m.tex_ms);
 
+  // A held frame changes only the pixels it marches: last frame's resolved layer and composed
+  // image stay where they are (the composed image in "hdr", which only the cloud passes write).
+  if (still) m.swap_history();
   glQueryCounter(m.queries[0], GL_TIMESTAMP);
   for (Pass& p : m.passes) p.drew = false;
   for (size_t i = 0; i < m.passes.size(); ++i) {
@@ -1448,6 +1470,22 @@ FrameImages GlRenderer::read_back() {
   glReadPixels(0, 0, m.w, m.h, GL_RGBA, GL_FLOAT, out.display.rgba.data());
   glReadBuffer(GL_COLOR_ATTACHMENT1);
   glReadPixels(0, 0, m.w, m.h, GL_RGBA, GL_FLOAT, out.linear.rgba.data());
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+  return out;
+}
+
+Image GlRenderer::read_target(const std::string& name, int attachment) {
+  Impl& m = *impl_;
+  // The frame's own copy of a history target is "@prev" once render() has swapped.
+  const Target& t = m.target(name);
+  const int copy = t.history ? 1 : 0;
+  if (t.volume_size || attachment < 0 || size_t(attachment) >= t.tex[size_t(copy)].size())
+    throw GlError("read_target: '" + name + "' has no 2D attachment " + std::to_string(attachment));
+  Image out(t.w, t.h);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, t.fbo[copy]);
+  glReadBuffer(GLenum(GL_COLOR_ATTACHMENT0 + attachment));
+  glReadPixels(0, 0, t.w, t.h, GL_RGBA, GL_FLOAT, out.rgba.data());
   glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
   return out;
 }

@@ -112,6 +112,11 @@ class GlRenderer {
   void render(const FrameSetup& frame, GpuTimings* timings = nullptr);
   /// Reads the last frame back.
   FrameImages read_back();
+  /// Reads one attachment of an internal 2D target as RGBA floats (a one-channel target in R), for
+  /// tests and debugging: "cloud_layer" attachment 0 after render() is the resolved temporal
+  /// cloud layer (L, T) that the next frame reprojects. Throws GlError for an unknown name, a 3D
+  /// target or an attachment it does not have.
+  Image read_target(const std::string& name, int attachment = 0);
   /// Blits the display image into the default framebuffer (window mode).
   void present(int window_width, int window_height);
   /// Reads the default framebuffer's back buffer (what present() drew), 8-bit display values.
