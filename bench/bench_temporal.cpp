@@ -98,7 +98,7 @@ int main(int argc, char** argv) {
     r.set_volume(vol);
     std::cout << "# " << ctx.description() << ", " << w << "x" << h << ", best of " << repeat << "\n\n";
 
-    std::cout << "The camera and the clouds still (the temporal frames hold their history: temporal_hold):\n\n";
+    std::cout << "The camera and the clouds still (the temporal frames hold their history: clouds_sparse_held):\n\n";
     std::cout << "| steps | full frame ms | temporal frame ms | frame speed-up | full clouds ms | temporal clouds ms | "
                  "clouds speed-up |\n|---:|---:|---:|---:|---:|---:|---:|\n";
     std::vector<GpuTimings> per_pass(2);

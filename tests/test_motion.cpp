@@ -653,12 +653,12 @@ TEST(TemporalUpsampling, StillViewConvergesToTheFullRenderIn16Frames) {
     GpuTimings g;
     temporal.render(make_frame(vol, t, cam, sun, w, h), &g);
     // The first frame has no history (the spatial upsample: the resolve and the full compose);
-    // every later one holds it (nothing moved: the hold passes at this frame's pixels alone, which
-    // the image below checks too).
+    // every later one holds it (nothing moved: the held sparse pass alone, which stores this
+    // frame's pixels into the layer and the image; the image below checks it too).
     EXPECT_EQ(ran(g, "temporal_resolve"), f == 0) << "frame " << f;
     EXPECT_EQ(ran(g, "temporal_compose"), f == 0) << "frame " << f;
-    EXPECT_EQ(ran(g, "temporal_hold"), f > 0) << "frame " << f;
-    EXPECT_EQ(ran(g, "temporal_hold_compose"), f > 0) << "frame " << f;
+    EXPECT_EQ(ran(g, "clouds_sparse"), f == 0) << "frame " << f;
+    EXPECT_EQ(ran(g, "clouds_sparse_held"), f > 0) << "frame " << f;
     if (f == 0) {
       s.frame = 0;
       full.render(make_frame(vol, s, cam, sun, w, h));

@@ -56,6 +56,10 @@
 #define CV_UNIT_NANOVDB_PAGES 15
 #define CV_UNIT_IRRADIANCE 16         // RGBA32F: the sky's irradiance on the ground (atmosphere LUT)
 #define CV_UNIT_CURL 17               // RGBA32F: the curl field that distorts the detail lookup
+// Image units (their own namespace): what a pass stores into with imageStore, in its table order.
+#define CV_IMAGE_PASS_OUTPUT0 0
+#define CV_IMAGE_PASS_OUTPUT1 1
+#define CV_IMAGE_PASS_OUTPUT2 2
 
 // Fixed sizes.
 #define CV_COVERAGE_MAP_SIZE 256   // layer-mode coverage map, texels per side

@@ -9,10 +9,8 @@
 // the air is evaluated once, at this pixel's own distance: the far ground near the horizon,
 // whose distance changes fast from row to row, can use its neighbours. The ground's own
 // radiance, its shadows and the sun's disc stay per pixel. The analytic sky is cheap:
-// compose_over as the full cloud pass does. A held frame (nothing moved) draws this pass only at
-// the pixels it marched (temporal_hold_compose, temporal_points.vert), over last frame's image:
-// there the bilinear filter sits on the pixel's own block, so each pixel's air is its own
-// sample's once all 16 have been marched.
+// compose_over as the full cloud pass does. A held frame (nothing moved) does not run this pass:
+// cloud_sparse_held.frag composes the pixels it marched over last frame's image.
 #include "cloud_headers.glsl"
 layout(binding = CV_UNIT_PASS_INPUT0) uniform sampler2D s_cloud;
 layout(binding = CV_UNIT_PASS_INPUT1) uniform sampler2D s_scene_color;

@@ -166,8 +166,8 @@ struct Pass {
   int blend_attachment = -1;                         // a 3D target's attachment this pass adds into
   int history_held = -1;                             // temporal: 1 runs only when the history is held
                                                      // (nothing moved), 0 only when not; -1 either way
-  bool fresh_points = false;                         // one point per pixel marched this frame (temporal:
-                                                     // temporal_points.vert) instead of a full-screen triangle
+  std::vector<std::pair<std::string, int>> images;  // (target, attachment) -> CV_IMAGE_PASS_OUTPUT0 + i,
+                                                     // written with imageStore (its own target's copy)
   bool drew = false;                                 // run() drew it this frame (GpuTimings::passes)
   GLuint program = 0;
 };
@@ -337,39 +337,35 @@ std::vector<Pass> make_passes() {
   clouds.inputs = {{"scene", 0}, {"scene", 1}}, clouds.group = Group::Clouds;
   clouds.enabled = [](const FrameSetup& f) { return !temporal_on(f); };
   p.push_back(clouds);
-  // render.temporal: the cloud layer at 1/16 of the pixels, resolved with the history, composited.
+  // render.temporal: the cloud layer at 1/16 of the pixels, resolved with the history, composited
+  // over the background at every pixel. When nothing moved since the last frame only the pixels
+  // marched in it change: the held frame keeps last frame's resolved layer and composed image in
+  // place (render() does not swap the history then), and one pass marches its pixels, composes
+  // them and stores them into both (a program of its own: llvmpipe would run the reprojection
+  // whatever the uniforms say).
   Pass sparse;
   sparse.name = "clouds_sparse", sparse.vs = "fullscreen.vert", sparse.fs = "cloud_sparse.frag";
   sparse.target = "cloud_quarter", sparse.inputs = {{"scene", 1}}, sparse.group = Group::Clouds;
-  sparse.enabled = temporal;
+  sparse.enabled = temporal, sparse.history_held = 0;
+  Pass held = sparse;
+  held.name = "clouds_sparse_held", held.fs = "cloud_sparse_held.frag";
+  held.inputs = {{"scene", 1}, {"scene", 0}}, held.images = {{"cloud_layer", 0}, {"cloud_layer", 1}, {"hdr", 0}};
+  held.history_held = 1;
   p.push_back(sparse);
-  // The resolve and the compose over the background, every pixel. When nothing moved since the
-  // last frame, only the pixels marched in this frame change: the held frame keeps the resolved
-  // layer and the composed image in place (render() does not swap the history then) and draws
-  // those pixels alone, as points, into both (a pass of their own besides: llvmpipe would run the
-  // reprojection whatever the uniforms say).
+  p.push_back(held);
   Pass resolve;
   resolve.name = "temporal_resolve", resolve.vs = "fullscreen.vert", resolve.fs = "temporal_resolve.frag";
   resolve.target = "cloud_layer", resolve.group = Group::Clouds, resolve.enabled = temporal;
   resolve.inputs = {{"cloud_quarter", 0}, {"cloud_quarter", 1}, {"cloud_layer@prev", 0}, {"cloud_layer@prev", 1}};
   resolve.history_held = 0;
-  Pass hold = resolve;
-  hold.name = "temporal_hold", hold.vs = "temporal_points.vert", hold.fs = "temporal_hold.frag";
-  hold.inputs = {{"cloud_quarter", 0}, {"cloud_quarter", 1}};
-  hold.history_held = 1, hold.fresh_points = true;
   p.push_back(resolve);
-  p.push_back(hold);
   Pass over;
   over.name = "temporal_compose", over.vs = "fullscreen.vert", over.fs = "temporal_compose.frag";
   over.target = "hdr", over.group = Group::Clouds, over.enabled = temporal;
   over.inputs = {{"cloud_layer", 0}, {"scene", 0}, {"scene", 1}, {"cloud_quarter", 2}, {"cloud_quarter", 3},
                 {"cloud_quarter", 4}};
   over.history_held = 0;
-  Pass over_held = over;  // the same compose at this frame's pixels, over last frame's image
-  over_held.name = "temporal_hold_compose", over_held.vs = "temporal_points.vert";
-  over_held.history_held = 1, over_held.fresh_points = true;
   p.push_back(over);
-  p.push_back(over_held);
   Pass bright;
   bright.name = "bloom_bright", bright.vs = "fullscreen.vert", bright.fs = "bloom_bright.frag";
   bright.target = "bloom_a", bright.inputs = {{"hdr", 0}}, bright.enabled = bloom_on;
@@ -568,8 +564,8 @@ struct GlRenderer::Impl {
   bool have_volume = false;
   // Temporal upsampling: what the history in "cloud_layer@prev" was rendered with.
   bool history_valid = false;
-  bool history_held = false;  // this frame: temporal, history valid, nothing moved (temporal_hold and
-                              // temporal_hold_compose run, at this frame's pixels only)
+  bool history_held = false;  // this frame: temporal, history valid, nothing moved (clouds_sparse_held
+                              // runs instead of clouds_sparse, temporal_resolve and temporal_compose)
   std::string history_key;       // settings, sun and size it was rendered with
   glm::dvec3 history_eye{0.0};
   glm::dmat4 history_view_proj{1.0};
@@ -887,13 +883,18 @@ struct GlRenderer::Impl {
       glBindVertexArray(vao_ground);
       glDrawArrays(GL_TRIANGLES, layer ? grid_first : quad_first, layer ? grid_count : quad_count);
       glDisable(GL_DEPTH_TEST);
-    } else if (p.fresh_points) {
-      const Target& quarter = target("cloud_quarter");
-      glBindVertexArray(vao_empty);
-      glDrawArrays(GL_POINTS, 0, GLsizei(quarter.w) * quarter.h);
     } else {
+      for (size_t i = 0; i < p.images.size(); ++i) {
+        const Target& out = target(p.images[i].first);
+        const size_t a = size_t(p.images[i].second);
+        glBindImageTexture(GLuint(CV_IMAGE_PASS_OUTPUT0 + i), out.tex[0][a], 0, GL_FALSE, 0, GL_WRITE_ONLY,
+                           out.colors[a]);
+      }
       glBindVertexArray(vao_empty);
       glDrawArrays(GL_TRIANGLES, 0, 3);
+      // The later passes (and the next frame) read what it stored through texture fetches and
+      // framebuffer blending.
+      if (!p.images.empty()) glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
     }
   }
   const Pass& pass(const std::string& name) const {

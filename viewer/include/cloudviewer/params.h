@@ -34,7 +34,7 @@ struct FrameBlock {
   glm::vec4 viewport;       ///< xy: full size (px); zw: bloom size (px)
   glm::vec4 post;           ///< x: exposure; y: tone map operator (CV_TONEMAP_*); z: bloom strength; w: bloom threshold
   glm::mat4 prev_view_proj; ///< temporal: previous frame's clip <- this frame's camera-relative world
-  glm::vec4 temporal;       ///< temporal: x history valid; y still (unread: temporal_hold serves it); zw block offset
+  glm::vec4 temporal;       ///< temporal: x history valid; y still (unread: clouds_sparse_held serves it); zw block offset
 };
 static_assert(sizeof(FrameBlock) == 240, "std140 FrameBlock size");
 
