@@ -721,6 +721,41 @@ TEST(TemporalUpsampling, HeldFramesChangeOnlyThePixelsTheyMarch) {
   EXPECT_GT(changed_total, w * h / 4);
 }
 
+// A shader hot reload (the window's R key) must not keep what the old programs computed: the
+// light volume and shadow map are rebuilt and the temporal history, held a frame before, dropped.
+TEST(TemporalUpsampling, ReloadedShadersRecomputeTheCachesAndTheHistory) {
+  gl_context();
+  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
+  const int w = 64, h = 36;
+  Camera cam = default_camera(vol, 60, double(w) / h);
+  Sun sun = default_sun(cam);
+  RenderSettings t;
+  t.temporal = true;
+  GlRenderer r{ShaderSource()};
+  r.set_volume(vol);
+  auto ran = [](const GpuTimings& g, const char* pass) {
+    for (const auto& p : g.passes)
+      if (p.first == pass) return true;
+    return false;
+  };
+  GpuTimings g;
+  for (int f = 0; f < 2; ++f) {
+    t.frame = f;
+    r.render(make_frame(vol, t, cam, sun, w, h), &g);
+  }
+  ASSERT_TRUE(ran(g, "clouds_sparse_held")) << "the second frame holds the history";
+  const int light = r.light_volume_builds(), shadow = r.shadow_map_builds();
+  ASSERT_GT(light, 0);
+  ASSERT_GT(shadow, 0);
+  r.reload_shaders();
+  t.frame = 2;
+  r.render(make_frame(vol, t, cam, sun, w, h), &g);
+  EXPECT_TRUE(ran(g, "clouds_sparse")) << "after a reload the history is not held";
+  EXPECT_FALSE(ran(g, "clouds_sparse_held"));
+  EXPECT_EQ(r.light_volume_builds(), light + 1);
+  EXPECT_EQ(r.shadow_map_builds(), shadow + 1);
+}
+
 // A camera pan and moving clouds: the reprojected, neighbourhood-clamped history must not leave
 // ghosts. Each frame is compared with the full render of the same camera, time and frame index;
 // a pixel off by more than 0.1 (display units, any channel) counts as a ghost.

@@ -1055,6 +1055,14 @@ void GlRenderer::reload_shaders() {
     throw;
   }
   for (auto& c : old) glDeleteProgram(c.second);
+  // What the old programs computed (the atmosphere and air LUTs, the light volume, the shadow map,
+  // the diffusion inputs, the temporal history) is computed again by the new ones on the next frame.
+  m.atmo_valid = false;
+  m.light_key.clear();
+  m.shadow_key.clear();
+  m.air_key.clear();
+  m.ms_key.clear();
+  m.history_valid = false;
 }
 
 std::string GlRenderer::renderer_string() const {

@@ -106,7 +106,9 @@ class GlRenderer {
   /// Uploads only the distance field of the volume set_volume took (fit_distance_field rebuilt it:
   /// the same cells); the lighting caches and the temporal history stay.
   void set_distance_field(const PreparedVolume& vol);
-  /// Recompiles every program (shader hot reload). Throws ShaderError, keeping the old programs.
+  /// Recompiles every program (shader hot reload); the next frame recomputes every cached table
+  /// (LUTs, light volume, shadow map) and drops the temporal history. Throws ShaderError, keeping
+  /// the old programs and caches.
   void reload_shaders();
   /// Renders into internal targets; `timings` from GPU timer queries (of this frame).
   void render(const FrameSetup& frame, GpuTimings* timings = nullptr);
