@@ -4,9 +4,9 @@
 // previous view-projection. A pixel marched this frame takes its fresh value. When the camera
 // and the clouds stand still, every other pixel takes last frame's value as it is (so a still
 // view converges to the full render in 16 frames): cloud_sparse_held.frag, which gl_renderer.cpp
-// runs instead of cloud_sparse.frag, this pass and temporal_compose.frag then. Here (something moved) any other pixel reprojects its cloud point
-// (at the cloud's opacity-weighted depth, moved back by the clouds' own motion since the last
-// frame) into the previous frame, and takes the history there clamped into the range of the
+// runs instead of cloud_sparse.frag, this pass and temporal_compose.frag then. Here (something
+// moved) any other pixel reprojects its cloud point (at the cloud's opacity-weighted depth, moved
+// back by the clouds' own motion since the last frame) into the previous frame, and takes the history there clamped into the range of the
 // fresh pixels around it (neighbourhood clamping: moving clouds and parallax cannot leave
 // ghosts), rejected (disocclusion) when its depth is outside the fresh neighbours' depths;
 // falling back to the bilinear upsample of the fresh pixels when there is no history (the first

@@ -892,8 +892,8 @@ struct GlRenderer::Impl {
       }
       glBindVertexArray(vao_empty);
       glDrawArrays(GL_TRIANGLES, 0, 3);
-      // The later passes (and the next frame) read what it stored through texture fetches and
-      // framebuffer blending.
+      // The later passes (and the next frame) read what it stored through texture fetches, and
+      // draw into or read back the same textures as framebuffer attachments.
       if (!p.images.empty()) glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
     }
   }
