@@ -6,11 +6,12 @@
 // view converges to the full render in 16 frames): cloud_sparse_held.frag, which gl_renderer.cpp
 // runs instead of cloud_sparse.frag, this pass and temporal_compose.frag then. Here (something
 // moved) any other pixel reprojects its cloud point (at the cloud's opacity-weighted depth, moved
-// back by the clouds' own motion since the last frame) into the previous frame, and takes the history there clamped into the range of the
-// fresh pixels around it (neighbourhood clamping: moving clouds and parallax cannot leave
-// ghosts), rejected (disocclusion) when its depth is outside the fresh neighbours' depths;
-// falling back to the bilinear upsample of the fresh pixels when there is no history (the first
-// frame, a resize, a changed setting) or the point was off screen last frame.
+// back by the clouds' own motion since the last frame) into the previous frame, and takes the
+// history there clamped into the range of the fresh pixels around it (neighbourhood clamping:
+// moving clouds and parallax cannot leave ghosts), rejected (disocclusion) when its depth is
+// outside the fresh neighbours' depths; falling back to the bilinear upsample of the fresh
+// pixels when there is no history (the first frame, a resize, a changed setting) or the point
+// was off screen last frame.
 #include "cloud_headers.glsl"
 layout(binding = CV_UNIT_PASS_INPUT0) uniform sampler2D s_fresh;          // quarter: (L, T)
 layout(binding = CV_UNIT_PASS_INPUT1) uniform sampler2D s_fresh_depth;    // quarter: cloud distance
