@@ -623,6 +623,15 @@ TEST(TemporalUpsampling, AirCarriedToAnotherDistanceIsExactInAUniformMedium) {
   EXPECT_EQ(tr, glm::dvec3(1.0));
 }
 
+namespace {
+// Whether `pass` drew in the frame `g` timed (GpuTimings::passes lists only the passes that drew).
+bool pass_ran(const GpuTimings& g, const char* pass) {
+  for (const auto& p : g.passes)
+    if (p.first == pass) return true;
+  return false;
+}
+}  // namespace
+
 // A still camera over still clouds: after 16 frames every pixel has been marched once and the
 // history maps pixel to pixel, so the image is the full-resolution render's (the jitter of the
 // frame each pixel was marched in is the only difference). Held frames compose only the pixels
@@ -643,11 +652,6 @@ TEST(TemporalUpsampling, StillViewConvergesToTheFullRenderIn16Frames) {
   full.set_volume(vol);
   temporal.set_volume(vol);
   double first = 0;
-  auto ran = [](const GpuTimings& g, const char* pass) {
-    for (const auto& p : g.passes)
-      if (p.first == pass) return true;
-    return false;
-  };
   for (int f = 0; f < 16; ++f) {
     t.frame = f;
     GpuTimings g;
@@ -655,10 +659,10 @@ TEST(TemporalUpsampling, StillViewConvergesToTheFullRenderIn16Frames) {
     // The first frame has no history (the spatial upsample: the resolve and the full compose);
     // every later one holds it (nothing moved: the held sparse pass alone, which stores this
     // frame's pixels into the layer and the image; the image below checks it too).
-    EXPECT_EQ(ran(g, "temporal_resolve"), f == 0) << "frame " << f;
-    EXPECT_EQ(ran(g, "temporal_compose"), f == 0) << "frame " << f;
-    EXPECT_EQ(ran(g, "clouds_sparse"), f == 0) << "frame " << f;
-    EXPECT_EQ(ran(g, "clouds_sparse_held"), f > 0) << "frame " << f;
+    EXPECT_EQ(pass_ran(g, "temporal_resolve"), f == 0) << "frame " << f;
+    EXPECT_EQ(pass_ran(g, "temporal_compose"), f == 0) << "frame " << f;
+    EXPECT_EQ(pass_ran(g, "clouds_sparse"), f == 0) << "frame " << f;
+    EXPECT_EQ(pass_ran(g, "clouds_sparse_held"), f > 0) << "frame " << f;
     if (f == 0) {
       s.frame = 0;
       full.render(make_frame(vol, s, cam, sun, w, h));
@@ -733,25 +737,20 @@ TEST(TemporalUpsampling, ReloadedShadersRecomputeTheCachesAndTheHistory) {
   t.temporal = true;
   GlRenderer r{ShaderSource()};
   r.set_volume(vol);
-  auto ran = [](const GpuTimings& g, const char* pass) {
-    for (const auto& p : g.passes)
-      if (p.first == pass) return true;
-    return false;
-  };
   GpuTimings g;
   for (int f = 0; f < 2; ++f) {
     t.frame = f;
     r.render(make_frame(vol, t, cam, sun, w, h), &g);
   }
-  ASSERT_TRUE(ran(g, "clouds_sparse_held")) << "the second frame holds the history";
+  ASSERT_TRUE(pass_ran(g, "clouds_sparse_held")) << "the second frame holds the history";
   const int light = r.light_volume_builds(), shadow = r.shadow_map_builds();
   ASSERT_GT(light, 0);
   ASSERT_GT(shadow, 0);
   r.reload_shaders();
   t.frame = 2;
   r.render(make_frame(vol, t, cam, sun, w, h), &g);
-  EXPECT_TRUE(ran(g, "clouds_sparse")) << "after a reload the history is not held";
-  EXPECT_FALSE(ran(g, "clouds_sparse_held"));
+  EXPECT_TRUE(pass_ran(g, "clouds_sparse")) << "after a reload the history is not held";
+  EXPECT_FALSE(pass_ran(g, "clouds_sparse_held"));
   EXPECT_EQ(r.light_volume_builds(), light + 1);
   EXPECT_EQ(r.shadow_map_builds(), shadow + 1);
 }

@@ -641,7 +641,11 @@ struct GlRenderer::Impl {
         t.fbo[c] = t.depth_tex[c] = 0;
         t.tex[c].clear();
       }
-    if (viewport_only) return;
+    if (!viewport_only) forget_tables();
+  }
+  // The tables the frame computes once and keeps (the atmosphere and air LUTs, the light volume,
+  // the shadow map, the diffusion inputs) are computed again on the next frame.
+  void forget_tables() {
     atmo_valid = false;
     light_key.clear();
     shadow_key.clear();
@@ -1055,13 +1059,9 @@ void GlRenderer::reload_shaders() {
     throw;
   }
   for (auto& c : old) glDeleteProgram(c.second);
-  // What the old programs computed (the atmosphere and air LUTs, the light volume, the shadow map,
-  // the diffusion inputs, the temporal history) is computed again by the new ones on the next frame.
-  m.atmo_valid = false;
-  m.light_key.clear();
-  m.shadow_key.clear();
-  m.air_key.clear();
-  m.ms_key.clear();
+  // What the old programs computed (the cached tables, the temporal history) is computed again by
+  // the new ones on the next frame.
+  m.forget_tables();
   m.history_valid = false;
 }
 
