@@ -348,6 +348,87 @@ TEST(NanoVdb, AtlasOfATilingVolumeGivesTheDenseImage) {
   EXPECT_GT(image_stats(gn.display).stddev, 0.05);
 }
 
+// render.skipping=tree, the hierarchical DDA through the NanoVDB tree (issue 13): jumps through
+// the density grid's empty nodes keep exactly the samples of the plain march, max |diff| = 0 on GL
+// and on the CPU reference, and take fewer loop trips. Paths: the primary march's exit along the
+// ray in box mode (still, and moving with the bend the motion allows); the radius in any direction
+// (layer mode; the light and shadow marches with render.occupancy_light). Volumes: the blob with
+// its detail grids; the tiling volume whose sides are not whole leaves (nodes cut at the wrap),
+// without detail grids (the atlas programs then read no nanovdb uniform but the tree's) and with
+// its first rows empty, so the grid's index box does not start at 0 (nodes are aligned in index
+// space, not in the volume's). A radius 32x too long changes the image: the check can fail. A
+// dense volume refuses the setting with a message naming the way out.
+TEST(NanoVdb, TreeSkippingKeepsEverySampleOfThePlainMarch) {
+  struct Case {
+    const char* name;
+    PreparedVolume vol;
+    std::vector<const char*> sets;
+    double time = 0;  // s: the default motion moves the clouds once time passes
+  };
+  std::vector<Case> cases;
+  {
+    const fs::path p = written("tree.nvdb", cloudgen::Format::Nvdb);
+    const PreparedVolume blob_nano = open_input(p.string(), with({"render.volume=nanovdb"}));
+    cases.push_back({"blob, still", blob_nano, {"render.steps=128", "motion.wind_speed=0", "motion.flow_up=0", "motion.flow_forward=0"}});
+    // Moving: the wind with its height shear (the flow map's steep slope would leave radii under a step).
+    cases.push_back({"blob, moving", blob_nano, {"render.steps=128", "motion.flow_up=0", "motion.flow_forward=0"}, 40.0});
+    cases.push_back({"blob, light and shadow by the tree", blob_nano,
+                     {"render.steps=128", "render.occupancy_light=true", "render.light_volume=false", "render.shadow_map=false"}});
+  }
+  cloudgen::Volume t = odd_tiling_volume();
+  for (uint32_t z = 0; z < t.dims[2]; ++z)
+    for (uint32_t y = 0; y < 3; ++y)
+      for (uint32_t x = 0; x < t.dims[0]; ++x) t.density[t.index(x, y, z)] = 0.f;
+  auto tn = std::make_shared<cloudgen::NanoVolume>(cloudgen::nano_from_volume(t, cloudgen::ExportOptions{}));
+  ASSERT_NE(tn->index_min[1], 0) << "a grid whose index box starts at 0 would not test the offset";
+  const PreparedVolume tiling = prepare_nano(tn, 8, 1);
+  ASSERT_TRUE(tiling.tiles);
+  ASSERT_FALSE(tiling.has_detail);
+  cases.push_back({"tiling, still", tiling, {"render.steps=96", "motion.wind_speed=0", "motion.flow_up=0", "motion.flow_forward=0"}});
+  cases.push_back({"tiling, layer mode", tiling, {"render.steps=96", "render.mode=layer", "motion.wind_speed=0", "motion.flow_up=0", "motion.flow_forward=0"}});
+  for (const Case& c : cases)
+    for (bool on_gl : {true, false}) {
+      if (!on_gl && std::string(c.name) == "tiling, layer mode") continue;  // long rays: GL only
+      const std::string what = std::string(c.name) + (on_gl ? " GL" : " CPU");
+      RenderSettings none, tree;
+      for (const char* a : c.sets) apply_setting(none, a), apply_setting(tree, a);
+      apply_setting(none, "render.skipping=none");
+      apply_setting(tree, "render.skipping=tree");
+      none.time = tree.time = c.time;
+      const FrameSetup fn = frame_for(c.vol, none, 96, 54), ft = frame_for(c.vol, tree, 96, 54);
+      ASSERT_EQ(ft.params.skip_tree, 1.0) << what;
+      auto draw = [&](const FrameSetup& f) { return on_gl ? render_gl(c.vol, f) : render_cpu(c.vol, f); };
+      const FrameImages a = draw(fn), b = draw(ft);
+      EXPECT_GT(image_stats(a.display).stddev, 0.01) << what << ": a picture to compare";
+      EXPECT_EQ(max_abs_diff(a.linear, b.linear), 0.0) << what;
+      auto trips = [&](FrameSetup f) {
+        f.params.output_mode = CV_OUTPUT_ITERATIONS;
+        const FrameImages im = draw(f);
+        double sum = 0;
+        for (size_t i = 0; i < im.linear.rgba.size(); i += 4) sum += im.linear.rgba[i];
+        return sum / (96.0 * 54.0);
+      };
+      const double tn_trips = trips(fn), tt_trips = trips(ft);
+      std::cout << what << ": loop trips per pixel none " << tn_trips << ", tree " << tt_trips << "\n";
+      // Layer mode reads the radius in any direction (the ray bends through the texture), which an
+      // 8-voxel tile keeps near one step: fewer trips, not many fewer.
+      EXPECT_LT(tt_trips, (ft.params.layer_on > 0.5 ? 0.99 : 0.9) * tn_trips) << what;
+      if (std::string(c.name) == "tiling, layer mode") {
+        FrameSetup bad = ft;
+        bad.params.df_cell_m *= 32.0;  // the radius is in voxels of df_cell_m / occ_cell_voxels metres
+        EXPECT_GT(max_abs_diff(a.linear, draw(bad).linear), 1e-3) << what << ": the check can fail";
+      }
+      if (HasFailure()) dump("tree_" + std::to_string(&c - cases.data()), a.display, b.display);
+    }
+  const PreparedVolume dense = open_input(written("tree_dense.vdb", cloudgen::Format::Vdb).string(), with({"render.volume=dense"}));
+  try {
+    frame_for(dense, with({"render.skipping=tree"}));
+    ADD_FAILURE() << "a dense volume took render.skipping=tree";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("render.volume=nanovdb"), std::string::npos) << e.what();
+  }
+}
+
 // A volume beyond the dense path's budget (here a deliberately small render.dense_budget) opens
 // and renders through NanoVDB under volume=auto, from .nvdb, from .vdb (converted sparse, no
 // dense copy) and from a raw texture; volume=dense refuses it naming the setting.

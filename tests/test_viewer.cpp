@@ -791,7 +791,7 @@ TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
   CV_EXPECT_OFFSET(shadow_map_min_x_m);
   CV_EXPECT_OFFSET(shadow_map_min_z_m);
   CV_EXPECT_OFFSET(shadow_map_ground_m);
-  CV_EXPECT_OFFSET(moved_pad0);
+  CV_EXPECT_OFFSET(skip_tree);
 #undef CV_EXPECT_OFFSET
   EXPECT_EQ(r.pass_names().front(), "atmosphere_transmittance");  // the LUT precomputes come first
   EXPECT_EQ(r.pass_names().at(1), "atmosphere_multiple_scattering");

@@ -100,6 +100,20 @@ vec3 nanovdb_detail(ivec3 ijk) {
   }
   return r;
 }
+// render.skipping=tree (volume_nanovdb.glsl nanovdb_empty_box): the edge of the density grid's
+// node holding ijk when it is a tile of value <= 0 (read as 0) or the background, else 0. One walk
+// from the root, whatever the lookups read through (the page table, the atlas): a read accessor's
+// cache saves nothing on llvmpipe, which runs every branch of its cached/uncached paths.
+int nanovdb_density_empty_dim(ivec3 ijk) {
+  pnanovdb_buf_t buf;
+  pnanovdb_grid_handle_t h;
+  h.address.byte_offset = u_nvdb_grid.x;
+  pnanovdb_root_handle_t root = pnanovdb_tree_get_root(buf, pnanovdb_grid_get_tree(buf, h));
+  uint level = 0u;
+  pnanovdb_address_t a = pnanovdb_root_get_value_address_and_level(PNANOVDB_GRID_TYPE_FLOAT, buf, root, ijk, level);
+  if (level == 0u || pnanovdb_read_float(buf, a) > 0.0) return 0;
+  return level == 1u ? 8 : level == 2u ? 128 : 4096;  // a lower, upper or root node's tile (or the background)
+}
 ivec3 nanovdb_index_min() { return u_nvdb_index_min; }
 bool nanovdb_has_detail() { return u_nvdb_detail != 0; }
 vec4 nanovdb_texel(ivec3 texel);    // volume_nanovdb.glsl

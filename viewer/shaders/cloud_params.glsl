@@ -132,5 +132,5 @@ struct CloudParams {
   Number shadow_map_min_x_m;
   Number shadow_map_min_z_m;
   Number shadow_map_ground_m;  // the ground's height in the march box (rounded to 1 mm: part of the map's key)
-  Number moved_pad0;
+  Number skip_tree;         // 1: with skip_distance, the radius from the NanoVDB tree's empty nodes, not the field
 };

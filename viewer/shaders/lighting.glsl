@@ -24,9 +24,8 @@ int empty_cells(vec3 p) { return empty_cells_seen(moving_uvw(p, motion_at(p))); 
 // The bound holds in L-infinity, so along any straight segment. In layer mode a straight ray bends
 // away from the layer's flat texture coordinates by at most r^2 / 2R (layer_altitude): r - r^2 / 2R
 // plus that bend stays within r.
-Number empty_radius_of(int d) {
-  if (d <= 1) return 0.0;
-  Number r = Number(d - 1) * u_cloud.df_cell_m - u_cloud.df_margin_m;
+// r: metres around the static point seen that hold no density; the radius a march may jump by.
+Number empty_radius_m(Number r) {
   if (layer_mode()) r -= r * r / (2.0 * u_cloud.earth_radius_m);
   // Moving clouds read the field at the static point seen, q = p - D(h(p)), which
   // moves up to motion_stretch times as fast as p (1 when still): a jump of r / stretch keeps q
@@ -34,7 +33,65 @@ Number empty_radius_of(int d) {
   // the 0.1% of r the march leaves; the field is at most half a tile across.)
   return max(r, 0.0) / max(u_cloud.motion_stretch, 1.0);
 }
-Number empty_radius(vec3 p) { return empty_radius_of(empty_cells(p)); }
+Number empty_radius_of(int d) {
+  if (d <= 1) return 0.0;
+  return empty_radius_m(Number(d - 1) * u_cloud.df_cell_m - u_cloud.df_margin_m);
+}
+
+// Tree skipping (render.skipping=tree, volume=nanovdb): instead of the field, the NanoVDB tree's
+// empty node around the static point seen (volume_nanovdb.glsl nanovdb_empty_box): a hierarchical
+// DDA, each check one walk down the tree, each jump to where the ray leaves that node's empty
+// box. No distance field. `uvw` as for empty_cells_seen.
+// A box open past the volume's sides gives no bound: jumps stop at 1000 km (the march's end comes
+// first; the jump count stays an int).
+#define CV_TREE_MAX_JUMP_M 1e6
+vec3 tree_position(vec3 uvw) {
+  vec3 x = uvw * u_cloud.volume_dims;
+  if (CV_MODE_TILES > 0.5) {
+    x.x -= u_cloud.volume_dims.x * floor(x.x / u_cloud.volume_dims.x);
+    x.z -= u_cloud.volume_dims.z * floor(x.z / u_cloud.volume_dims.z);
+  }
+  return x;
+}
+// Any direction (the light and shadow marches, and the primary march in layer mode, where the ray
+// bends through the texture's coordinates): the L-infinity margin
+// to the box's faces, in voxels of the smallest world edge (df_cell_m / occ_cell_voxels), so that
+// any straight segment that short stays in the box.
+Number tree_radius_seen(vec3 uvw) {
+  vec3 x = tree_position(uvw);
+  vec3 lo = vec3(0.0), hi = vec3(0.0);
+  if (!nanovdb_empty_box(x, lo, hi)) return 0.0;
+  vec3 m = min(x - lo, hi - x);
+  Number r = min(m.x, min(m.y, m.z)) * (u_cloud.df_cell_m / u_cloud.occ_cell_voxels);
+  return empty_radius_m(min(r, CV_TREE_MAX_JUMP_M));
+}
+// The primary march in box mode: the distance along unit `rd` to where the static point seen
+// leaves the box (the DDA's exit), in metres. Still clouds: the ray is straight in voxel
+// coordinates, v voxels per metre. Moving clouds: the static point is q = p - D(h(p)), and along a
+// jump of J metres h changes by at most J |rd.y| / H, so D by at most J |rd.y| (stretch - 1)
+// (apply_motion's G / H): q's voxel coordinate along each axis moves at J v, give or take
+// J e. The exit bounds both sides. (Layer mode bends the ray in the texture: the radius above.)
+Number tree_exit_seen(vec3 uvw, vec3 rd) {
+  if (layer_mode()) return tree_radius_seen(uvw);
+  vec3 x = tree_position(uvw);
+  vec3 lo = vec3(0.0), hi = vec3(0.0);
+  if (!nanovdb_empty_box(x, lo, hi)) return 0.0;
+  vec3 voxel = u_cloud.volume_size_m / u_cloud.volume_dims;
+  vec3 v = rd / voxel;  // voxels per metre along the ray
+  vec3 e = vec3(max(u_cloud.motion_stretch, 1.0) - 1.0) * abs(rd.y) / voxel;
+  Number t = CV_TREE_MAX_JUMP_M;
+  if (v.x + e.x > 0.0) t = min(t, (hi.x - x.x) / (v.x + e.x));
+  if (e.x - v.x > 0.0) t = min(t, (x.x - lo.x) / (e.x - v.x));
+  if (v.y + e.y > 0.0) t = min(t, (hi.y - x.y) / (v.y + e.y));
+  if (e.y - v.y > 0.0) t = min(t, (x.y - lo.y) / (e.y - v.y));
+  if (v.z + e.z > 0.0) t = min(t, (hi.z - x.z) / (v.z + e.z));
+  if (e.z - v.z > 0.0) t = min(t, (x.z - lo.z) / (e.z - v.z));
+  return t;
+}
+Number empty_radius(vec3 p) {
+  if (CV_MODE_SKIP_TREE > 0.5) return tree_radius_seen(moving_uvw(p, motion_at(p)));
+  return empty_radius_of(empty_cells(p));
+}
 
 // Beer-Lambert transmittance of optical depth tau (dimensionless).
 Number beer_lambert(Number tau) { return exp(-tau); }

@@ -120,7 +120,8 @@ vec4 march_clouds(vec3 rd, Number t_scene, Number jitter, OUT(int) iterations, O
       // density, so neither does this sample nor the next floor(0.999 r / dt) on the lattice (each a
       // whole step further along the unit ray; a shorter last segment only brings its sample closer).
       since_check = 0;
-      Number r = empty_radius_of(empty_cells_seen(uvw));
+      // (render.skipping=tree: no point before the ray leaves the tree's empty node holds density.)
+      Number r = CV_MODE_SKIP_TREE > 0.5 ? tree_exit_seen(uvw, rd) : empty_radius_of(empty_cells_seen(uvw));
       if (r > 0.0) {
         int jump = int(floor(0.999 * r / dt)) + 1;
         if (adaptive) t += Number(jump) * dt; else n += jump;

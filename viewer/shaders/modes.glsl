@@ -26,4 +26,5 @@
 #define CV_MODE_ADAPTIVE u_cloud.adaptive
 #define CV_MODE_SKIP u_cloud.occupancy_skip
 #define CV_MODE_SKIP_DISTANCE u_cloud.skip_distance
+#define CV_MODE_SKIP_TREE u_cloud.skip_tree
 #define CV_MODE_DENSITY_STEP u_cloud.density_step

@@ -43,3 +43,44 @@ vec4 nanovdb_filtered(vec3 uvw) {
   }
   return acc;
 }
+
+// render.skipping=tree (lighting.glsl tree_radius, march.glsl): the empty node of the density grid
+// around volume voxel coordinates x (uvw * volume_dims; x and z wrapped into the tile for a tiling
+// volume), from the includer's
+//   int nanovdb_density_empty_dim(ivec3 ijk)   edge in voxels of the node holding ijk when that
+//                                              node is a tile of value 0 or the background (8, 128
+//                                              or 4096: a lower, upper or root tile), else 0
+// (ijk in a leaf, or in a tile of another value). Every voxel of such a node reads 0. A trilinear
+// lookup at x reads the corners floor(x - 0.5) and one more per axis, so where x lies at least half
+// a voxel inside the node's faces all eight corners are the node's voxels and the density there is
+// 0; `lo` and `hi` bound that box (0.01 voxel more inside: float positions of a few thousand voxels
+// err by 1e-4 voxel). A tiling volume's node is cut at the tile's sides, where corners wrap. A
+// point outside the volume on an axis that clamps looks up the edge voxel's node. False when x is
+// not in such a box.
+bool nanovdb_empty_box(vec3 x, OUT(vec3) lo, OUT(vec3) hi) {
+  ivec3 n = ivec3(u_cloud.volume_dims);
+  ivec3 texel = ivec3(clamp_index(int(floor(x.x)), n.x), clamp_index(int(floor(x.y)), n.y),
+                      clamp_index(int(floor(x.z)), n.z));
+  ivec3 ijk = texel + nanovdb_index_min();
+  int dim = nanovdb_density_empty_dim(ijk);
+  if (dim == 0) return false;
+  ivec3 lower = ivec3(ijk.x & -dim, ijk.y & -dim, ijk.z & -dim) - nanovdb_index_min();  // dim: a power of 2
+  ivec3 upper = lower + ivec3(dim);
+  lo = vec3(lower) + vec3(0.51);
+  hi = vec3(upper) - vec3(0.51);
+  // Past a side that clamps (y; x and z unless the volume tiles) the density is 0, and a lookup
+  // inside reads the edge voxel for every corner beyond it: a node holding that voxel reaches on.
+  bool tiles = CV_MODE_TILES > 0.5;
+  if (lower.y <= 0) lo.y = -1e30;
+  if (upper.y >= n.y) hi.y = 1e30;
+  if (tiles) {
+    lo.x = max(lo.x, 0.51), lo.z = max(lo.z, 0.51);
+    hi.x = min(hi.x, Number(n.x) - 0.51), hi.z = min(hi.z, Number(n.z) - 0.51);
+  } else {
+    if (lower.x <= 0) lo.x = -1e30;
+    if (upper.x >= n.x) hi.x = 1e30;
+    if (lower.z <= 0) lo.z = -1e30;
+    if (upper.z >= n.z) hi.z = 1e30;
+  }
+  return x.x >= lo.x && x.y >= lo.y && x.z >= lo.z && x.x < hi.x && x.y < hi.y && x.z < hi.z;
+}

@@ -142,6 +142,19 @@ struct CpuShader {
     pnanovdb_coord_t c{ijk.x, ijk.y, ijk.z};
     return pnanovdb_readaccessor_get_value_address(PNANOVDB_GRID_TYPE_FLOAT, buf, &nvdb_acc[grid], &c);
   }
+  // render.skipping=tree (volume_nanovdb.glsl nanovdb_empty_box): the edge of the density grid's
+  // node holding ijk when it is a tile of value <= 0 (read as 0) or the background, else 0; one
+  // walk from the root, as on the GPU.
+  int nanovdb_density_empty_dim(ivec3 ijk) const {
+    if (!vol.nano) return 0;
+    pnanovdb_buf_t buf = nvdb_buf();
+    pnanovdb_coord_t c{ijk.x, ijk.y, ijk.z};
+    pnanovdb_uint32_t level = 0;
+    const pnanovdb_address_t a =
+        pnanovdb_root_get_value_address_and_level(PNANOVDB_GRID_TYPE_FLOAT, buf, nvdb_root(buf, 0), &c, &level);
+    if (level == 0 || pnanovdb_read_float(buf, a) > 0.0f) return 0;
+    return level == 1 ? 8 : level == 2 ? 128 : 4096;  // a lower, upper or root node's tile (or the background)
+  }
   Number nanovdb_density(ivec3 ijk) const { return pnanovdb_read_float(nvdb_buf(), nvdb_address(0, ijk)); }
   vec3 nanovdb_detail(ivec3 ijk) const {
     pnanovdb_buf_t buf = nvdb_buf();

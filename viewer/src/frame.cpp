@@ -338,9 +338,16 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   p.adaptive_start_m = s.adaptive_start > 0 ? s.adaptive_start : 0.25 * max_extent;
   p.adaptive_growth_per_m = s.adaptive_growth > 0 ? s.adaptive_growth : 4.0 / max_extent;
   const bool skipping = s.occupancy && s.skipping != Skipping::None;
-  const bool distance = skipping && s.skipping == Skipping::Distance && field_ok;
+  // Tree skipping proves its jumps from the NanoVDB tree (lighting.glsl tree_radius_seen): the
+  // distance skipping's paths with another radius, and no field to fit.
+  const bool tree = skipping && s.skipping == Skipping::Tree;
+  if (tree && !vol.nano)
+    throw InputError("render.skipping=tree jumps through the NanoVDB tree's empty nodes, so it needs "
+                     "render.volume=nanovdb (this volume is on the dense path; or use render.skipping=distance)");
+  const bool distance = skipping && ((s.skipping == Skipping::Distance && field_ok) || tree);
   p.occupancy_skip = skipping ? 1 : 0;
   p.skip_distance = distance ? 1 : 0;
+  p.skip_tree = tree ? 1 : 0;
   // The distance field's empty radius (march.glsl, empty_radius): d cells of the smallest world
   // cell edge, less the half voxel trilinear density reaches past a non-empty cell.
   p.df_cell_m = cell_m;
@@ -447,6 +454,7 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
     if (p.skip_distance < 0.5) p.occupancy_skip = 0;
     p.large_step_count = 1.0;
   }
+  if (p.skip_distance < 0.5) p.skip_tree = 0;  // no jumps at all: no tree to read
   // The moved grid serves occupied() alone: the thesis scheme's march and the light march that skips
   // empty cells (render.occupancy_light; apply_motion turns its field off). A frame that reads
   // neither, as with the defaults' distance skipping, does not build it (6.6 ms a frame on

@@ -97,6 +97,7 @@ const ModeRow kModes[] = {
     {"CV_MODE_ADAPTIVE", [](const ref::CloudParams& p) { return p.adaptive; }},
     {"CV_MODE_SKIP", [](const ref::CloudParams& p) { return p.occupancy_skip; }},
     {"CV_MODE_SKIP_DISTANCE", [](const ref::CloudParams& p) { return p.skip_distance; }},
+    {"CV_MODE_SKIP_TREE", [](const ref::CloudParams& p) { return p.skip_tree; }},
     {"CV_MODE_DENSITY_STEP", [](const ref::CloudParams& p) { return p.density_step; }},
 };
 
@@ -773,7 +774,7 @@ struct GlRenderer::Impl {
     const ref::CloudParams& p = f.params;
     std::vector<double> k = sun_medium_key(f);
     k.insert(k.end(), {p.shadow_map_nx, p.shadow_map_nz, p.shadow_map_texel_m, p.shadow_map_min_x_m, p.shadow_map_min_z_m,
-                       p.shadow_map_ground_m, p.shadow_samples, p.skip_distance, p.df_cell_m, p.df_margin_m,
+                       p.shadow_map_ground_m, p.shadow_samples, p.skip_distance, p.skip_tree, p.df_cell_m, p.df_margin_m,
                        p.moved_occ_cell_m});
     std::vector<double> mk = motion_key(f);
     k.insert(k.end(), mk.begin(), mk.end());
@@ -825,9 +826,10 @@ struct GlRenderer::Impl {
   }
   // The nanovdb lookups' plain uniforms (cloud_bindings.glsl); passes without them skip them.
   void set_volume_uniforms(GLuint program) const {
-    // (The atlas programs read only u_nvdb_detail: the others are then inactive, location -1,
-    // which glUniform ignores.)
-    if (!nvdb_on || glGetUniformLocation(program, "u_nvdb_detail") < 0) return;
+    // (A program reads some of them or none: the atlas programs u_nvdb_detail, unless compiled
+    // without detail, and with render.skipping=tree u_nvdb_grid and u_nvdb_index_min. Inactive
+    // ones have location -1, which glUniform ignores.)
+    if (!nvdb_on) return;
     glUniform1i(glGetUniformLocation(program, "u_nvdb_detail"), nvdb_detail);
     glUniform1i(glGetUniformLocation(program, "u_nvdb_shared"), nvdb_shared);
     glUniform1i(glGetUniformLocation(program, "u_nvdb_table"), nvdb_table);
@@ -1175,8 +1177,13 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   if (!m.have_volume) throw GlError("GlRenderer::render before set_volume");
   m.resize(f.width, f.height);
   // The nanovdb lookups' storage (nanovdb_storage.glsl) before the modes, so a change links once more.
-  const bool atlas = m.nvdb_on && f.settings.nanovdb_lookup == NanoLookup::Atlas && m.ensure_atlas();
-  if (m.nvdb_on && !atlas) m.ensure_grids();
+  // Tree skipping (render.skipping=tree) walks the grids whatever the lookup: they go up too. The
+  // atlas programs read them from a storage buffer; grids beyond one (128 MiB on llvmpipe) take
+  // the page table's buffer texture instead.
+  const bool tree = m.nvdb_on && f.params.skip_tree > 0.5;
+  const bool atlas = m.nvdb_on && f.settings.nanovdb_lookup == NanoLookup::Atlas && (!tree || m.nvdb_ssbo) &&
+                     m.ensure_atlas();
+  if (m.nvdb_on && (!atlas || tree)) m.ensure_grids();
   m.use_storage(!m.nvdb_on ? 0 : atlas ? 3 : m.nvdb_ssbo ? 1 : 2);
   m.use_modes(f);
   const double compile_ms = m.compile_ms;

@@ -26,7 +26,7 @@ enum class OutputMode {
   Iterations = CV_OUTPUT_ITERATIONS
 };
 enum class PlaceMode { Box = 0, Layer = 1 };
-enum class Skipping { None = 0, Thesis = 1, Distance = 2 };
+enum class Skipping { None = 0, Thesis = 1, Distance = 2, Tree = 3 };
 enum class SkyMode { Analytic = CV_SKY_ANALYTIC, Precomputed = CV_SKY_PRECOMPUTED };
 /// How the volume reaches the shaders: a dense RGBA texture, or NanoVDB grids in a GPU buffer.
 enum class VolumeStorage { Auto = 0, Dense = 1, NanoVdb = 2 };
