@@ -631,6 +631,40 @@ TEST(ViewerLayer, RejectsANonTilingVolume) {
   EXPECT_THROW(make_frame(vol, s, Camera{}, Sun{}, 16, 9), InputError);
 }
 
+// The window's panel offers every render.* choice, and some need another kind of volume: a
+// refused choice is undone with the reason (the last settings a frame took, this frame's time and
+// index kept), where the window used to end. Choices the volume takes pass through and become the
+// new fallback; a command line the volume refuses still throws.
+TEST(ViewerLayer, TheWindowUndoesAPanelChoiceTheVolumeRefuses) {
+  const PreparedVolume& vol = volume("sphere");  // dense, does not tile
+  RenderSettings good = with({"render.steps=48"});
+  RenderSettings s = good;
+  std::string refused;
+  FrameSetup f = make_frame_or_keep(vol, s, good, Camera{}, Sun{}, 16, 9, refused);
+  EXPECT_TRUE(refused.empty());
+  for (const char* choice : {"render.mode=layer", "render.skipping=tree"}) {
+    apply_setting(s, choice);
+    s.time = 12.5;
+    s.frame = 7;
+    f = make_frame_or_keep(vol, s, good, Camera{}, Sun{}, 16, 9, refused);
+    EXPECT_FALSE(refused.empty()) << choice;
+    EXPECT_EQ(s.mode, PlaceMode::Box) << choice;
+    EXPECT_EQ(s.skipping, Skipping::Distance) << choice;
+    EXPECT_EQ(s.steps, 48) << choice;
+    EXPECT_EQ(s.time, 12.5) << choice;
+    EXPECT_EQ(s.frame, 7) << choice;
+    EXPECT_EQ(f.params.layer_on, 0.0) << choice;
+  }
+  EXPECT_NE(refused.find("render.volume=nanovdb"), std::string::npos) << refused;
+  apply_setting(s, "render.steps=64");
+  f = make_frame_or_keep(vol, s, good, Camera{}, Sun{}, 16, 9, refused);
+  EXPECT_TRUE(refused.empty());
+  EXPECT_EQ(good.steps, 64);
+  RenderSettings bad = with({"render.mode=layer"});
+  RenderSettings bad_good = bad;
+  EXPECT_THROW(make_frame_or_keep(vol, bad, bad_good, Camera{}, Sun{}, 16, 9, refused), InputError);
+}
+
 TEST(ViewerEgl, DevicePlatformPathCreatesAContext) {
   // On this machine the only EGL device is Mesa's software device; forcing the device path checks
   // the code that picks an NVIDIA GPU elsewhere.

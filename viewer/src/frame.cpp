@@ -488,4 +488,22 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   return f;
 }
 
+FrameSetup make_frame_or_keep(const PreparedVolume& vol, RenderSettings& s, RenderSettings& good, const Camera& cam,
+                              const Sun& sun, int width, int height, std::string& refused) {
+  refused.clear();
+  try {
+    FrameSetup f = make_frame(vol, s, cam, sun, width, height);
+    good = s;
+    return f;
+  } catch (const InputError& e) {
+    refused = e.what();
+    const double time = s.time;
+    const int frame = s.frame;
+    s = good;
+    s.time = time;
+    s.frame = frame;
+    return make_frame(vol, s, cam, sun, width, height);
+  }
+}
+
 }  // namespace cloudviewer

@@ -448,6 +448,7 @@ struct GlRenderer::Impl {
   PreparedVolume atlas_of;  // what build_nano_atlas and ensure_grids read of the volume (nano, dims, tiles, detail)
   GLuint tex_atlas = 0, tex_atlas_index = 0;
   int atlas_state = 0;  // 0 not built, 1 built, -1 refused (beyond kAtlasBudget: the page table instead)
+  bool tree_atlas_noted = false;  // said once: tree skipping over grids beyond a storage buffer skips the atlas
   static constexpr uint64_t kAtlasBudget = uint64_t(1) << 30;
   bool ensure_atlas() {
     if (atlas_state != 0) return atlas_state > 0;
@@ -1181,8 +1182,13 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   // atlas programs read them from a storage buffer; grids beyond one (128 MiB on llvmpipe) take
   // the page table's buffer texture instead.
   const bool tree = m.nvdb_on && f.params.skip_tree > 0.5;
-  const bool atlas = m.nvdb_on && f.settings.nanovdb_lookup == NanoLookup::Atlas && (!tree || m.nvdb_ssbo) &&
-                     m.ensure_atlas();
+  const bool atlas_wanted = m.nvdb_on && f.settings.nanovdb_lookup == NanoLookup::Atlas;
+  if (atlas_wanted && tree && !m.nvdb_ssbo && !m.tree_atlas_noted) {
+    std::cerr << "cloudviewer: render.skipping=tree walks grids larger than a storage buffer here: the frames read them "
+                 "through the page table, not the brick atlas\n";
+    m.tree_atlas_noted = true;
+  }
+  const bool atlas = atlas_wanted && (!tree || m.nvdb_ssbo) && m.ensure_atlas();
   if (m.nvdb_on && (!atlas || tree)) m.ensure_grids();
   m.use_storage(!m.nvdb_on ? 0 : atlas ? 3 : m.nvdb_ssbo ? 1 : 2);
   m.use_modes(f);

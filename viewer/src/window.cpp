@@ -169,6 +169,7 @@ void on_scroll(GLFWwindow* w, double, double dy) {
 int run_window(const Options& o, std::ostream& out, std::ostream& err) {
   // Load first, so a bad input fails before a window opens.
   RenderSettings settings = o.settings;
+  RenderSettings good_settings = settings;  // the last settings a frame took (make_frame_or_keep)
   PreparedVolume vol = open_input(o.input, settings);
   if (!glfwInit()) throw GlError("GLFW could not initialise (no display? use --headless, or run under xvfb-run)");
   struct Terminate {
@@ -281,7 +282,10 @@ int run_window(const Options& o, std::ostream& out, std::ostream& err) {
     // The panel and the keys change the erosion and the motion: the field follows (a few ms on the
     // thesis volume; exact meanwhile, since make_frame never trusts a field that does not cover).
     if (fit_distance_field(vol, settings)) renderer.set_distance_field(vol);
-    FrameSetup fs = make_frame(vol, settings, cam, sun, fw, fh);
+    // A panel choice this volume refuses goes back, with the reason, instead of ending the window.
+    std::string refused;
+    FrameSetup fs = make_frame_or_keep(vol, settings, good_settings, cam, sun, fw, fh, refused);
+    if (!refused.empty()) err << refused << " (the panel's choice is undone)\n";
     GpuTimings t;
     renderer.render(fs, &t);
     renderer.present(fw, fh);

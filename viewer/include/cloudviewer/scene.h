@@ -296,4 +296,12 @@ void set_phase_params(ref::CloudParams& p, const RenderSettings& s);
 FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const Camera& cam,
                       const Sun& sun, int width, int height);
 
+/// The window's frame: make_frame with `s`, or, when the volume refuses them (InputError: a panel
+/// choice such as render.mode=layer on a volume that does not tile, render.skipping=tree on the
+/// dense path), `s` put back to `good` (the last settings a frame took; its time and frame index
+/// kept) with the refusal in `refused`. `good` follows every frame that succeeds. Throws when
+/// `good` is refused too (the command line's own settings).
+FrameSetup make_frame_or_keep(const PreparedVolume& vol, RenderSettings& s, RenderSettings& good, const Camera& cam,
+                              const Sun& sun, int width, int height, std::string& refused);
+
 }  // namespace cloudviewer
