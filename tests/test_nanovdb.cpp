@@ -403,10 +403,7 @@ TEST(NanoVdb, TreeSkippingKeepsEverySampleOfThePlainMarch) {
       EXPECT_EQ(max_abs_diff(a.linear, b.linear), 0.0) << what;
       auto trips = [&](FrameSetup f) {
         f.params.output_mode = CV_OUTPUT_ITERATIONS;
-        const FrameImages im = draw(f);
-        double sum = 0;
-        for (size_t i = 0; i < im.linear.rgba.size(); i += 4) sum += im.linear.rgba[i];
-        return sum / (96.0 * 54.0);
+        return testutil::loop_trips_sum(draw(f)) / (96.0 * 54.0);
       };
       const double tn_trips = trips(fn), tt_trips = trips(ft);
       std::cout << what << ": loop trips per pixel none " << tn_trips << ", tree " << tt_trips << "\n";

@@ -34,6 +34,14 @@ inline cloudviewer::FrameImages render_gl(const cloudviewer::PreparedVolume& vol
   return r.read_back();
 }
 
+/// Primary-march loop trips summed over a frame rendered with render.output=iterations (each
+/// pixel's count in the red channel of the linear image).
+inline double loop_trips_sum(const cloudviewer::FrameImages& iterations) {
+  double sum = 0;
+  for (size_t i = 0; i < iterations.linear.rgba.size(); i += 4) sum += iterations.linear.rgba[i];
+  return sum;
+}
+
 /// Default render settings with each "render.key=value" applied in order.
 inline cloudviewer::RenderSettings with(std::initializer_list<const char*> sets) {
   cloudviewer::RenderSettings s;

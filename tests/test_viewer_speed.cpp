@@ -38,10 +38,7 @@ FrameImages render(bool on_gl, const PreparedVolume& vol, const FrameSetup& f) {
 
 double loop_trips(bool on_gl, const PreparedVolume& vol, RenderSettings s, const Camera& cam, int w, int h) {
   s.output = OutputMode::Iterations;
-  FrameImages im = render(on_gl, vol, make_frame(vol, s, cam, default_sun(cam), w, h));
-  double sum = 0;
-  for (size_t i = 0; i < im.linear.rgba.size(); i += 4) sum += im.linear.rgba[i];
-  return sum;
+  return testutil::loop_trips_sum(render(on_gl, vol, make_frame(vol, s, cam, default_sun(cam), w, h)));
 }
 
 uint32_t lcg(uint32_t& h) { return (h = h * 1664525u + 1013904223u) >> 8; }

@@ -80,12 +80,10 @@ Number tree_exit_seen(vec3 uvw, vec3 rd) {
   vec3 v = rd / voxel;  // voxels per metre along the ray
   vec3 e = vec3(max(u_cloud.motion_stretch, 1.0) - 1.0) * abs(rd.y) / voxel;
   Number t = CV_TREE_MAX_JUMP_M;
-  if (v.x + e.x > 0.0) t = min(t, (hi.x - x.x) / (v.x + e.x));
-  if (e.x - v.x > 0.0) t = min(t, (x.x - lo.x) / (e.x - v.x));
-  if (v.y + e.y > 0.0) t = min(t, (hi.y - x.y) / (v.y + e.y));
-  if (e.y - v.y > 0.0) t = min(t, (x.y - lo.y) / (e.y - v.y));
-  if (v.z + e.z > 0.0) t = min(t, (hi.z - x.z) / (v.z + e.z));
-  if (e.z - v.z > 0.0) t = min(t, (x.z - lo.z) / (e.z - v.z));
+  for (int a = 0; a < 3; ++a) {
+    if (v[a] + e[a] > 0.0) t = min(t, (hi[a] - x[a]) / (v[a] + e[a]));
+    if (e[a] - v[a] > 0.0) t = min(t, (x[a] - lo[a]) / (e[a] - v[a]));
+  }
   return t;
 }
 Number empty_radius(vec3 p) {
