@@ -153,3 +153,31 @@ TEST(DefaultView, TheFilesViewWinsOverDefaultsAndLosesToFlags) {
     EXPECT_NE(std::string(e.what()).find("b.json: view.render.gg"), std::string::npos) << e.what();
   }
 }
+
+// Every shipped preset opens in its own view: the view's render keys are ones its volume takes
+// (render.mode=layer needs a volume that tiles, or make_frame refuses it and the preset cannot be
+// shown), and the picture is not blank. At a reduced resolution, which keeps the preset's tiling.
+TEST(DefaultView, EveryShippedPresetOpensInItsOwnView) {
+  int shipped = 0, layers = 0;
+  for (const auto& e : fs::directory_iterator(kPresets)) {
+    if (e.path().extension() != ".json") continue;
+    ++shipped;
+    SCOPED_TRACE(e.path().filename().string());
+    const cloudgen::Preset p = cloudgen::load_preset(e.path().string(), {"resolution=[32,16,32]"});
+    const PreparedVolume vol = prepare_volume(cloudgen::generate(p), 8);
+    Options o;
+    o.input = e.path();
+    apply_input_view(o, false);
+    const Camera cam = o.camera ? *o.camera : default_view_camera(vol, o.settings, o.fov, 48.0 / 27);
+    FrameSetup f;
+    ASSERT_NO_THROW(f = make_frame(vol, o.settings, cam, default_view_sun(o, cam), 48, 27));
+    if (o.settings.mode == PlaceMode::Layer) {
+      ++layers;
+      EXPECT_TRUE(vol.tiles);
+      EXPECT_LT(cam.eye.y, layer_altitudes(vol, o.settings).x) << "the layer's default view is from the ground";
+    }
+    EXPECT_GT(image_stats(render_cpu(vol, f).display).stddev, 0.02) << "not blank";
+  }
+  EXPECT_GE(shipped, 6);
+  EXPECT_GE(layers, 1) << "stratus is shown as the layer it is";
+}

@@ -138,8 +138,7 @@ void run_blender(const BlenderArgs& a) {
     go.cancel = &g_cancel;
     go.progress = progress_bar("generate", a.quiet);
     Volume v = generate(p, go);
-      ExportOptions eo;
-    eo = p.export_options;
+    ExportOptions eo = p.export_options;
     vdb = fs::path(a.output).replace_extension(".vdb").string();
     write_vdb(v, vdb, eo);
     if (!a.quiet) std::fprintf(stderr, "wrote %s (vdb)\n", vdb.c_str());
@@ -151,6 +150,13 @@ void run_blender(const BlenderArgs& a) {
   const SceneInfo info = read_scene_info(vdb);
   const View view = view_of_metadata(info.metadata, vdb);
   const Look look = look_of_view(view, vdb);
+  // A tiling preset the viewer shows as an endless layer (stratus): Blender gets the one tile.
+  for (const auto& kv : view.render)
+    if (kv.first == "mode" && kv.second == "layer" && !a.quiet)
+      std::fprintf(stderr,
+                   "note: cloudviewer shows %s as a cloud layer repeated over the Earth (view.render.mode=layer); "
+                   "this scene holds the one tile, framed from above like a box\n",
+                   a.input.c_str());
   const Vec3 lo = info.origin, size = info.size();
   const Vec3 centre{lo[0] + 0.5 * size[0], lo[1] + 0.5 * size[1], lo[2] + 0.5 * size[2]};
   const double fov = view.fov.value_or(60.0);
