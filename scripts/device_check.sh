@@ -6,9 +6,10 @@
 #   SIZE_SMALL=320x180 SIZE_LARGE=480x270 OUT=/tmp/o bash scripts/device_check.sh
 #                                           the same steps on this machine's llvmpipe, to try the script
 # Each step has its own time limit, so one that hangs costs its limit, not the run. Results go to
-# $OUT (at most 8 files come back): summary.txt (the machine, each step's exit code and seconds),
-# steps.log (every step's output), thesis_<size>.csv, temporal_<size>.csv, moving_<size>.csv,
-# outside.png.
+# $OUT: summary.txt (the machine, each step's exit code and seconds), steps.log (every step's
+# output), compute_<size>.csv, temporal_compute_<size>.csv, thesis_<size>.csv,
+# temporal_<size>.csv, moving_<size>.csv, outside.png. Steps run most wanted first: when the run's
+# limit cuts the last ones, what the first wrote still comes back.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 OUT="${OUT:?OUT: the folder results go to}"
@@ -49,10 +50,16 @@ step volumes 60 bash -c "'$b/bin/cloudgen' generate thesis -q -o '$vol/thesis.ra
 view=(--sun 135,35.26 --camera 1280,1600,-2200:1280,500,1280 --set render.ground_height=-341.33)
 # A first process: the driver compiles and caches the shaders; its time is the cold start.
 step first_frame 90 "$b/bin/cloudviewer" "$vol/thesis.raw" --headless --size "$SMALL" "${view[@]}" --out "$OUT/outside.png"
-step thesis_small 150 "$b/bin/cloudviewer" "$vol/thesis.raw" --headless --size "$SMALL" --sun 135,35.26 \
-  --bench bench/tracks/thesis_gpu.json --bench-repeat 3 --csv "$OUT/thesis_$SMALL.csv"
+# render.compute first (2026-12-06): the cloud pass as a compute shader against the full-screen
+# triangle, the same image; the H100/H200 shade pixels on two of their TPCs only.
+step compute_large 100 "$b/bin/cloudviewer" "$vol/thesis.raw" --headless --size "$LARGE" --sun 135,35.26 \
+  --bench bench/tracks/compute_gpu.json --bench-repeat 3 --csv "$OUT/compute_$LARGE.csv"
+step temporal_compute 100 "$b/bin/bench_temporal" "$vol/cumulus.raw" --size "$LARGE" --repeat 3 --frames 16 \
+  --set render.compute=true --csv "$OUT/temporal_compute_$LARGE.csv"
 step temporal_large 120 "$b/bin/bench_temporal" "$vol/cumulus.raw" --size "$LARGE" --repeat 3 --frames 16 \
   --csv "$OUT/temporal_$LARGE.csv"
+step thesis_small 150 "$b/bin/cloudviewer" "$vol/thesis.raw" --headless --size "$SMALL" --sun 135,35.26 \
+  --bench bench/tracks/thesis_gpu.json --bench-repeat 3 --csv "$OUT/thesis_$SMALL.csv"
 step thesis_large 150 "$b/bin/cloudviewer" "$vol/thesis.raw" --headless --size "$LARGE" --sun 135,35.26 \
   --bench bench/tracks/thesis_gpu.json --bench-repeat 3 --csv "$OUT/thesis_$LARGE.csv"
 # Moving clouds (--time 60): the moved grid's distance field and the light volume rebuilt per frame.

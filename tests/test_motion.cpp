@@ -678,6 +678,51 @@ TEST(TemporalUpsampling, StillViewConvergesToTheFullRenderIn16Frames) {
   EXPECT_GT(converged, first + 3.0) << "the history must add detail the spatial upsample lacks";
 }
 
+// render.compute runs the full cloud pass and the held temporal frame as compute shaders: the same
+// pixels, so the same bits as the full-screen triangles, at a size that is a multiple of neither
+// the 8x8 work group nor the 4x4 block, through held frames, a camera move (the fragment passes of
+// a moving frame over the compute frames' history) and held frames again.
+TEST(TemporalUpsampling, ComputePassesStoreTheFragmentPassesBits) {
+  gl_context();
+  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
+  const int w = 101, h = 57;
+  Camera cam = default_camera(vol, 60, double(w) / h);
+  const Sun sun = default_sun(cam);
+  auto max_diff = [](const Image& a, const Image& b) {
+    EXPECT_EQ(a.rgba.size(), b.rgba.size());
+    double d = 0;
+    for (size_t i = 0; i < a.rgba.size() && i < b.rgba.size(); ++i) d = std::max(d, double(std::abs(a.rgba[i] - b.rgba[i])));
+    return d;
+  };
+  for (bool temporal : {false, true}) {
+    SCOPED_TRACE(temporal ? "temporal" : "full");
+    GlRenderer frag{ShaderSource()}, comp{ShaderSource()};
+    frag.set_volume(vol);
+    comp.set_volume(vol);
+    RenderSettings s;
+    s.temporal = temporal;
+    RenderSettings c = s;
+    c.compute = true;
+    Camera at = cam;
+    int computed = 0;
+    for (int f = 0; f < (temporal ? 14 : 2); ++f) {
+      if (f == 7) at.eye += glm::dvec3(40, 10, 0);  // a move: one frame of the fragment passes
+      s.frame = c.frame = f;
+      GpuTimings gf, gc;
+      frag.render(make_frame(vol, s, at, sun, w, h), &gf);
+      comp.render(make_frame(vol, c, at, sun, w, h), &gc);
+      const FrameImages a = frag.read_back(), b = comp.read_back();
+      EXPECT_EQ(max_diff(a.linear, b.linear), 0.0) << "frame " << f;
+      EXPECT_GT(image_stats(b.display).stddev, 0.02) << "frame " << f;
+      const char* pass = temporal ? "clouds_sparse_held" : "clouds";
+      EXPECT_FALSE(pass_ran(gf, (std::string(pass) + " (compute)").c_str())) << "frame " << f;
+      computed += pass_ran(gc, (std::string(pass) + " (compute)").c_str()) ? 1 : 0;
+      EXPECT_EQ(pass_ran(gf, pass), pass_ran(gc, (std::string(pass) + " (compute)").c_str())) << "frame " << f;
+    }
+    EXPECT_EQ(computed, temporal ? 12 : 2) << "every held frame (all but the first and the move's) and every full frame";
+  }
+}
+
 // A held frame (nothing moved) draws only the pixels it marches, into last frame's resolved layer
 // and composed image kept in place: every other pixel of both must stay exactly as it was, and
 // the marched ones must take their fresh value. (A held frame that drew into the other copy of

@@ -60,6 +60,9 @@
 #define CV_IMAGE_PASS_OUTPUT0 0
 #define CV_IMAGE_PASS_OUTPUT1 1
 #define CV_IMAGE_PASS_OUTPUT2 2
+#define CV_IMAGE_PASS_OUTPUT3 3
+#define CV_IMAGE_PASS_OUTPUT4 4
+#define CV_COMPUTE_GROUP 8         // render.compute: a compute pass's work group is 8 x 8 pixels
 
 // Fixed sizes.
 #define CV_COVERAGE_MAP_SIZE 256   // layer-mode coverage map, texels per side

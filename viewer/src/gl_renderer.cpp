@@ -43,6 +43,23 @@ void check_fbo(GLuint fbo, const char* what) {
     throw GlError(std::string("framebuffer '") + what + "' incomplete (status 0x" + std::to_string(status) + ")");
 }
 
+// Links compiled stages into a program (deleting the stages); `what` names them in the error.
+GLuint link_stages(std::initializer_list<GLuint> stages, const std::string& what, const std::string& file) {
+  GLuint p = glCreateProgram();
+  for (GLuint st : stages) glAttachShader(p, st);
+  glLinkProgram(p);
+  for (GLuint st : stages) glDeleteShader(st);
+  GLint ok = 0;
+  glGetProgramiv(p, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    char log[4096] = {0};
+    glGetProgramInfoLog(p, sizeof(log), nullptr, log);
+    glDeleteProgram(p);
+    throw ShaderError("shader link error (" + what + "):\n" + log, file, 0);
+  }
+  return p;
+}
+
 GLuint link_program(const ShaderSource& src, const std::string& vs, const std::string& fs) {
   GLuint v = compile_shader_stage(GL_VERTEX_SHADER, src, vs);
   GLuint f = 0;
@@ -52,21 +69,12 @@ GLuint link_program(const ShaderSource& src, const std::string& vs, const std::s
     glDeleteShader(v);
     throw;
   }
-  GLuint p = glCreateProgram();
-  glAttachShader(p, v);
-  glAttachShader(p, f);
-  glLinkProgram(p);
-  glDeleteShader(v);
-  glDeleteShader(f);
-  GLint ok = 0;
-  glGetProgramiv(p, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    char log[4096] = {0};
-    glGetProgramInfoLog(p, sizeof(log), nullptr, log);
-    glDeleteProgram(p);
-    throw ShaderError("shader link error (" + vs + " + " + fs + "):\n" + log, fs, 0);
-  }
-  return p;
+  return link_stages({v, f}, vs + " + " + fs, fs);
+}
+
+// render.compute: a pass's compute shader alone.
+GLuint link_compute_program(const ShaderSource& src, const std::string& cs) {
+  return link_stages({compile_shader_stage(GL_COMPUTE_SHADER, src, cs)}, cs, cs);
 }
 
 // modes.glsl's switches baked into the GL programs (render.compiled_modes): one row per CV_MODE_*
@@ -147,6 +155,10 @@ enum class Group { Atmosphere, Light, Shadow, Ground, Clouds, Post };
 struct Pass {
   std::string name;
   std::string vs, fs;
+  std::string cs;                                    // render.compute: the same pass as a compute shader
+                                                     // (one invocation per texel of its target)
+  bool compute = false;                              // its program is the compute one (build_programs)
+  int cs_outputs = -1;                               // compute: its target's first attachments it stores (-1: all)
   std::string target;
   std::vector<std::pair<std::string, int>> inputs;  // (target, attachment) -> CV_UNIT_PASS_INPUT0 + i
   Group group = Group::Post;
@@ -335,6 +347,7 @@ std::vector<Pass> make_passes() {
   auto temporal = [](const FrameSetup& f) { return temporal_on(f); };
   Pass clouds;
   clouds.name = "clouds", clouds.vs = "fullscreen.vert", clouds.fs = "cloud.frag", clouds.target = "hdr";
+  clouds.cs = "cloud.comp";
   clouds.inputs = {{"scene", 0}, {"scene", 1}}, clouds.group = Group::Clouds;
   clouds.enabled = [](const FrameSetup& f) { return !temporal_on(f); };
   p.push_back(clouds);
@@ -349,7 +362,8 @@ std::vector<Pass> make_passes() {
   sparse.target = "cloud_quarter", sparse.inputs = {{"scene", 1}}, sparse.group = Group::Clouds;
   sparse.enabled = temporal, sparse.history_held = 0;
   Pass held = sparse;
-  held.name = "clouds_sparse_held", held.fs = "cloud_sparse_held.frag";
+  held.name = "clouds_sparse_held", held.fs = "cloud_sparse_held.frag", held.cs = "cloud_sparse_held.comp";
+  held.cs_outputs = 2;  // the quarter target's (L, T) and distance, as the fragment stage writes them
   held.inputs = {{"scene", 1}, {"scene", 0}}, held.images = {{"cloud_layer", 0}, {"cloud_layer", 1}, {"hdr", 0}};
   held.history_held = 1;
   p.push_back(sparse);
@@ -599,10 +613,12 @@ struct GlRenderer::Impl {
     try {
       for (const Pass& p : passes) {
         std::vector<std::string> files;
-        std::string key = shaders.expand(p.vs, files) + '\0' + shaders.expand(p.fs, files);
+        const bool cs = compute_on && !p.cs.empty();
+        std::string key = cs ? "compute" + std::string(1, '\0') + shaders.expand(p.cs, files)
+                             : shaders.expand(p.vs, files) + '\0' + shaders.expand(p.fs, files);
         bool have = program_cache.count(key) > 0;
         for (auto& b : built) have = have || b.first == key;
-        if (!have) built.push_back({key, link_program(shaders, p.vs, p.fs)});
+        if (!have) built.push_back({key, cs ? link_compute_program(shaders, p.cs) : link_program(shaders, p.vs, p.fs)});
         keys.push_back(std::move(key));
       }
     } catch (...) {
@@ -610,10 +626,25 @@ struct GlRenderer::Impl {
       throw;
     }
     for (auto& b : built) program_cache.emplace(std::move(b.first), b.second);
-    for (size_t i = 0; i < passes.size(); ++i) passes[i].program = program_cache.at(keys[i]);
+    for (size_t i = 0; i < passes.size(); ++i) {
+      passes[i].program = program_cache.at(keys[i]);
+      passes[i].compute = compute_on && !passes[i].cs.empty();
+    }
     // (the link status query above waits for the driver, so this is the compile's wall time)
     if (!built.empty()) compile_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     programs_linked += int(built.size());
+  }
+  // render.compute: the passes that have a compute shader run it (programs built once per choice).
+  bool compute_on = false;
+  void use_compute(bool on) {
+    if (on == compute_on) return;
+    compute_on = on;
+    try {
+      build_programs();
+    } catch (...) {
+      compute_on = !on;
+      throw;
+    }
   }
   // render.compiled_modes: the programs for this frame's modes (built once per set of values).
   void use_modes(const FrameSetup& f) {
@@ -877,6 +908,26 @@ struct GlRenderer::Impl {
                                      CV_UNIT_PASS_INPUT4, CV_UNIT_PASS_INPUT5};
       if (i >= sizeof(units) / sizeof(units[0])) throw GlError("render pass '" + p.name + "' reads too many inputs");
       glBindTextureUnit(units[i], in.tex[prev ? 1 : 0][size_t(p.inputs[i].second)]);
+    }
+    if (p.compute) {  // the pass's images (as drawn), then its target's attachments, as images in that order
+      glUseProgram(p.program);
+      set_volume_uniforms(p.program);
+      if (p.uniforms) p.uniforms(p.program);
+      std::vector<std::pair<const Target*, size_t>> outs;
+      for (const auto& im : p.images) outs.push_back({&target(im.first), size_t(im.second)});
+      const size_t n = p.cs_outputs < 0 ? t.tex[0].size() : std::min(t.tex[0].size(), size_t(p.cs_outputs));
+      for (size_t a = 0; a < n; ++a) outs.push_back({&t, a});
+      if (outs.size() > 5) throw GlError("render pass '" + p.name + "' stores into too many images");
+      for (size_t i = 0; i < outs.size(); ++i)
+        glBindImageTexture(GLuint(CV_IMAGE_PASS_OUTPUT0 + i), outs[i].first->tex[0][outs[i].second], 0, GL_FALSE, 0,
+                           GL_WRITE_ONLY, outs[i].first->colors[outs[i].second]);
+      glDispatchCompute(GLuint((t.w + CV_COMPUTE_GROUP - 1) / CV_COMPUTE_GROUP),
+                        GLuint((t.h + CV_COMPUTE_GROUP - 1) / CV_COMPUTE_GROUP), 1);
+      // Later passes and the next frame read the images as textures and framebuffer attachments,
+      // read-backs copy them, and the next frame's stores must follow these.
+      glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
+                      GL_TEXTURE_UPDATE_BARRIER_BIT | GL_PIXEL_BUFFER_BARRIER_BIT);
+      return;
     }
     glBindFramebuffer(GL_FRAMEBUFFER, t.fbo[0]);
     glViewport(0, 0, t.w, t.h);
@@ -1191,6 +1242,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   const bool atlas = atlas_wanted && (!tree || m.nvdb_ssbo) && m.ensure_atlas();
   if (m.nvdb_on && (!atlas || tree)) m.ensure_grids();
   m.use_storage(!m.nvdb_on ? 0 : atlas ? 3 : m.nvdb_ssbo ? 1 : 2);
+  m.use_compute(f.settings.compute);
   m.use_modes(f);
   const double compile_ms = m.compile_ms;
   const int programs_linked = m.programs_linked;
@@ -1379,7 +1431,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
     *timings = GpuTimings{};
     for (size_t i = 0; i < m.passes.size(); ++i) {
       double ms = double(t[i + 1] - t[i]) * 1e-6;
-      if (m.passes[i].drew) timings->passes.push_back({m.passes[i].name, ms});
+      if (m.passes[i].drew) timings->passes.push_back({m.passes[i].name + (m.passes[i].compute ? " (compute)" : ""), ms});
       Group g = m.passes[i].group;
       (g == Group::Atmosphere ? timings->atmosphere_ms : g == Group::Light ? timings->light_volume_ms
        : g == Group::Shadow ? timings->shadow_map_ms : g == Group::Ground ? timings->ground_ms

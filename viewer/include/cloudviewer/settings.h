@@ -56,6 +56,7 @@ struct RenderSettings {
   bool jitter = true;              ///< jittered start against banding
   bool exact_filter = false;       ///< trilinear by hand (texelFetch) instead of the texture unit
   bool compiled_modes = true;      ///< GL: programs compiled for the frame's modes (docs/viewer-speed.md)
+  bool compute = false;            ///< GL: the per-pixel cloud passes as compute shaders (the same image)
   double max_distance = 1e7;       ///< m
   double transmittance_cutoff = CV_TRANSMITTANCE_EPSILON;  ///< stop the primary march below this transmittance
   int density_step = 1;            ///< after a sample below density_step_below, step this many small steps (1: off)
