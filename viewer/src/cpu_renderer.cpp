@@ -262,7 +262,7 @@ dvec3 bilinear(CpuShader& sh, const Buffer& b, dvec2 uv) {
   return acc;
 }
 
-// One direction of the separable bloom blur (bloom_blur.frag).
+// One direction of the separable bloom blur (bloom_blur.glsl).
 void blur(CpuShader& sh, const Buffer& src, Buffer& dst, ivec2 direction) {
   for (int y = 0; y < src.h; ++y)
     for (int x = 0; x < src.w; ++x) {
@@ -460,7 +460,7 @@ struct Lookups {
 };
 
 // Bloom (half-resolution bright pass, separable Gaussian, added before tone mapping) and the tone
-// map: the same passes and taps as bloom_bright.frag, bloom_blur.frag, tonemap.frag.
+// map: the same passes and taps as bloom_bright.glsl, bloom_blur.glsl, tonemap.glsl.
 FrameImages finish(const PreparedVolume& vol, const FrameSetup& frame, const AtmosphereLuts& lut, const Buffer& hdr) {
   const int w = frame.width, h = frame.height;
   const ref::CloudParams& P = frame.params;

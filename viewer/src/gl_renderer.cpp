@@ -383,12 +383,13 @@ std::vector<Pass> make_passes() {
   p.push_back(over);
   Pass bright;
   bright.name = "bloom_bright", bright.vs = "fullscreen.vert", bright.fs = "bloom_bright.frag";
+  bright.cs = "bloom_bright.comp";
   bright.target = "bloom_a", bright.inputs = {{"hdr", 0}}, bright.enabled = bloom_on;
   p.push_back(bright);
   for (int axis = 0; axis < 2; ++axis) {
     Pass blur;
     blur.name = axis == 0 ? "bloom_blur_x" : "bloom_blur_y";
-    blur.vs = "fullscreen.vert", blur.fs = "bloom_blur.frag";
+    blur.vs = "fullscreen.vert", blur.fs = "bloom_blur.frag", blur.cs = "bloom_blur.comp";
     blur.target = axis == 0 ? "bloom_b" : "bloom_a";
     blur.inputs = {{axis == 0 ? "bloom_a" : "bloom_b", 0}};
     blur.enabled = bloom_on;
@@ -397,6 +398,7 @@ std::vector<Pass> make_passes() {
   }
   Pass tonemap;
   tonemap.name = "tonemap", tonemap.vs = "fullscreen.vert", tonemap.fs = "tonemap.frag", tonemap.target = "final";
+  tonemap.cs = "tonemap.comp";
   tonemap.inputs = {{"hdr", 0}, {"bloom_a", 0}};
   p.push_back(tonemap);
   return p;
