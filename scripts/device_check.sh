@@ -6,10 +6,11 @@
 #   SIZE_SMALL=320x180 SIZE_LARGE=480x270 OUT=/tmp/o bash scripts/device_check.sh
 #                                           the same steps on this machine's llvmpipe, to try the script
 # Each step has its own time limit, so one that hangs costs its limit, not the run. Results go to
-# $OUT: summary.txt (the machine, each step's exit code and seconds), steps.log (every step's
-# output), compute_<size>.csv, temporal_compute_<size>.csv, thesis_<size>.csv,
-# temporal_<size>.csv, moving_<size>.csv, outside.png. Steps run most wanted first: when the run's
-# limit cuts the last ones, what the first wrote still comes back.
+# $OUT (at most 8 files come back): summary.txt (the machine, each step's exit code and seconds),
+# steps.log (every step's output), outside.png and the CSVs (compute_<size>.csv,
+# temporal_compute_<size>.csv, temporal_<size>.csv, thesis_<size>.csv, moving_<size>.csv), packed
+# into csv.tar after the last step. Steps run most wanted first: when the run's limit cuts the
+# last ones, the CSVs the first wrote still come back (six at most then).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 OUT="${OUT:?OUT: the folder results go to}"
@@ -54,7 +55,7 @@ step first_frame 90 "$b/bin/cloudviewer" "$vol/thesis.raw" --headless --size "$S
 # triangle, the same image; the H100/H200 shade pixels on two of their TPCs only.
 step compute_large 100 "$b/bin/cloudviewer" "$vol/thesis.raw" --headless --size "$LARGE" --sun 135,35.26 \
   --bench bench/tracks/compute_gpu.json --bench-repeat 3 --csv "$OUT/compute_$LARGE.csv"
-step temporal_compute 100 "$b/bin/bench_temporal" "$vol/cumulus.raw" --size "$LARGE" --repeat 3 --frames 16 \
+step temporal_cs 100 "$b/bin/bench_temporal" "$vol/cumulus.raw" --size "$LARGE" --repeat 3 --frames 16 \
   --set render.compute=true --csv "$OUT/temporal_compute_$LARGE.csv"
 step temporal_large 120 "$b/bin/bench_temporal" "$vol/cumulus.raw" --size "$LARGE" --repeat 3 --frames 16 \
   --csv "$OUT/temporal_$LARGE.csv"
@@ -65,4 +66,5 @@ step thesis_large 150 "$b/bin/cloudviewer" "$vol/thesis.raw" --headless --size "
 # Moving clouds (--time 60): the moved grid's distance field and the light volume rebuilt per frame.
 step moving_large 100 "$b/bin/cloudviewer" "$vol/thesis.raw" --headless --size "$LARGE" --sun 135,35.26 --time 60 \
   --bench bench/tracks/moving_gpu.json --bench-repeat 3 --csv "$OUT/moving_$LARGE.csv"
+(cd "$OUT" && tar -cf csv.tar ./*.csv && rm -f ./*.csv)
 rm -rf "$b"
