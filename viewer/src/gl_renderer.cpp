@@ -636,31 +636,25 @@ struct GlRenderer::Impl {
     if (!built.empty()) compile_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     programs_linked += int(built.size());
   }
-  // render.compute: the passes that have a compute shader run it (programs built once per choice).
+  // render.compute: the passes that have a compute shader run it (use_modes builds per choice).
   bool compute_on = false;
-  void use_compute(bool on) {
-    if (on == compute_on) return;
-    compute_on = on;
-    try {
-      build_programs();
-    } catch (...) {
-      compute_on = !on;
-      throw;
-    }
-  }
-  // render.compiled_modes: the programs for this frame's modes (built once per set of values).
+  // render.compiled_modes and render.compute: the programs for this frame (built once per set of values).
   void use_modes(const FrameSetup& f) {
     std::string text = f.settings.compiled_modes ? compiled_modes_text(f.params) : std::string();
-    if (text == modes_text) return;
+    const bool compute = f.settings.compute;
+    if (text == modes_text && compute == compute_on) return;
     auto apply = [this](const std::string& t) {
       if (t.empty()) shaders.clear_override("modes.glsl");
       else shaders.set_override("modes.glsl", t);
     };
+    const bool compute_before = compute_on;
     apply(text);
+    compute_on = compute;
     try {
       build_programs();
     } catch (...) {  // (a file broken under --shader-dir) keep the programs and the modes they were built for
       apply(modes_text);
+      compute_on = compute_before;
       throw;
     }
     modes_text = text;
@@ -1244,8 +1238,7 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   const bool atlas = atlas_wanted && (!tree || m.nvdb_ssbo) && m.ensure_atlas();
   if (m.nvdb_on && (!atlas || tree)) m.ensure_grids();
   m.use_storage(!m.nvdb_on ? 0 : atlas ? 3 : m.nvdb_ssbo ? 1 : 2);
-  m.use_compute(f.settings.compute);
-  m.use_modes(f);
+  m.use_modes(f);  // and render.compute's programs
   const double compile_ms = m.compile_ms;
   const int programs_linked = m.programs_linked;
   m.compile_ms = 0, m.programs_linked = 0;
