@@ -678,8 +678,8 @@ TEST(TemporalUpsampling, StillViewConvergesToTheFullRenderIn16Frames) {
   EXPECT_GT(converged, first + 3.0) << "the history must add detail the spatial upsample lacks";
 }
 
-// render.compute runs the full cloud pass, the held temporal frame, the bloom and the tone map as
-// compute shaders: the same pixels, so the same bits as the full-screen triangles, at a size that is a multiple of neither
+// render.compute runs the full cloud pass, the temporal passes (moving and held), the bloom and the
+// tone map as compute shaders: the same pixels, so the same bits as the full-screen triangles, at a size that is a multiple of neither
 // the 8x8 work group nor the 4x4 block, through held frames, a camera move (the fragment passes of
 // a moving frame over the compute frames' history) and held frames again.
 TEST(TemporalUpsampling, ComputePassesStoreTheFragmentPassesBits) {
@@ -718,6 +718,9 @@ TEST(TemporalUpsampling, ComputePassesStoreTheFragmentPassesBits) {
       EXPECT_FALSE(pass_ran(gf, (std::string(pass) + " (compute)").c_str())) << "frame " << f;
       computed += pass_ran(gc, (std::string(pass) + " (compute)").c_str()) ? 1 : 0;
       EXPECT_EQ(pass_ran(gf, pass), pass_ran(gc, (std::string(pass) + " (compute)").c_str())) << "frame " << f;
+      for (const char* moved : {"clouds_sparse", "temporal_resolve", "temporal_compose"})  // frames 0 and 7
+        EXPECT_EQ(pass_ran(gf, moved), pass_ran(gc, (std::string(moved) + " (compute)").c_str())) << moved << ", frame " << f;
+      if (temporal) EXPECT_EQ(pass_ran(gc, "temporal_resolve (compute)"), f == 0 || f == 7) << "frame " << f;
       for (const char* post : {"bloom_bright", "bloom_blur_x", "bloom_blur_y", "tonemap"}) {
         EXPECT_TRUE(pass_ran(gf, post)) << post << ", frame " << f;
         EXPECT_TRUE(pass_ran(gc, (std::string(post) + " (compute)").c_str())) << post << ", frame " << f;

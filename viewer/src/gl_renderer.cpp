@@ -359,6 +359,7 @@ std::vector<Pass> make_passes() {
   // whatever the uniforms say).
   Pass sparse;
   sparse.name = "clouds_sparse", sparse.vs = "fullscreen.vert", sparse.fs = "cloud_sparse.frag";
+  sparse.cs = "cloud_sparse.comp";
   sparse.target = "cloud_quarter", sparse.inputs = {{"scene", 1}}, sparse.group = Group::Clouds;
   sparse.enabled = temporal, sparse.history_held = 0;
   Pass held = sparse;
@@ -370,12 +371,14 @@ std::vector<Pass> make_passes() {
   p.push_back(held);
   Pass resolve;
   resolve.name = "temporal_resolve", resolve.vs = "fullscreen.vert", resolve.fs = "temporal_resolve.frag";
+  resolve.cs = "temporal_resolve.comp";
   resolve.target = "cloud_layer", resolve.group = Group::Clouds, resolve.enabled = temporal;
   resolve.inputs = {{"cloud_quarter", 0}, {"cloud_quarter", 1}, {"cloud_layer@prev", 0}, {"cloud_layer@prev", 1}};
   resolve.history_held = 0;
   p.push_back(resolve);
   Pass over;
   over.name = "temporal_compose", over.vs = "fullscreen.vert", over.fs = "temporal_compose.frag";
+  over.cs = "temporal_compose.comp";
   over.target = "hdr", over.group = Group::Clouds, over.enabled = temporal;
   over.inputs = {{"cloud_layer", 0}, {"scene", 0}, {"scene", 1}, {"cloud_quarter", 2}, {"cloud_quarter", 3},
                 {"cloud_quarter", 4}};
