@@ -908,18 +908,23 @@ struct GlRenderer::Impl {
       if (i >= sizeof(units) / sizeof(units[0])) throw GlError("render pass '" + p.name + "' reads too many inputs");
       glBindTextureUnit(units[i], in.tex[prev ? 1 : 0][size_t(p.inputs[i].second)]);
     }
-    if (p.compute) {  // the pass's images (as drawn), then its target's attachments, as images in that order
-      glUseProgram(p.program);
-      set_volume_uniforms(p.program);
-      if (p.uniforms) p.uniforms(p.program);
-      std::vector<std::pair<const Target*, size_t>> outs;
-      for (const auto& im : p.images) outs.push_back({&target(im.first), size_t(im.second)});
+    glUseProgram(p.program);
+    set_volume_uniforms(p.program);
+    if (p.uniforms) p.uniforms(p.program);
+    // What the pass stores with imageStore, in image-unit order: its own images, then for a
+    // compute pass its target's attachments (which a fragment pass writes as its outputs).
+    std::vector<std::pair<const Target*, size_t>> outs;
+    for (const auto& im : p.images) outs.push_back({&target(im.first), size_t(im.second)});
+    if (p.compute) {
       const size_t n = p.cs_outputs < 0 ? t.tex[0].size() : std::min(t.tex[0].size(), size_t(p.cs_outputs));
       for (size_t a = 0; a < n; ++a) outs.push_back({&t, a});
-      if (outs.size() > 5) throw GlError("render pass '" + p.name + "' stores into too many images");
-      for (size_t i = 0; i < outs.size(); ++i)
-        glBindImageTexture(GLuint(CV_IMAGE_PASS_OUTPUT0 + i), outs[i].first->tex[0][outs[i].second], 0, GL_FALSE, 0,
-                           GL_WRITE_ONLY, outs[i].first->colors[outs[i].second]);
+    }
+    if (outs.size() > size_t(CV_IMAGE_PASS_OUTPUT4 + 1))
+      throw GlError("render pass '" + p.name + "' stores into too many images");
+    for (size_t i = 0; i < outs.size(); ++i)
+      glBindImageTexture(GLuint(CV_IMAGE_PASS_OUTPUT0 + i), outs[i].first->tex[0][outs[i].second], 0, GL_FALSE, 0,
+                         GL_WRITE_ONLY, outs[i].first->colors[outs[i].second]);
+    if (p.compute) {
       glDispatchCompute(GLuint((t.w + CV_COMPUTE_GROUP - 1) / CV_COMPUTE_GROUP),
                         GLuint((t.h + CV_COMPUTE_GROUP - 1) / CV_COMPUTE_GROUP), 1);
       // Later passes and the next frame read the images as textures and framebuffer attachments,
@@ -930,9 +935,6 @@ struct GlRenderer::Impl {
     }
     glBindFramebuffer(GL_FRAMEBUFFER, t.fbo[0]);
     glViewport(0, 0, t.w, t.h);
-    glUseProgram(p.program);
-    set_volume_uniforms(p.program);
-    if (p.uniforms) p.uniforms(p.program);
     if (p.mesh) {
       bool layer = f.params.layer_on > 0.5;
       glEnable(GL_DEPTH_TEST);
@@ -941,17 +943,11 @@ struct GlRenderer::Impl {
       glDrawArrays(GL_TRIANGLES, layer ? grid_first : quad_first, layer ? grid_count : quad_count);
       glDisable(GL_DEPTH_TEST);
     } else {
-      for (size_t i = 0; i < p.images.size(); ++i) {
-        const Target& out = target(p.images[i].first);
-        const size_t a = size_t(p.images[i].second);
-        glBindImageTexture(GLuint(CV_IMAGE_PASS_OUTPUT0 + i), out.tex[0][a], 0, GL_FALSE, 0, GL_WRITE_ONLY,
-                           out.colors[a]);
-      }
       glBindVertexArray(vao_empty);
       glDrawArrays(GL_TRIANGLES, 0, 3);
       // The later passes (and the next frame) read what it stored through texture fetches, and
       // draw into or read back the same textures as framebuffer attachments.
-      if (!p.images.empty()) glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
+      if (!outs.empty()) glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
     }
   }
   const Pass& pass(const std::string& name) const {
