@@ -113,6 +113,17 @@ int main(int argc, char** argv) {
                   full.total_ms / temporal.total_ms, full.cloud_ms, temporal.cloud_ms, full.cloud_ms / temporal.cloud_ms);
       if (steps == 64) per_pass = {full, temporal};
     }
+    {  // what keeping the ground in held frames gains, in this run
+      RenderSettings t = base;
+      t.steps = 64, t.temporal = true;
+      r.set_ground_reuse(false);
+      GpuTimings drawn = best_of(r, vol, t, cam, sun, w, h, repeat);
+      r.set_ground_reuse(true);
+      GpuTimings kept = best_of(r, vol, t, cam, sun, w, h, repeat);
+      std::printf("\nHeld frames at 64 steps: %.2f ms keeping last frame's ground, %.2f ms drawing it every frame "
+                  "(%.2fx the full frame's speed against %.2fx).\n",
+                  kept.total_ms, drawn.total_ms, per_pass[0].total_ms / kept.total_ms, per_pass[0].total_ms / drawn.total_ms);
+    }
     std::cout << "\nPasses at 64 steps (ms; full | temporal):";
     for (int k = 0; k < 2; ++k) {
       std::cout << (k ? "\n  temporal:" : "\n  full:");
@@ -176,6 +187,15 @@ int main(int argc, char** argv) {
     double sum_full_ms = 0, sum_temporal_ms = 0, min_speedup = 1e300;  // the GPU time of each frame
     int max_ghosts = 0, measured = 0;
     long sum_ghosts = 0;
+    // Every pass's time summed over the measured frames (full | temporal), in order of first run.
+    std::vector<std::vector<std::pair<std::string, double>>> pass_sums(2);
+    auto add_passes = [&](const GpuTimings& g, std::vector<std::pair<std::string, double>>& sums) {
+      for (const auto& [name, ms] : g.passes) {
+        auto it = std::find_if(sums.begin(), sums.end(), [&](const auto& e) { return e.first == name; });
+        if (it == sums.end()) sums.push_back({name, ms});
+        else it->second += ms;
+      }
+    };
     for (int f = 0; f < 16 + track_frames; ++f) {
       int moving = std::max(0, f - 16);
       RenderSettings s = base;
@@ -197,6 +217,7 @@ int main(int argc, char** argv) {
       ++measured;
       sum_full_ms += tf.total_ms, sum_temporal_ms += tt.total_ms;
       min_speedup = std::min(min_speedup, tf.total_ms / tt.total_ms);
+      add_passes(tf, pass_sums[0]), add_passes(tt, pass_sums[1]);
       if (csv) csv << moving << "," << e << "," << g << "," << tf.total_ms << "," << tt.total_ms << "\n";
     }
     std::printf("\n| moving track (%d frames: pan 0.5 deg, wind 15 m/s, 1 s per frame) | mean | worst |\n|---|---:|---:|\n| RMSE (display) | %.4f | %.4f |\n"
@@ -205,6 +226,13 @@ int main(int argc, char** argv) {
                 measured, sum_rmse / measured, max_rmse, double(sum_ghosts) / measured,
                 100.0 * double(sum_ghosts) / measured / (w * h), max_ghosts, 100.0 * max_ghosts / (w * h),
                 sum_full_ms / sum_temporal_ms, sum_full_ms / measured, sum_temporal_ms / measured, min_speedup);
+    std::cout << "\nPasses along the moving track (mean ms per frame; full | temporal):";
+    for (int k = 0; k < 2; ++k) {
+      std::cout << (k ? "\n  temporal:" : "\n  full:");
+      for (const auto& [name, ms] : pass_sums[k])
+        if (ms / measured > 0.005) std::printf(" %s %.2f", name.c_str(), ms / measured);
+    }
+    std::cout << "\n";
   } catch (const std::exception& e) {
     std::cerr << "bench_temporal: " << e.what() << "\n";
     return 2;

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <iterator>
 #include <memory>
+#include <set>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -775,6 +776,60 @@ TEST(TemporalUpsampling, HeldFramesChangeOnlyThePixelsTheyMarch) {
   // Frame 0's spatial upsample gave the unmarched pixels an interpolated value, which the held
   // frames replace by their own: the composed image must change somewhere.
   EXPECT_GT(changed_total, w * h / 4);
+}
+
+// A held frame also keeps last frame's ground ("scene", which only the ground pass writes): the
+// same settings, sun, camera, time and volume draw the same ground. Every frame must give the bits
+// of a renderer that draws the ground every frame, through held frames, a camera move, a sun change,
+// moving clouds (each time step redraws: the shadow moves) and a new volume; and the ground must be
+// drawn exactly in the frames that are not held.
+TEST(TemporalUpsampling, HeldFramesKeepTheGroundTheyWouldDraw) {
+  gl_context();
+  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
+  const int w = 96, h = 54;
+  Camera cam = default_camera(vol, 60, double(w) / h);
+  Sun sun = default_sun(cam);
+  RenderSettings t;
+  t.temporal = true;
+  GlRenderer kept{ShaderSource()}, drawn{ShaderSource()};
+  kept.set_volume(vol);
+  drawn.set_volume(vol);
+  drawn.set_ground_reuse(false);
+  std::set<int> redraw;  // the frames that change something the ground shows (and frame 0)
+  for (int f = 0; f < 22; ++f) {
+    if (f == 0) redraw.insert(f);
+    if (f == 5) cam.eye += glm::dvec3(30, 0, -20), redraw.insert(f);  // level: the air LUT stays
+    if (f == 9) sun.elevation_deg += 7, redraw.insert(f);
+    if (f == 13 || f == 14) t.time += 20, redraw.insert(f);  // the defaults move the clouds and their shadow
+    if (f == 18) {
+      kept.set_volume(vol);
+      drawn.set_volume(vol);
+      redraw.insert(f);
+    }
+    t.frame = f;
+    const int before = kept.ground_draws();
+    GpuTimings gk, gd;
+    kept.render(make_frame(vol, t, cam, sun, w, h), &gk);
+    drawn.render(make_frame(vol, t, cam, sun, w, h), &gd);
+    const bool held = pass_ran(gk, "clouds_sparse_held");
+    EXPECT_EQ(held, redraw.count(f) == 0) << "frame " << f;
+    EXPECT_EQ(kept.ground_draws() - before, held ? 0 : 1) << "frame " << f;
+    EXPECT_EQ(pass_ran(gk, "ground"), !held) << "frame " << f;
+    EXPECT_TRUE(pass_ran(gd, "ground")) << "frame " << f;
+    const FrameImages a = kept.read_back(), b = drawn.read_back();
+    ASSERT_EQ(a.linear.rgba.size(), b.linear.rgba.size());
+    double d = 0;
+    for (size_t i = 0; i < a.linear.rgba.size(); ++i) d = std::max(d, double(std::abs(a.linear.rgba[i] - b.linear.rgba[i])));
+    EXPECT_EQ(d, 0.0) << "frame " << f;
+  }
+  EXPECT_EQ(kept.ground_draws(), int(redraw.size()));
+  EXPECT_EQ(drawn.ground_draws(), 22);
+  // The ground is in the picture (not the sky everywhere), so keeping it is not keeping nothing.
+  const Image distance = kept.read_target("scene", 1);
+  int ground = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) ground += distance.at(x, y)[0] < 0.5f * float(CV_NO_HIT) ? 1 : 0;
+  EXPECT_GT(ground, w * h / 10);
 }
 
 // A shader hot reload (the window's R key) must not keep what the old programs computed: the

@@ -446,6 +446,8 @@ struct GlRenderer::Impl {
   int light_builds = 0;
   std::vector<double> shadow_key;     // what the ground shadow map was built from; empty = not built
   int shadow_builds = 0;
+  bool ground_reuse = true;           // a held temporal frame keeps last frame's ground (set_ground_reuse)
+  int ground_draws = 0;
   std::vector<double> air_key;        // what the air LUT was built from; empty = not built
   int air_builds = 0;
   int atmo_generation = 0;            // counts the atmosphere LUTs' recomputes (part of the air LUT's key)
@@ -1378,6 +1380,11 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   // A held frame changes only the pixels it marches: last frame's resolved layer and composed
   // image stay where they are (the composed image in "hdr", which only the cloud passes write).
   if (still) m.swap_history();
+  // Nor does it change the ground: "scene", which only the ground pass writes, holds last frame's,
+  // drawn with the same settings, sun, size, camera, time and volume (what `still` compares),
+  // unless a table the ground reads (the shadow map, the sky's LUTs, the air) is rebuilt now.
+  const bool ground_kept = still && m.ground_reuse && !atmo_dirty && !air_dirty && !shadow_dirty && !light_dirty &&
+                           !ms_dirty;
   glQueryCounter(m.queries[0], GL_TIMESTAMP);
   for (Pass& p : m.passes) p.drew = false;
   for (size_t i = 0; i < m.passes.size(); ++i) {
@@ -1410,8 +1417,11 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
         m.solve_ms_volume(f);
         glBindTextureUnit(CV_UNIT_MS_VOLUME, m.tex_ms);
       }
+    } else if (m.passes[i].mesh && ground_kept) {
+      // last frame's ground is still in "scene"
     } else {
       m.run(m.passes[i], f);
+      if (m.passes[i].mesh && m.passes[i].drew) m.ground_draws += 1;
     }
     glQueryCounter(m.queries[i + 1], GL_TIMESTAMP);
   }
@@ -1513,6 +1523,8 @@ std::vector<glm::vec3> GlRenderer::transmittance_dump(const AtmosphereSettings& 
 
 int GlRenderer::light_volume_builds() const { return impl_->light_builds; }
 int GlRenderer::shadow_map_builds() const { return impl_->shadow_builds; }
+int GlRenderer::ground_draws() const { return impl_->ground_draws; }
+void GlRenderer::set_ground_reuse(bool on) { impl_->ground_reuse = on; }
 bool GlRenderer::nano_grids_on_gpu() const { return impl_->grids_up; }
 int GlRenderer::air_lut_builds() const { return impl_->air_builds; }
 int GlRenderer::program_count() const { return int(impl_->program_cache.size()); }

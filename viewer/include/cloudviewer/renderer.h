@@ -135,6 +135,11 @@ class GlRenderer {
   /// How many times the ground shadow map has been built (render.shadow_map): once per change of
   /// the sun, the volume, the time (moving clouds) or a lighting key, never for a camera move alone.
   int shadow_map_builds() const;
+  /// How many times the ground pass has drawn. A held temporal frame (render.temporal, nothing
+  /// moved since the last frame, no table the ground reads rebuilt) keeps the last frame's ground
+  /// instead; set_ground_reuse(false) draws it every frame (tests and benchmarks compare the two).
+  int ground_draws() const;
+  void set_ground_reuse(bool on);
   /// Whether the NanoVDB grids (and their leaf page table) are on the GPU: only once a frame has
   /// read them (render.nanovdb_lookup=table or accessor, or an atlas that was refused); the brick
   /// atlas, the default, leaves them on the CPU.
