@@ -25,6 +25,9 @@ using namespace cloudviewer;
 
 namespace {
 
+// The sky tests' frame: 160x90, or 64x36 under the sanitizers (test_util.h).
+const int kW = testutil::sized(160, 64), kH = testutil::sized(90, 36);
+
 using testutil::gl_context;
 using testutil::run;
 
@@ -359,7 +362,7 @@ TEST(Atmosphere, DocsListTheCurrentParameters) {
 TEST(AtmosphereSky, GlMatchesTheCpuReference) {
   for (const SkyView& v : {SkyView{"noon", 0, 60, {}, {}, 60}, SkyView{"sunset", 0, 2, {}, {}, 60},
                            SkyView{"space", 0, 20, {0, 1e6, 0}, {0, 0, -3e6}, 70}}) {
-    FrameSetup f = sky_frame(160, 90, v.az, v.el, v.eye, v.target, v.fov);
+    FrameSetup f = sky_frame(kW, kH, v.az, v.el, v.eye, v.target, v.fov);
     FrameImages gl = gl_frame(f);
     FrameImages cpu = render_cpu(blob(), f);
     EXPECT_EQ(image_stats(gl.linear).nonfinite, 0) << v.name;
@@ -383,8 +386,8 @@ TEST(AtmosphereSky, ScatteringLutSkyMatchesTheMarchAndTheCpuReference) {
   for (const SkyView& v : {SkyView{"noon", 0, 60, {}, {}, 60}, SkyView{"sunset", 0, 2, {}, {}, 60},
                            SkyView{"space", 0, 20, {0, 1e6, 0}, {0, 0, -3e6}, 70},
                            SkyView{"10 km", 40, 20, {0, 1e4, 0}, {0, 0, -3e4}, 60}}) {
-    FrameSetup march = sky_frame(160, 90, v.az, v.el, v.eye, v.target, v.fov);
-    FrameSetup lut = sky_frame(160, 90, v.az, v.el, v.eye, v.target, v.fov, {"render.sky_lut=true"});
+    FrameSetup march = sky_frame(kW, kH, v.az, v.el, v.eye, v.target, v.fov);
+    FrameSetup lut = sky_frame(kW, kH, v.az, v.el, v.eye, v.target, v.fov, {"render.sky_lut=true"});
     r.render(march);
     FrameImages gl_march = r.read_back();
     r.render(lut);
@@ -428,8 +431,8 @@ TEST(AtmosphereSky, AirLutSkyMatchesTheMarchAndTheCpuReference) {
   for (const SkyView& v : {SkyView{"noon", 0, 60, {}, {}, 60}, SkyView{"sunset", 0, 2, {}, {}, 60},
                            SkyView{"space", 0, 20, {0, 1e6, 0}, {0, 0, -3e6}, 70},
                            SkyView{"10 km", 40, 20, {0, 1e4, 0}, {0, 0, -3e4}, 60}}) {
-    FrameSetup march = sky_frame(160, 90, v.az, v.el, v.eye, v.target, v.fov);
-    FrameSetup air = sky_frame(160, 90, v.az, v.el, v.eye, v.target, v.fov, {"render.air_lut=true"});
+    FrameSetup march = sky_frame(kW, kH, v.az, v.el, v.eye, v.target, v.fov);
+    FrameSetup air = sky_frame(kW, kH, v.az, v.el, v.eye, v.target, v.fov, {"render.air_lut=true"});
     r.render(march);
     FrameImages gl_march = r.read_back();
     EXPECT_EQ(r.air_lut_builds(), builds) << v.name;  // off: never built
@@ -1273,7 +1276,7 @@ TEST(AtmosphereSky, DensityOrdersGlMatchesTheCpuReference) {
   r.set_volume(blob());
   for (const SkyView& v : {SkyView{"noon", 0, 60, {}, {}, 60}, SkyView{"sunset", 0, 2, {}, {}, 60},
                            SkyView{"space", 0, 20, {0, 1e6, 0}, {0, 0, -3e6}, 70}}) {
-    FrameSetup f = sky_frame(160, 90, v.az, v.el, v.eye, v.target, v.fov, {"render.sky_lut=true", "atmosphere.density_orders=true"});
+    FrameSetup f = sky_frame(kW, kH, v.az, v.el, v.eye, v.target, v.fov, {"render.sky_lut=true", "atmosphere.density_orders=true"});
     r.render(f);
     FrameImages gl = r.read_back();
     FrameImages cpu = render_cpu(blob(), f);

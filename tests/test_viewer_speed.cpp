@@ -32,6 +32,10 @@ using testutil::with;
 
 namespace {
 
+// The render tests' frame: 160x90, or 64x36 under the sanitizers (test_util.h).
+const int kW = testutil::sized(160, 64), kH = testutil::sized(90, 36);
+const double kAspect = double(kW) / kH;
+
 FrameImages render(bool on_gl, const PreparedVolume& vol, const FrameSetup& f) {
   return on_gl ? render_gl(vol, f) : render_cpu(vol, f);
 }
@@ -175,7 +179,7 @@ TEST(ViewerSpeed, DistanceSkippingDoesNotChangeTheImage) {
   std::vector<SkipCase> cases;
   {
     PreparedVolume v = prepare_volume(synthetic_volume("blob"), 8, 2);
-    Camera cam = default_camera(v, 60, 160.0 / 90);
+    Camera cam = default_camera(v, 60, kAspect);
     cases.push_back({"blob", v, with({"render.steps=128"}), cam});
   }
   {
@@ -194,23 +198,23 @@ TEST(ViewerSpeed, DistanceSkippingDoesNotChangeTheImage) {
       dist_light.skipping = Skipping::Distance;
       dist_light.occupancy_light = true;
       Sun sun = default_sun(c.cam);
-      FrameImages a = render(on_gl, c.vol, make_frame(c.vol, none, c.cam, sun, 160, 90));
-      FrameImages b = render(on_gl, c.vol, make_frame(c.vol, dist, c.cam, sun, 160, 90));
-      FrameImages l = render(on_gl, c.vol, make_frame(c.vol, dist_light, c.cam, sun, 160, 90));
+      FrameImages a = render(on_gl, c.vol, make_frame(c.vol, none, c.cam, sun, kW, kH));
+      FrameImages b = render(on_gl, c.vol, make_frame(c.vol, dist, c.cam, sun, kW, kH));
+      FrameImages l = render(on_gl, c.vol, make_frame(c.vol, dist_light, c.cam, sun, kW, kH));
       EXPECT_GT(image_stats(a.display).stddev, 0.01) << what << ": a picture to compare";
       EXPECT_EQ(max_abs_diff(a.linear, b.linear), 0.0) << what;
       EXPECT_EQ(max_abs_diff(a.display, b.display), 0.0) << what;
       EXPECT_EQ(max_abs_diff(a.linear, l.linear), 0.0) << what << " (light and shadow marches by the field)";
-      double ta = loop_trips(on_gl, c.vol, none, c.cam, 160, 90), tb = loop_trips(on_gl, c.vol, dist, c.cam, 160, 90);
+      double ta = loop_trips(on_gl, c.vol, none, c.cam, kW, kH), tb = loop_trips(on_gl, c.vol, dist, c.cam, kW, kH);
       RenderSettings thesis = c.s;
       thesis.skipping = Skipping::Thesis;
-      double tt = loop_trips(on_gl, c.vol, thesis, c.cam, 160, 90);
+      double tt = loop_trips(on_gl, c.vol, thesis, c.cam, kW, kH);
       std::cout << what << ": loop trips none / thesis / distance " << ta << " / " << tt << " / " << tb << "\n";
       EXPECT_LT(tb, 0.8 * ta) << what;
       EXPECT_LT(tb, tt) << what << ": the field jumps farther than one cell";
       // Sensitivity: a radius one cell longer than the field proves changes the image.
       if (std::string(c.name) == "isolated voxels") {
-        FrameSetup bad = make_frame(c.vol, dist, c.cam, sun, 160, 90);
+        FrameSetup bad = make_frame(c.vol, dist, c.cam, sun, kW, kH);
         bad.params.df_margin_m -= bad.params.df_cell_m;
         EXPECT_GT(max_abs_diff(a.linear, render(on_gl, c.vol, bad).linear), 0.01) << what << ": the check can fail";
       }
@@ -237,7 +241,7 @@ TEST(ViewerSpeed, DistanceSkippingStaysExactWhileMoving) {
     PreparedVolume v = prepare_volume(synthetic_volume("blob"), 4, 2);
     RenderSettings s = with({"render.steps=128", "motion.wind_speed=6", "motion.wind_shear=3"});
     s.time = 40;  // tops 960 m downwind, the base 240 m: still in view, strongly sheared
-    cases.push_back({"blob", v, s, default_camera(v, 70, 160.0 / 90)});
+    cases.push_back({"blob", v, s, default_camera(v, 70, kAspect)});
   }
   {
     PreparedVolume v = prepare_volume(sparse, 4, 1);
@@ -256,24 +260,24 @@ TEST(ViewerSpeed, DistanceSkippingStaysExactWhileMoving) {
       dist.skipping = Skipping::Distance;
       thesis.skipping = Skipping::Thesis;
       Sun sun = default_sun(c.cam);
-      FrameSetup fd = make_frame(c.vol, dist, c.cam, sun, 160, 90);
+      FrameSetup fd = make_frame(c.vol, dist, c.cam, sun, kW, kH);
       ASSERT_EQ(fd.params.motion_on, 1.0) << what;
       ASSERT_EQ(fd.params.skip_distance, 1.0) << what;
       ASSERT_GT(fd.params.motion_stretch, 1.2) << what << ": a stretch that matters";
       // Nothing reads the moved grid here (make_frame leaves it unbuilt): the exactness below holds
       // without it, on GL with the still grid bound in its place.
       ASSERT_TRUE(fd.moved_occupancy.empty()) << what;
-      FrameImages a = render(on_gl, c.vol, make_frame(c.vol, none, c.cam, sun, 160, 90));
+      FrameImages a = render(on_gl, c.vol, make_frame(c.vol, none, c.cam, sun, kW, kH));
       FrameImages b = render(on_gl, c.vol, fd);
       EXPECT_GT(image_stats(a.display).stddev, 0.01) << what << ": a picture to compare";
       RenderSettings seen = none;
       seen.output = OutputMode::Transmittance;
-      EXPECT_LT(image_stats(render(on_gl, c.vol, make_frame(c.vol, seen, c.cam, sun, 160, 90)).linear).min, 0.5)
+      EXPECT_LT(image_stats(render(on_gl, c.vol, make_frame(c.vol, seen, c.cam, sun, kW, kH)).linear).min, 0.5)
           << what << ": the cloud in view";
       EXPECT_EQ(max_abs_diff(a.linear, b.linear), 0.0) << what;
       EXPECT_EQ(max_abs_diff(a.display, b.display), 0.0) << what;
-      const double ta = loop_trips(on_gl, c.vol, none, c.cam, 160, 90), tb = loop_trips(on_gl, c.vol, dist, c.cam, 160, 90),
-                   tt = loop_trips(on_gl, c.vol, thesis, c.cam, 160, 90);
+      const double ta = loop_trips(on_gl, c.vol, none, c.cam, kW, kH), tb = loop_trips(on_gl, c.vol, dist, c.cam, kW, kH),
+                   tt = loop_trips(on_gl, c.vol, thesis, c.cam, kW, kH);
       std::cout << what << " (moving): loop trips none / thesis / distance " << ta << " / " << tt << " / " << tb << "\n";
       EXPECT_LT(tb, (std::string(c.name) == "blob" ? 0.5 : 0.9) * ta) << what;
       EXPECT_LT(tb, tt) << what << ": the field jumps farther than the thesis's large step";
@@ -340,7 +344,7 @@ TEST(ViewerSpeed, PartialCellsOnATilingVolumeSkipExactly) {
     ASSERT_NE(vol.dims[0] % cell, 0) << "a partial last cell";
     RenderSettings s = with({"render.mode=layer", "render.steps=64"});
     s.occupancy_cell = cell;
-    const Camera cam = default_camera(vol, s, 60, 160.0 / 90);
+    const Camera cam = default_camera(vol, s, 60, kAspect);
     const Sun sun = default_sun(cam);
     for (bool on_gl : {true, false}) {
       const std::string side = std::string(kind) + (on_gl ? " GL" : " CPU");
@@ -348,18 +352,18 @@ TEST(ViewerSpeed, PartialCellsOnATilingVolumeSkipExactly) {
       none.skipping = Skipping::None;
       thesis.skipping = Skipping::Thesis;
       dist.skipping = Skipping::Distance;
-      const FrameSetup fd = make_frame(vol, dist, cam, sun, 160, 90);
+      const FrameSetup fd = make_frame(vol, dist, cam, sun, kW, kH);
       ASSERT_EQ(fd.params.skip_distance, 1.0) << side;
-      const FrameImages a = render(on_gl, vol, make_frame(vol, none, cam, sun, 160, 90));
+      const FrameImages a = render(on_gl, vol, make_frame(vol, none, cam, sun, kW, kH));
       EXPECT_GT(image_stats(a.display).stddev, 0.01) << side << ": a picture to compare";
       // GL's thesis program differs from the plain one by float rounding in layer mode (up to 1e-6
       // here, as ViewerLayer.GlMatchesCpuAndSkippingIsImageNeutral allows); reading the wrong cells
       // changed the tiled blob by 0.99 (whole repeats missing).
-      const double thesis_diff = max_abs_diff(a.linear, render(on_gl, vol, make_frame(vol, thesis, cam, sun, 160, 90)).linear);
+      const double thesis_diff = max_abs_diff(a.linear, render(on_gl, vol, make_frame(vol, thesis, cam, sun, kW, kH)).linear);
       std::cout << side << ": thesis scheme against no skipping, max |diff| " << thesis_diff << "\n";
       EXPECT_LE(thesis_diff, on_gl ? 1e-5 : 0.0) << side << " thesis";
       EXPECT_EQ(max_abs_diff(a.linear, render(on_gl, vol, fd).linear), 0.0) << side << " distance";
-      const double t_none = loop_trips(on_gl, vol, none, cam, 160, 90), t_dist = loop_trips(on_gl, vol, dist, cam, 160, 90);
+      const double t_none = loop_trips(on_gl, vol, none, cam, kW, kH), t_dist = loop_trips(on_gl, vol, dist, cam, kW, kH);
       std::cout << side << ": loop trips without skipping / with the field " << t_none << " / " << t_dist << "\n";
       EXPECT_LT(t_dist, 0.8 * t_none) << side << ": the field skips";
     }
@@ -392,7 +396,7 @@ TEST(ViewerSpeed, ThesisLargeStepStaysWithinThePaddingsClearance) {
     s.occupancy_cell = cell;
     s.occupancy_padding = padding;
     const Camera cam = default_camera(vol, s, 60, 16.0 / 9);
-    const FrameSetup f = make_frame(vol, s, cam, default_sun(cam), 160, 90);
+    const FrameSetup f = make_frame(vol, s, cam, default_sun(cam), kW, kH);
     const std::string at = "side " + std::to_string(side) + " padding " + std::to_string(padding);
     const double dt = f.params.step_m, large = f.params.large_step_count * dt;
     const double voxel = vol.voxel_size;
@@ -403,7 +407,7 @@ TEST(ViewerSpeed, ThesisLargeStepStaysWithinThePaddingsClearance) {
     // voxels), and the thesis scheme must stop rather than skip a sample it cannot prove empty.
     RenderSettings few = s;
     few.steps = 32;
-    EXPECT_EQ(make_frame(vol, few, cam, default_sun(cam), 160, 90).params.occupancy_skip,
+    EXPECT_EQ(make_frame(vol, few, cam, default_sun(cam), kW, kH).params.occupancy_skip,
               partial && padding == 1 ? 0.0 : 1.0) << at << " at 32 steps";
     const double naive = std::floor(0.999 * (padding * cell - 0.5) * voxel / dt) * dt;
     const glm::dvec3 lo = f.params.volume_min_m, hi = lo + f.params.volume_size_m;
@@ -455,24 +459,24 @@ TEST(ViewerSpeed, MovingLayersJumpByTheStillFieldExactly) {
                                "motion.flow_up=300"});
       s.time = time;
       PreparedVolume vol = prepare_volume(input, 4, 2, &s);  // the field fitted to the motion
-      const Camera cam = default_camera(vol, s, 60, 160.0 / 90);
+      const Camera cam = default_camera(vol, s, 60, kAspect);
       const Sun sun = default_sun(cam);
       RenderSettings none = s, thesis = s, dist = s;
       none.skipping = Skipping::None;
       thesis.skipping = Skipping::Thesis;
       dist.skipping = Skipping::Distance;
-      const FrameSetup fd = make_frame(vol, dist, cam, sun, 160, 90);
+      const FrameSetup fd = make_frame(vol, dist, cam, sun, kW, kH);
       const std::string at = std::string(kind) + " t " + std::to_string(int(time));
       ASSERT_EQ(fd.params.motion_on, 1.0) << at;
       ASSERT_EQ(fd.params.skip_distance, 1.0) << at;
       ASSERT_GT(fd.params.motion_stretch, 1.5) << at << ": a stretch that matters";
       for (bool on_gl : {true, false}) {
         const std::string what = at + (on_gl ? " GL" : " CPU");
-        const FrameImages a = render(on_gl, vol, make_frame(vol, none, cam, sun, 160, 90));
+        const FrameImages a = render(on_gl, vol, make_frame(vol, none, cam, sun, kW, kH));
         EXPECT_GT(image_stats(a.display).stddev, 0.01) << what << ": a picture to compare";
         EXPECT_EQ(max_abs_diff(a.linear, render(on_gl, vol, fd).linear), 0.0) << what;
-        const double tn = loop_trips(on_gl, vol, none, cam, 160, 90), tt = loop_trips(on_gl, vol, thesis, cam, 160, 90),
-                     td = loop_trips(on_gl, vol, dist, cam, 160, 90);
+        const double tn = loop_trips(on_gl, vol, none, cam, kW, kH), tt = loop_trips(on_gl, vol, thesis, cam, kW, kH),
+                     td = loop_trips(on_gl, vol, dist, cam, kW, kH);
         std::cout << what << ": stretch " << fd.params.motion_stretch << ", loop trips none / thesis / distance " << tn
                   << " / " << tt << " / " << td << "\n";
         EXPECT_LT(td, tt) << what << ": the field jumps farther than the thesis's large step";
@@ -531,21 +535,21 @@ TEST(ViewerSpeed, ErodedFieldSkipsExactly) {
     for (size_t i = 0; i < vol.dist.size(); ++i) held_base += base.dist[i] == 0, held += vol.dist[i] == 0;
     std::cout << c.name << ": cells holding density " << held_base << " (base) / " << held << " (eroded)\n";
     EXPECT_LT(double(held), 0.95 * double(held_base)) << c.name << ": the erosion empties cells";
-    const Camera cam = default_camera(vol, s, 60, 160.0 / 90);
+    const Camera cam = default_camera(vol, s, 60, kAspect);
     const Sun sun = default_sun(cam);
     for (bool on_gl : {true, false}) {
       const std::string what = std::string(c.name) + (on_gl ? " GL" : " CPU");
       RenderSettings none = s, dist = s;
       none.skipping = Skipping::None;
       dist.skipping = Skipping::Distance;
-      const FrameSetup fd = make_frame(vol, dist, cam, sun, 160, 90);
+      const FrameSetup fd = make_frame(vol, dist, cam, sun, kW, kH);
       ASSERT_EQ(fd.params.skip_distance, 1.0) << what;
-      FrameImages a = render(on_gl, vol, make_frame(vol, none, cam, sun, 160, 90));
+      FrameImages a = render(on_gl, vol, make_frame(vol, none, cam, sun, kW, kH));
       FrameImages b = render(on_gl, vol, fd);
       EXPECT_GT(image_stats(a.display).stddev, 0.01) << what << ": a picture to compare";
       EXPECT_EQ(max_abs_diff(a.linear, b.linear), 0.0) << what;
       EXPECT_EQ(max_abs_diff(a.display, b.display), 0.0) << what;
-      const double t_base = loop_trips(on_gl, base, dist, cam, 160, 90), t_eroded = loop_trips(on_gl, vol, dist, cam, 160, 90);
+      const double t_base = loop_trips(on_gl, base, dist, cam, kW, kH), t_eroded = loop_trips(on_gl, vol, dist, cam, kW, kH);
       std::cout << what << ": loop trips with the base / eroded field " << t_base << " / " << t_eroded << "\n";
       EXPECT_LT(t_eroded, 0.97 * t_base) << what;
       if (c.time == 0) {
@@ -557,7 +561,7 @@ TEST(ViewerSpeed, ErodedFieldSkipsExactly) {
         strong.erosion = 0.8;
         build_distance_field(lie, strong);
         lie.dist_rule = FieldRule{};
-        const double lie_diff = max_abs_diff(a.linear, render(on_gl, lie, make_frame(lie, dist, cam, sun, 160, 90)).linear);
+        const double lie_diff = max_abs_diff(a.linear, render(on_gl, lie, make_frame(lie, dist, cam, sun, kW, kH)).linear);
         std::cout << what << ": the lying field changes the image by " << lie_diff << "\n";
         EXPECT_GT(lie_diff, 1e-3)
             << what << ": the check can fail";
@@ -595,7 +599,7 @@ TEST(ViewerSpeed, LightVolumeMarchesOnlyTheTexelsSamplesRead) {
     RenderSettings s = with({"render.steps=128", "render.light_volume_scale=4", "motion.wind_speed=6",
                              "motion.wind_shear=0", "motion.flow_up=0", "motion.flow_forward=0"});
     s.time = time;
-    const Camera cam = default_camera(vol, s, 60, 160.0 / 90);
+    const Camera cam = default_camera(vol, s, 60, kAspect);
     const Sun sun{default_sun(cam).azimuth_deg, 8.0};  // low: long shadows across the box, away from the cloud
     RenderSettings none = s, dist = s;
     none.skipping = Skipping::None;
@@ -622,7 +626,7 @@ TEST(ViewerSpeed, LightVolumeMarchesOnlyTheTexelsSamplesRead) {
     std::cout << "t " << time << ": light-volume texels spared " << spared << " of " << full.size() << " zeros " << zf << " / " << zs << "\n";
     EXPECT_GT(spared, 0u) << "t " << time << ": texels with light on them, left out (most others hold 0 anyway)";
     for (bool on_gl : {true, false}) {
-      FrameSetup a = make_frame(vol, none, cam, sun, 160, 90), b = make_frame(vol, dist, cam, sun, 160, 90);
+      FrameSetup a = make_frame(vol, none, cam, sun, kW, kH), b = make_frame(vol, dist, cam, sun, kW, kH);
       for (FrameSetup* f : {&a, &b}) {  // the same per-frame grid as above at the test's size
         f->params.light_volume_on = 1.0;
         f->params.light_volume_dims = fd.params.light_volume_dims;
@@ -708,10 +712,10 @@ TEST(ViewerSpeed, LightVolumeRebuildsOnSunChangeNotOnCameraMove) {
   GlRenderer r{ShaderSource()};
   r.set_volume(vol);
   RenderSettings s = with({"render.light_volume=true", "render.exact_filter=true", "render.steps=96"});
-  Camera cam = default_camera(vol, 60, 160.0 / 90);
+  Camera cam = default_camera(vol, 60, kAspect);
   Sun sun = default_sun(cam);
   EXPECT_EQ(r.light_volume_builds(), 0);
-  FrameSetup f = make_frame(vol, s, cam, sun, 160, 90);
+  FrameSetup f = make_frame(vol, s, cam, sun, kW, kH);
   r.render(f);
   EXPECT_EQ(r.light_volume_builds(), 1);
   FrameImages a = r.read_back();
@@ -722,16 +726,16 @@ TEST(ViewerSpeed, LightVolumeRebuildsOnSunChangeNotOnCameraMove) {
   Camera moved = cam;
   for (int i = 1; i <= 3; ++i) {
     moved.eye += glm::dvec3(37.0 * i, 11.0, -23.0);
-    r.render(make_frame(vol, s, moved, sun, 160, 90));
+    r.render(make_frame(vol, s, moved, sun, kW, kH));
   }
   EXPECT_EQ(r.light_volume_builds(), 1) << "camera moves alone keep the light volume";
   Sun later = sun;
   later.elevation_deg += 5;
-  r.render(make_frame(vol, s, moved, later, 160, 90));
+  r.render(make_frame(vol, s, moved, later, kW, kH));
   EXPECT_EQ(r.light_volume_builds(), 2) << "a new sun rebuilds it";
   RenderSettings denser = s;
   denser.density = 2;
-  r.render(make_frame(vol, denser, moved, later, 160, 90));
+  r.render(make_frame(vol, denser, moved, later, kW, kH));
   EXPECT_EQ(r.light_volume_builds(), 3) << "a lighting key rebuilds it";
   r.render(make_frame(vol, denser, moved, later, 320, 180));
   EXPECT_EQ(r.light_volume_builds(), 3) << "a new viewport size does not";
@@ -883,9 +887,9 @@ TEST(ViewerSpeed, ShadowMapRebuildsOnSunChangeNotOnCameraMove) {
   GlRenderer r{ShaderSource()};
   r.set_volume(vol);
   RenderSettings s = with({"render.shadow_map=true", "render.steps=96"});
-  Camera cam = default_camera(vol, 60, 160.0 / 90);
+  Camera cam = default_camera(vol, 60, kAspect);
   const Sun sun{210, 40};
-  FrameSetup f = make_frame(vol, s, cam, sun, 160, 90);
+  FrameSetup f = make_frame(vol, s, cam, sun, kW, kH);
   r.render(f);
   EXPECT_EQ(r.shadow_map_builds(), 1);
   const FrameImages a = r.read_back();
@@ -894,7 +898,7 @@ TEST(ViewerSpeed, ShadowMapRebuildsOnSunChangeNotOnCameraMove) {
   EXPECT_GT(p, 50.0);
   RenderSettings march = s;
   march.shadow_map = false;
-  const FrameImages m = render_gl(vol, make_frame(vol, march, cam, sun, 160, 90));
+  const FrameImages m = render_gl(vol, make_frame(vol, march, cam, sun, kW, kH));
   const double e = rmse(a.display, m.display), d = max_abs_diff(a.display, m.display);
   std::cout << "shadow map against the per-pixel march: RMSE " << e << ", max |diff| " << d << "\n";
   EXPECT_GT(d, 0.0) << "the lookup was not used";
@@ -902,18 +906,18 @@ TEST(ViewerSpeed, ShadowMapRebuildsOnSunChangeNotOnCameraMove) {
   Camera moved = cam;
   for (int i = 1; i <= 3; ++i) {
     moved.eye += glm::dvec3(37.0 * i, 11.0, -23.0);
-    r.render(make_frame(vol, s, moved, sun, 160, 90));
+    r.render(make_frame(vol, s, moved, sun, kW, kH));
   }
   EXPECT_EQ(r.shadow_map_builds(), 1) << "camera moves alone keep the map";
-  r.render(make_frame(vol, s, moved, Sun{210, 45}, 160, 90));
+  r.render(make_frame(vol, s, moved, Sun{210, 45}, kW, kH));
   EXPECT_EQ(r.shadow_map_builds(), 2) << "a new sun rebuilds it";
   RenderSettings denser = s;
   denser.density = 2;
-  r.render(make_frame(vol, denser, moved, Sun{210, 45}, 160, 90));
+  r.render(make_frame(vol, denser, moved, Sun{210, 45}, kW, kH));
   EXPECT_EQ(r.shadow_map_builds(), 3) << "a lighting key rebuilds it";
   RenderSettings light_keys = denser;
   light_keys.light_samples = 9;  // the light march's, not the shadow march's
-  r.render(make_frame(vol, light_keys, moved, Sun{210, 45}, 160, 90));
+  r.render(make_frame(vol, light_keys, moved, Sun{210, 45}, kW, kH));
   EXPECT_EQ(r.shadow_map_builds(), 3) << "a key of the light march alone does not";
   r.render(make_frame(vol, denser, moved, Sun{210, 45}, 320, 180));
   EXPECT_EQ(r.shadow_map_builds(), 3) << "a new viewport size does not";
@@ -928,10 +932,10 @@ TEST(ViewerSpeed, ShadowMapRebuildsOnSunChangeNotOnCameraMove) {
   EXPECT_EQ(r.shadow_map_builds(), 5) << "moving clouds rebuild it every frame";
   // ...so they march per pixel instead while the map has over a quarter of the frame's pixels
   // (125 x 146 texels; 160 x 90 pixels); still clouds always use it.
-  FrameSetup small = make_frame(vol, moving, moved, Sun{210, 45}, 160, 90);
+  FrameSetup small = make_frame(vol, moving, moved, Sun{210, 45}, kW, kH);
   EXPECT_GT(small.params.motion_on, 0.5);
   EXPECT_EQ(small.params.shadow_map_on, 0.0);
-  EXPECT_EQ(make_frame(vol, denser, moved, Sun{210, 45}, 160, 90).params.shadow_map_on, 1.0);
+  EXPECT_EQ(make_frame(vol, denser, moved, Sun{210, 45}, kW, kH).params.shadow_map_on, 1.0);
   r.render(small);
   EXPECT_EQ(r.shadow_map_builds(), 5);
   r.set_volume(vol);
