@@ -3,14 +3,15 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
 
-# ccache, when installed, makes rebuilds from another clone of the same sources cheap (CI runs on
-# the developer's machine): paths are hashed relative to the clone.
-if command -v ccache >/dev/null 2>&1; then
+# ccache makes rebuilds from another clone of the same sources cheap (CI runs on the developer's
+# machine): paths are hashed relative to the clone. install_missing turns it on once it is installed.
+use_ccache() {
+  command -v ccache >/dev/null 2>&1 || return 0
   export CMAKE_C_COMPILER_LAUNCHER=ccache CMAKE_CXX_COMPILER_LAUNCHER=ccache CCACHE_BASEDIR="$ROOT"
-  # ccache 4.7 hashes the -fsanitize-ignorelist= path, not the file: hash its contents too, so an
-  # edit to it recompiles the sanitizer build instead of reusing objects built with the old list.
-  export CCACHE_EXTRAFILES="$ROOT/tests/fuzz/ubsan_ignore.txt"
-fi
+  # ccache 4.7 hashes the -fsanitize-ignorelist= path, not the file: hash its contents instead, so
+  # an edit to it recompiles the sanitizer builds, and another clone's path still finds the objects.
+  export CCACHE_EXTRAFILES="$ROOT/tests/fuzz/ubsan_ignore.txt" CCACHE_IGNOREOPTIONS="-fsanitize-ignorelist=*"
+}
 
 log() { printf '\033[1m==> %s\033[0m\n' "$*" >&2; }
 
@@ -29,6 +30,7 @@ install_missing() {
   done
   if [ ${#missing[@]} -eq 0 ]; then
     log "all ${#want[@]} Debian packages present"
+    use_ccache
     return
   fi
   log "installing missing Debian packages: ${missing[*]}"
@@ -36,6 +38,7 @@ install_missing() {
   [ "$(id -u)" -ne 0 ] && sudo="sudo"
   $sudo apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+  use_ccache
 }
 
 configure_and_build() {
