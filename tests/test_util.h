@@ -33,6 +33,11 @@
 #define CLOUD_TEST_SANITIZED 1
 #endif
 
+// The source tree and the build folder (tests/test_paths.cpp; CLOUD_SOURCE_DIR and CLOUD_BINARY_DIR
+// call these).
+const char* cloud_test_source_dir();
+const char* cloud_test_binary_dir();
+
 namespace testutil {
 
 namespace fs = std::filesystem;
