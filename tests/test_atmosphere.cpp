@@ -134,7 +134,7 @@ RelativeError relative_error(const std::vector<glm::dvec3>& got, const std::vect
 }
 
 const PreparedVolume& blob() {
-  static PreparedVolume v = prepare_volume(synthetic_volume("blob"), 8);
+  static PreparedVolume v = prepare_volume(testutil::synthetic("blob"), 8);
   return v;
 }
 

@@ -157,7 +157,7 @@ glm::dvec3 table_displacement(const FrameSetup& f, double h) {
 // The table the shaders interpolate is motion_displacement to within a centimetre at any height
 // (the default flow, strong shear, at several times).
 TEST(ViewerMotion, MotionTableFollowsTheFormulaWithinACentimetre) {
-  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8);
   RenderSettings s;
   s.motion.wind_shear = 1.5;
   for (double t : {3.0, 95.0, 1000.0}) {
@@ -178,7 +178,7 @@ TEST(ViewerMotion, MotionTableFollowsTheFormulaWithinACentimetre) {
 // (zero outside) and a tileable one (x, z wrap).
 TEST(ViewerMotion, MovingDensityIsTheStaticDensityAtDisplacedPositions) {
   for (const char* kind : {"blob", "noise"}) {
-    PreparedVolume vol = prepare_volume(synthetic_volume(kind), 8);
+    PreparedVolume vol = prepare_volume(testutil::synthetic(kind), 8);
     RenderSettings s;
     s.motion.wind_shear = 1.5;
     s.motion.wind_speed = 3.0;  // the grown box stays small enough for random points to find the cloud
@@ -213,7 +213,7 @@ TEST(ViewerMotion, MovingDensityIsTheStaticDensityAtDisplacedPositions) {
 TEST(ViewerMotion, BakedFrameEqualsTheViewersDisplacedDensity) {
   for (const char* kind : {"blob", "noise", "noise+curl"}) {
     const bool curl = std::string(kind) == "noise+curl";
-    cloudgen::Volume stat = synthetic_volume(curl ? "noise" : kind);
+    cloudgen::Volume stat = testutil::synthetic(curl ? "noise" : kind);
     MotionParams m;
     m.wind_speed = 4;
     if (curl) m.curl_amplitude = 150, m.curl_scale = 250, m.curl_rise = 3;
@@ -252,7 +252,7 @@ TEST(ViewerMotion, BakedFrameEqualsTheViewersDisplacedDensity) {
 // through the detail (with erosion 0 the image is the same bit for bit), most at the base; and
 // with curl_rise it churns over time while a still setting (rise 0) keeps the light volume.
 TEST(ViewerMotion, CurlDistortsTheDetailOnGlAndCpuAlike) {
-  PreparedVolume vol = prepare_volume(synthetic_volume("noise"), 8);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("noise"), 8);
   ASSERT_TRUE(vol.has_detail);
   RenderSettings s;
   s.erosion = 0.8;
@@ -288,7 +288,7 @@ TEST(ViewerMotion, CurlDistortsTheDetailOnGlAndCpuAlike) {
 // the displacement's slope so the samples kept are still those of the plain march. Strong shear
 // (tops 4x faster) at a late time makes the slope large.
 TEST(ViewerMotion, OccupancySkippingStaysExactWhileMoving) {
-  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8, 1);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8, 1);
   RenderSettings on;
   on.steps = 128;
   on.motion.wind_shear = 3.0;
@@ -318,7 +318,8 @@ TEST(ViewerMotion, MovedOccupancyLeavesOutOnlyEmptySpace) {
   int built = 0;
   for (int static_cell : {8, 4, 2})
   for (const char* kind : {"blob", "noise"}) {
-    PreparedVolume vol = prepare_volume(synthetic_volume(kind), static_cell, 1);
+    PreparedVolume vol = prepare_volume(testutil::synthetic(kind), static_cell, 1);
+    const PreparedVolume vol8 = static_cell == 8 ? vol : prepare_volume(testutil::synthetic(kind), 8, 1);
     for (glm::dvec2 ts : {glm::dvec2(95, 0), glm::dvec2(95, 3), glm::dvec2(240, 0), glm::dvec2(240, 3)}) {
       const double t = ts.x, shear = ts.y;
       const std::string at = std::string(kind) + " cell " + std::to_string(static_cell) + " t " +
@@ -340,7 +341,7 @@ TEST(ViewerMotion, MovedOccupancyLeavesOutOnlyEmptySpace) {
       ASSERT_EQ(f.moved_occupancy.size(), size_t(n.x) * n.y * n.z) << at;
       EXPECT_NEAR(f.params.moved_occ_cell_m, 8 * vol.voxel_size, 1e-3 * vol.voxel_size) << at;
       if (static_cell != 8) {  // the same large step as with 8-voxel static cells
-        const FrameSetup f8 = frame_at(prepare_volume(synthetic_volume(kind), 8, 1), s, t);
+        const FrameSetup f8 = frame_at(vol8, s, t);
         EXPECT_EQ(f.params.large_step_count, f8.params.large_step_count) << at;
       }
       size_t marked = 0;
@@ -392,7 +393,7 @@ TEST(ViewerMotion, MovedOccupancyLeavesOutOnlyEmptySpace) {
 // scheme, apply_motion). Distance skipping alone, the defaults, no skipping and layer mode leave it
 // empty, and their images stay those of no skipping (ViewerSpeed.DistanceSkippingStaysExactWhileMoving).
 TEST(ViewerMotion, MovedGridIsBuiltForItsReadersOnly) {
-  PreparedVolume vol = prepare_volume(synthetic_volume("noise"), 4, 2);  // tiles: layer mode too
+  PreparedVolume vol = prepare_volume(testutil::synthetic("noise"), 4, 2);  // tiles: layer mode too
   struct Case { const char* name; Skipping skipping; bool light; bool layer; bool built; };
   const Case cases[] = {{"distance", Skipping::Distance, false, false, false},
                         {"distance + occupancy_light", Skipping::Distance, true, false, true},
@@ -426,7 +427,7 @@ TEST(ViewerMotion, MovedGridIsBuiltForItsReadersOnly) {
 // Wind alone (no flow map): a steep flow over this small volume would turn the thesis scheme off
 // (its step under one small step), and make_frame builds no grid that nothing reads.
 TEST(ViewerMotion, MovedOccupancyKeepsItsMarginAtCellFaces) {
-  cloudgen::Volume v = synthetic_volume("blob");
+  cloudgen::Volume v = testutil::synthetic("blob");
   std::fill(v.density.begin(), v.density.end(), 0.f);
   const std::array<std::array<uint32_t, 3>, 3> dots = {{{47, 23, 47}, {56, 16, 39}, {31, 31, 64}}};
   for (const auto& d : dots) v.density[v.index(d[0], d[1], d[2])] = 1.f;
@@ -479,7 +480,7 @@ TEST(ViewerMotion, MovedOccupancyKeepsItsMarginAtCellFaces) {
 // Time 0 with the default (moving) parameters, and any time with the motion switched off, are the
 // static image bit for bit; the defaults move the clouds by time 60.
 TEST(ViewerMotion, TimeZeroIsStaticAndTheDefaultsMove) {
-  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8);
   RenderSettings s;
   RenderSettings still = s;
   still.motion.wind_speed = 0;
@@ -642,7 +643,7 @@ bool pass_ran(const GpuTimings& g, const char* pass) {
 // upsample, visibly worse).
 TEST(TemporalUpsampling, StillViewConvergesToTheFullRenderIn16Frames) {
   gl_context();
-  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8);
   const int w = 160, h = 96;
   Camera cam = default_camera(vol, 60, double(w) / h);
   Sun sun = default_sun(cam);
@@ -685,7 +686,7 @@ TEST(TemporalUpsampling, StillViewConvergesToTheFullRenderIn16Frames) {
 // a moving frame over the compute frames' history) and held frames again.
 TEST(TemporalUpsampling, ComputePassesStoreTheFragmentPassesBits) {
   gl_context();
-  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8);
   const int w = 101, h = 57;
   Camera cam = default_camera(vol, 60, double(w) / h);
   const Sun sun = default_sun(cam);
@@ -733,7 +734,7 @@ TEST(TemporalUpsampling, ComputePassesStoreTheFragmentPassesBits) {
 // the history would bring back the layer of two frames ago: the images pass, the history not.)
 TEST(TemporalUpsampling, HeldFramesChangeOnlyThePixelsTheyMarch) {
   gl_context();
-  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8);
   const int w = 90, h = 54;  // partial 4x4 blocks at the right and top edges
   Camera cam = default_camera(vol, 60, double(w) / h);
   Sun sun = default_sun(cam);
@@ -781,7 +782,7 @@ TEST(TemporalUpsampling, HeldFramesChangeOnlyThePixelsTheyMarch) {
 // drawn exactly in the frames that are not held.
 TEST(TemporalUpsampling, HeldFramesKeepTheGroundTheyWouldDraw) {
   gl_context();
-  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8);
   const int w = 96, h = 54;
   Camera cam = default_camera(vol, 60, double(w) / h);
   Sun sun = default_sun(cam);
@@ -828,7 +829,7 @@ TEST(TemporalUpsampling, HeldFramesKeepTheGroundTheyWouldDraw) {
 // light volume and shadow map are rebuilt and the temporal history, held a frame before, dropped.
 TEST(TemporalUpsampling, ReloadedShadersRecomputeTheCachesAndTheHistory) {
   gl_context();
-  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8);
   const int w = 64, h = 36;
   Camera cam = default_camera(vol, 60, double(w) / h);
   Sun sun = default_sun(cam);
@@ -859,7 +860,7 @@ TEST(TemporalUpsampling, ReloadedShadersRecomputeTheCachesAndTheHistory) {
 // a pixel off by more than 0.1 (display units, any channel) counts as a ghost.
 TEST(TemporalUpsampling, PanAndMovingCloudsLeaveNoGhosts) {
   gl_context();
-  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8);
   const int w = 160, h = 96;
   GlRenderer full{ShaderSource()}, temporal{ShaderSource()};
   full.set_volume(vol);

@@ -139,7 +139,7 @@ TEST(MsDiffusion, ConservesEnergyAndIsTheSameAtAnyThreadCount) {
 // solver; float against double in the source pass), and the solve is redone when the sun or a
 // lighting key changes, not when the camera moves.
 TEST(MsVolume, GlMatchesTheCpuReferenceAndRebuildsOnlyWhenTheLightChanges) {
-  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8, 2);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8, 2);
   gl_context();
   GlRenderer r{ShaderSource()};
   r.set_volume(vol);
@@ -194,7 +194,7 @@ TEST(MsVolume, GlMatchesTheCpuReferenceAndRebuildsOnlyWhenTheLightChanges) {
 // the diffusion volume's cloud light is within 25% of it (measured 0.79) and closer than single
 // scattering (0.07) and the 4 octaves (0.67) are. The presets' figures are in docs/accuracy.md.
 TEST(MsVolume, CloudLightIsCloseToThePathTracers) {
-  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8, 2);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8, 2);
   const int w = 48, h = 27;
   RenderSettings base = with({"render.powder=0", "render.bloom=0", "render.jitter=false"});
   RenderSettings empty = base;

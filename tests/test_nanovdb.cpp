@@ -35,7 +35,7 @@ fs::path dir() { return testutil::test_output_dir("nanovdb"); }
 
 // The blob (96 x 48 x 96, detail channels), written once as .vdb and .nvdb with the same options.
 const cloudgen::Volume& blob() {
-  static const cloudgen::Volume v = synthetic_volume("blob");
+  static const cloudgen::Volume v = testutil::synthetic("blob");
   return v;
 }
 // Every channel as a grid (the default bakes the erosion and drops the detail grids): these tests
@@ -252,7 +252,7 @@ TEST(NanoVdb, GridsGoToTheGpuOnlyWhenALookupReadsThem) {
 // A tiling volume whose sides are not whole leaves (100 x 40 x 92 voxels, the noise repeated):
 // a brick at the wrap reads leaf cells from both ends of the tile.
 cloudgen::Volume odd_tiling_volume() {
-  static const cloudgen::Volume src = synthetic_volume("noise");
+  static const cloudgen::Volume src = testutil::synthetic("noise");
   cloudgen::Volume v = src;
   v.dims = {100, 40, 92};
   v.density.assign(v.voxel_count(), 0.f);
@@ -274,7 +274,7 @@ cloudgen::Volume odd_tiling_volume() {
 // anywhere in its 9^3; a tiling volume wraps. A budget below the atlas's size gives none.
 TEST(NanoVdb, BrickAtlasHoldsTheDenseTexels) {
   for (const char* kind : {"blob", "noise", "odd"}) {
-    const cloudgen::Volume v = std::string(kind) == "odd" ? odd_tiling_volume() : synthetic_volume(kind);
+    const cloudgen::Volume v = std::string(kind) == "odd" ? odd_tiling_volume() : testutil::synthetic(kind);
     auto n = std::make_shared<cloudgen::NanoVolume>(cloudgen::nano_from_volume(v, all_grids()));
     const PreparedVolume pv = prepare_nano(n, 8, 1);
     ASSERT_EQ(pv.tiles, std::string(kind) != "blob");

@@ -22,7 +22,7 @@ using testutil::frame_for;
 using testutil::with;
 
 TEST(PathTrace, FurnaceUniformSlabGivesTheAmbientSkyWeightedByTheTransmittance) {
-  PreparedVolume vol = prepare_volume(synthetic_volume("slab"), 8);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("slab"), 8);
   for (const char* phase : {"render.phase=hg", "render.phase=none", "render.phase=two-lobe-hg", "render.phase=draine-hg"}) {
     RenderSettings s = with({"render.sky=analytic", "render.sun_intensity=0", "render.albedo=1", phase,
                              "render.g=0.6", "render.sigma_t=0.02"});
@@ -79,7 +79,7 @@ TEST(PathTrace, FurnaceUniformSlabGivesTheAmbientSkyWeightedByTheTransmittance) 
 // Bounds: 0.98 (noise of 16384 paths per pixel, ~1%) to 1.08. The sun is behind the camera and
 // g = 0.5, so a flipped phase angle would be off by a factor ~9.
 TEST(PathTrace, ThinCloudMatchesTheMarchersSingleScattering) {
-  PreparedVolume vol = prepare_volume(synthetic_volume("sphere"), 8);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("sphere"), 8);
   RenderSettings s = with({"render.sky=analytic", "render.ambient=0", "render.powder=0", "render.g=0.5", "render.ms_octaves=1",
                            "render.density=0.0005", "render.steps=512", "render.light_samples=24",
                            "render.light_growth=1.1", "render.bloom=0", "render.jitter=false", "render.ground=false"});
@@ -105,7 +105,7 @@ TEST(PathTrace, ThinCloudMatchesTheMarchersSingleScattering) {
 }
 
 TEST(PathTrace, SameImageAtAnyThreadCount) {
-  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8);
   FrameSetup f = frame_for(vol, RenderSettings{}, 24, 14);
   PathTraceOptions o;
   o.spp = 4;
@@ -157,7 +157,7 @@ TEST(PathTrace, CommandLineWritesTheImageAndChecksSpp) {
 // smaller, measured 2.4x; bound 1.8-6, where a bias would flatten it towards 1), and at 128 spp
 // |error| / standard error has about the median of |N(0, 1)|, 0.674 (measured 0.57; bound 0.45-1.0).
 TEST(PathTrace, ErrorFallsAsOneOverRootSppAndTheStandardErrorPredictsIt) {
-  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8);
   const FrameSetup f = frame_for(vol, with({"render.bloom=0"}), 24, 14);
   auto linear = [&](int spp, uint32_t seed, Image* se) {
     PathTraceOptions o;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <initializer_list>
+#include <map>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -23,6 +24,16 @@ inline cloudviewer::HeadlessContext& gl_context() {
   static std::unique_ptr<cloudviewer::HeadlessContext> ctx = std::make_unique<cloudviewer::HeadlessContext>();
   ctx->make_current();
   return *ctx;
+}
+
+/// cloudviewer::synthetic_volume(kind), made once per kind in a test process: many tests start
+/// from the same few volumes, and making one (noise over 442k voxels) costs seconds under the
+/// sanitizers. A const reference: copy it to change it.
+inline const cloudgen::Volume& synthetic(const std::string& kind) {
+  static std::map<std::string, cloudgen::Volume> made;
+  auto it = made.find(kind);
+  if (it == made.end()) it = made.emplace(kind, cloudviewer::synthetic_volume(kind)).first;
+  return it->second;
 }
 
 /// One frame of `vol` through a fresh GL renderer, read back.

@@ -49,7 +49,7 @@ const PreparedVolume& volume(const std::string& kind, int cell = 8) {
   static std::map<std::string, std::unique_ptr<PreparedVolume>> cache;
   std::string key = kind + "/" + std::to_string(cell);
   auto& v = cache[key];
-  if (!v) v = std::make_unique<PreparedVolume>(prepare_volume(synthetic_volume(kind), cell));
+  if (!v) v = std::make_unique<PreparedVolume>(prepare_volume(testutil::synthetic(kind), cell));
   return *v;
 }
 
@@ -373,7 +373,7 @@ TEST(ViewerRender, HeadlessImageIsNotBlankAndShowsTheCloud) {
 // runs fewer iterations. Checked for the thesis's grid (8-voxel cells, double padding) and the
 // tighter ones make_frame's argument allows (padding 1, 4-voxel cells).
 TEST(ViewerRender, OccupancySkippingDoesNotChangeTheImage) {
-  cloudgen::Volume blob = synthetic_volume("blob");
+  cloudgen::Volume blob = testutil::synthetic("blob");
   struct Grid { int cell, padding; };
   const int W = testutil::sized(160, 64), H = testutil::sized(90, 36);  // smaller under the sanitizers
   for (Grid g : {Grid{8, 2}, Grid{8, 1}, Grid{4, 1}}) {
@@ -551,7 +551,7 @@ TEST(ViewerErrors, BadInputsGiveAClearMessageAndNonZeroExit) {
   // A volume without density.
   cloudgen::Volume empty;
   EXPECT_THROW(prepare_volume(empty, 8), InputError);
-  cloudgen::Volume wrong = synthetic_volume("slab");
+  cloudgen::Volume wrong = testutil::synthetic("slab");
   wrong.density.resize(10);
   EXPECT_THROW(prepare_volume(wrong, 8), InputError);
 }
@@ -696,7 +696,7 @@ TEST(ViewerEgl, DevicePlatformPathCreatesAContext) {
 // differs only where clamp-to-edge filtering at the cropped faces meets the sample lattice's new
 // origin (measured 51 dB).
 TEST(ViewerCloudgen, VdbAndRawInputsRenderLikeTheInMemoryVolume) {
-  cloudgen::Volume v = synthetic_volume("blob");
+  cloudgen::Volume v = testutil::synthetic("blob");
   PreparedVolume mem = prepare_volume(v, 8);
   const double step_m = 6.0;
   auto settings_for = [&](const PreparedVolume& p) {
@@ -733,7 +733,7 @@ TEST(ViewerCloudgen, PresetJsonIsGeneratedAndRendered) {
 }
 
 TEST(ViewerCloudgen, NonCloudVdbAndTruncatedTextureAreClearErrors) {
-  cloudgen::Volume v = synthetic_volume("sphere");
+  cloudgen::Volume v = testutil::synthetic("sphere");
   cloudgen::ExportOptions eo;
   // A VDB whose grids are not named "density": rename the grid in the file (same length, so the
   // layout stays valid) - a well-formed VDB that is not a cloud volume.
@@ -930,7 +930,7 @@ TEST(ViewerErrors, NonFiniteAndOutOfRangeNumbersAreRefused) {
   }
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
   // A raw texture whose sidecar claims 1e308 m voxels.
-  cloudgen::Volume v = synthetic_volume("slab");
+  cloudgen::Volume v = testutil::synthetic("slab");
   fs::path raw = output_dir() / "huge_voxels.raw";
   cloudgen::ExportOptions eo;
   cloudgen::write_volume(v, raw.string(), cloudgen::Format::Raw, eo);
@@ -1229,11 +1229,11 @@ TEST(ViewerMath, ForwardScatteringBrightensTheThinEdgesOfABackLitCloud) {
 // padding (cloudgen builds it with the one builder, cloudgen::build_occupancy), and builds it with
 // that same builder otherwise: the two grids of one volume are identical.
 TEST(ViewerVolume, OccupancyComesFromTheVolumeOrCloudgensBuilder) {
-  cloudgen::Volume v = synthetic_volume("blob");
+  cloudgen::Volume v = testutil::synthetic("blob");
   v.occupancy_cell = 8;
   v.occupancy_padding = 2;
   cloudgen::build_occupancy(v);
-  PreparedVolume built = prepare_volume(synthetic_volume("blob"), 8, 2);  // no grid carried: built
+  PreparedVolume built = prepare_volume(testutil::synthetic("blob"), 8, 2);  // no grid carried: built
   ASSERT_EQ(built.occ.size(), v.occupancy.size());
   EXPECT_TRUE(std::equal(built.occ.begin(), built.occ.end(), v.occupancy.begin()));
   // A carried grid is taken as it is: mark one more cell and see it arrive.
@@ -1247,7 +1247,7 @@ TEST(ViewerVolume, OccupancyComesFromTheVolumeOrCloudgensBuilder) {
   EXPECT_EQ(other.occ_padding, 1);
   PreparedVolume rebuilt = prepare_volume(v, 4, 2);
   EXPECT_EQ(rebuilt.occ_cell, 4);
-  cloudgen::Volume w = synthetic_volume("blob");
+  cloudgen::Volume w = testutil::synthetic("blob");
   w.occupancy_cell = 8;
   w.occupancy_padding = 1;
   cloudgen::build_occupancy(w);

@@ -158,7 +158,7 @@ TEST(ViewerSpeed, DistanceFieldIsExactAndConservative) {
     }
   }
   // And prepare_volume fills it from the cells holding density (before padding).
-  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8, 2);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8, 2);
   ASSERT_EQ(vol.dist.size(), vol.occ.size());
   size_t far = 0;
   for (size_t i = 0; i < vol.dist.size(); ++i) {
@@ -178,7 +178,7 @@ TEST(ViewerSpeed, DistanceSkippingDoesNotChangeTheImage) {
   const cloudgen::Volume sparse = isolated_voxels(12345);
   std::vector<SkipCase> cases;
   {
-    PreparedVolume v = prepare_volume(synthetic_volume("blob"), 8, 2);
+    PreparedVolume v = prepare_volume(testutil::synthetic("blob"), 8, 2);
     Camera cam = default_camera(v, 60, kAspect);
     cases.push_back({"blob", v, with({"render.steps=128"}), cam});
   }
@@ -238,7 +238,7 @@ TEST(ViewerSpeed, DistanceSkippingStaysExactWhileMoving) {
   const cloudgen::Volume sparse = isolated_voxels(777);
   std::vector<SkipCase> cases;
   {
-    PreparedVolume v = prepare_volume(synthetic_volume("blob"), 4, 2);
+    PreparedVolume v = prepare_volume(testutil::synthetic("blob"), 4, 2);
     RenderSettings s = with({"render.steps=128", "motion.wind_speed=6", "motion.wind_shear=3"});
     s.time = 40;  // tops 960 m downwind, the base 240 m: still in view, strongly sheared
     cases.push_back({"blob", v, s, default_camera(v, 70, kAspect)});
@@ -337,7 +337,7 @@ TEST(ViewerSpeed, ErosionBoundHoldsForEveryTrilinearMix) {
 TEST(ViewerSpeed, PartialCellsOnATilingVolumeSkipExactly) {
   const int cell = 5;
   for (const char* kind : {"noise", "blob"}) {
-    cloudgen::Volume input = synthetic_volume(kind);
+    cloudgen::Volume input = testutil::synthetic(kind);
     input.tiles_xz = true;  // the blob repeated across the sky: much empty space between the repeats
     const PreparedVolume vol = prepare_volume(input, cell, 2);
     ASSERT_TRUE(vol.tiles);
@@ -452,7 +452,7 @@ TEST(ViewerSpeed, ThesisLargeStepStaysWithinThePaddingsClearance) {
 TEST(ViewerSpeed, MovingLayersJumpByTheStillFieldExactly) {
   const std::vector<std::pair<const char*, double>> cases = {{"blob", 40.0}, {"blob", 300.0}, {"noise", 300.0}};
   for (const auto& [kind, time] : cases) {
-    cloudgen::Volume input = synthetic_volume(kind);
+    cloudgen::Volume input = testutil::synthetic(kind);
     input.tiles_xz = true;  // the blob repeated across the sky
     {
       RenderSettings s = with({"render.mode=layer", "render.steps=64", "motion.wind_speed=8", "motion.wind_shear=3",
@@ -513,7 +513,7 @@ TEST(ViewerSpeed, ErodedFieldSkipsExactly) {
     RenderSettings s = with({"render.steps=128"});
     for (const char* a : c.sets) apply_setting(s, a);
     s.time = c.time;
-    const PreparedVolume base = prepare_volume(synthetic_volume(c.input), 4, 2);
+    const PreparedVolume base = prepare_volume(testutil::synthetic(c.input), 4, 2);
     ASSERT_EQ(base.dist_rule.erosion, 0.0) << c.name << ": prepare_volume builds the base field";
     PreparedVolume vol = base;
     ASSERT_TRUE(fit_distance_field(vol, s)) << c.name;
@@ -521,7 +521,7 @@ TEST(ViewerSpeed, ErodedFieldSkipsExactly) {
     EXPECT_EQ(vol.dist_rule.height_slack > 0, c.time != 0) << c.name;
     EXPECT_FALSE(fit_distance_field(vol, s)) << c.name << ": fitted once";
     {  // prepare_volume builds the same field at once, and a rebuild of the grid keeps its rule
-      PreparedVolume fitted = prepare_volume(synthetic_volume(c.input), 4, 2, &s);
+      PreparedVolume fitted = prepare_volume(testutil::synthetic(c.input), 4, 2, &s);
       EXPECT_TRUE(fitted.dist_rule == vol.dist_rule) << c.name;
       EXPECT_TRUE(fitted.dist == vol.dist) << c.name;
       build_occupancy(fitted, 4, 2);
@@ -595,7 +595,7 @@ TEST(ViewerSpeed, ErodedFieldSkipsExactly) {
 // stretch, fall under the spacing).
 TEST(ViewerSpeed, LightVolumeMarchesOnlyTheTexelsSamplesRead) {
   for (double time : {0.0, 40.0}) {
-    const PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 2, 2);
+    const PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 2, 2);
     RenderSettings s = with({"render.steps=128", "render.light_volume_scale=4", "motion.wind_speed=6",
                              "motion.wind_shear=0", "motion.flow_up=0", "motion.flow_forward=0"});
     s.time = time;
@@ -644,7 +644,7 @@ TEST(ViewerSpeed, LightVolumeMarchesOnlyTheTexelsSamplesRead) {
 // points inside the cloud: at the volume's resolution (scale 1) and at half of it (scale 2), the
 // mean and the 99th-percentile |tau error| and the transmittance error exp(-tau) it makes.
 TEST(ViewerSpeed, LightVolumeFollowsTheLightMarch) {
-  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8, 2);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8, 2);
   Camera cam = default_camera(vol, 60, 16.0 / 9);
   double worst_mean[2] = {0, 0};
   for (int scale : {1, 2}) {
@@ -707,7 +707,7 @@ TEST(ViewerSpeed, LightVolumeFollowsTheLightMarch) {
 // The light volume is rebuilt when the sun, the volume or a lighting key changes, never when only
 // the camera moves (a counter, not a timing); the GL image with it matches the CPU reference's.
 TEST(ViewerSpeed, LightVolumeRebuildsOnSunChangeNotOnCameraMove) {
-  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8, 2);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8, 2);
   gl_context();
   GlRenderer r{ShaderSource()};
   r.set_volume(vol);
@@ -754,7 +754,7 @@ TEST(ViewerSpeed, LightVolumeRebuildsOnSunChangeNotOnCameraMove) {
 // its own, it follows the time (a new time rebuilds it, a camera move alone does not), and a
 // frame smaller than the grid marches per sample.
 TEST(ViewerSpeed, MovingCloudsRebuildTheLightVolumeWhereItPays) {
-  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8, 2);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8, 2);
   gl_context();
   GlRenderer r{ShaderSource()};
   r.set_volume(vol);
@@ -817,7 +817,7 @@ TEST(ViewerSpeed, MovingCloudsRebuildTheLightVolumeWhereItPays) {
 // sends its sun ray past the march box, where the march gives exactly 1 (so the area is not too
 // small); the map holds a real shadow. A finer map is closer.
 TEST(ViewerSpeed, ShadowMapFollowsTheShadowMarch) {
-  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8, 2);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8, 2);
   Camera cam = default_camera(vol, 60, 16.0 / 9);
   double mean_err[2] = {0, 0};
   for (int scale : {1, 2}) {
@@ -871,7 +871,7 @@ TEST(ViewerSpeed, ShadowMapFollowsTheShadowMarch) {
   }
   EXPECT_LT(mean_err[0], mean_err[1]) << "a finer map is closer to the march";
   // Off in layer mode, with the sun below the horizon and without the ground.
-  const PreparedVolume tiling = prepare_volume(synthetic_volume("noise"), 8);
+  const PreparedVolume tiling = prepare_volume(testutil::synthetic("noise"), 8);
   EXPECT_EQ(make_frame(tiling, with({"render.shadow_map=true"}), cam, Sun{210, 40}, 16, 9).params.shadow_map_on, 1.0);
   EXPECT_EQ(make_frame(tiling, with({"render.shadow_map=true", "render.mode=layer"}), cam, Sun{210, 40}, 16, 9).params.shadow_map_on, 0.0);
   EXPECT_EQ(make_frame(vol, with({"render.shadow_map=true"}), cam, Sun{210, -5}, 16, 9).params.shadow_map_on, 0.0);
@@ -882,7 +882,7 @@ TEST(ViewerSpeed, ShadowMapFollowsTheShadowMarch) {
 // changes, never when only the camera moves; the GL image with it is the CPU reference's, and
 // differs from the per-pixel march only at the shadows' edges.
 TEST(ViewerSpeed, ShadowMapRebuildsOnSunChangeNotOnCameraMove) {
-  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8, 2);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8, 2);
   gl_context();
   GlRenderer r{ShaderSource()};
   r.set_volume(vol);
@@ -968,7 +968,7 @@ TEST(ViewerSpeed, ShadowMapRebuildsOnSunChangeNotOnCameraMove) {
 // in each mode the switch bakes in; and a set of modes seen before is not compiled again.
 TEST(ViewerSpeed, CompiledModesKeepTheImage) {
   gl_context();
-  PreparedVolume vol = prepare_volume(synthetic_volume("noise"), 8);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("noise"), 8);
   struct Case {
     const char* name;
     std::vector<const char*> sets;
@@ -1049,7 +1049,7 @@ TEST(ViewerSpeed, CompiledModesSurviveAFailedCompile) {
   fs::create_directories(dir);
   for (const std::string& name : embedded_shader_names()) std::ofstream(dir / name) << ShaderSource().load(name);
   gl_context();
-  PreparedVolume vol = prepare_volume(synthetic_volume("blob"), 8);
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8);
   Camera cam = default_camera(vol, 60, 64.0 / 36);
   auto frame = [&](bool exact) {
     RenderSettings s;
