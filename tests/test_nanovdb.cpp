@@ -34,10 +34,7 @@ namespace {
 fs::path dir() { return testutil::test_output_dir("nanovdb"); }
 
 // The blob (96 x 48 x 96, detail channels), written once as .vdb and .nvdb with the same options.
-const cloudgen::Volume& blob() {
-  static const cloudgen::Volume v = testutil::synthetic("blob");
-  return v;
-}
+const cloudgen::Volume& blob() { return testutil::synthetic("blob"); }
 // Every channel as a grid (the default bakes the erosion and drops the detail grids): these tests
 // are about NanoVDB carrying all of them.
 cloudgen::ExportOptions all_grids() {
@@ -252,7 +249,7 @@ TEST(NanoVdb, GridsGoToTheGpuOnlyWhenALookupReadsThem) {
 // A tiling volume whose sides are not whole leaves (100 x 40 x 92 voxels, the noise repeated):
 // a brick at the wrap reads leaf cells from both ends of the tile.
 cloudgen::Volume odd_tiling_volume() {
-  static const cloudgen::Volume src = testutil::synthetic("noise");
+  const cloudgen::Volume& src = testutil::synthetic("noise");
   cloudgen::Volume v = src;
   v.dims = {100, 40, 92};
   v.density.assign(v.voxel_count(), 0.f);

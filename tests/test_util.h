@@ -21,7 +21,7 @@
 #include <vector>
 
 // The suite runs twice (scripts/test.sh): optimised, then built with clang's ASan+UBSan. Under the
-// sanitizers the costliest tests draw smaller frames and volumes (testutil::sized): the same code
+// sanitizers the costliest tests draw smaller frames (testutil::sized): the same code
 // paths and the same assertions over fewer pixels, so the second run checks memory and undefined
 // behaviour in a fraction of the time. Their full sizes run in the optimised build.
 #if defined(__has_feature)
