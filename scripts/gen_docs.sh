@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Regenerates docs/presets.md and the generated parts of docs/viewer.md from their parameter tables
-# (the test suite checks both are current).
+# Regenerates docs/presets.md and docs/reference/viewer-params.md from their parameter tables
+# (the test suite checks both are current), and the README's preset gallery.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 {
@@ -8,8 +8,8 @@ cd "$(dirname "$0")/.."
   build/bin/cloudgen presets --markdown
 } > docs/presets.md
 
-# docs/viewer.md: the render parameter table and the window's parameter keys, between their
-# BEGIN/END markers (the test suite checks they are current).
+# docs/reference/viewer-params.md: the render, atmosphere and motion parameter tables and the
+# window's parameter keys, between their BEGIN/END markers (the test suite checks they are current).
 replace_block() {  # FILE NAME CONTENT_FILE
   /usr/bin/python3 - "$1" "$2" "$3" <<'PY'
 import sys
@@ -27,15 +27,16 @@ os.replace(tmp, path)
 PY
 }
 tmp="$(mktemp)"
+params=docs/reference/viewer-params.md
 trap 'rm -f "$tmp"' EXIT
 build/bin/cloudviewer --params-markdown > "$tmp"
-replace_block docs/viewer.md render-params "$tmp"
+replace_block "$params" render-params "$tmp"
 build/bin/cloudviewer --atmosphere-markdown > "$tmp"
-replace_block docs/viewer.md atmosphere-params "$tmp"
+replace_block "$params" atmosphere-params "$tmp"
 build/bin/cloudviewer --motion-markdown > "$tmp"
-replace_block docs/viewer.md motion-params "$tmp"
+replace_block "$params" motion-params "$tmp"
 build/bin/cloudviewer --keys-markdown > "$tmp"
-replace_block docs/viewer.md render-keys "$tmp"
+replace_block "$params" render-keys "$tmp"
 
 # README: one small picture per shipped preset, the viewer's headless default view of it (the
 # preset's own `view` when it has one), so a newcomer sees what each preset makes before running

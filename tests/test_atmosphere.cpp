@@ -345,13 +345,13 @@ TEST(Atmosphere, DumpLutWritesTheDocumentedCsv) {
   EXPECT_EQ(run({"--dump-lut", "scattering", "--out", "x.csv"}), 1);
 }
 
-// docs/viewer.md holds the generated atmosphere table (scripts/gen_docs.sh).
+// docs/reference/viewer-params.md holds the generated atmosphere table (scripts/gen_docs.sh).
 TEST(Atmosphere, DocsListTheCurrentParameters) {
-  std::ifstream in(std::string(CLOUD_SOURCE_DIR) + "/docs/viewer.md");
+  std::ifstream in(std::string(CLOUD_SOURCE_DIR) + "/docs/reference/viewer-params.md");
   std::stringstream ss;
   ss << in.rdbuf();
   EXPECT_NE(ss.str().find(atmosphere_params_markdown()), std::string::npos)
-      << "docs/viewer.md's atmosphere table is out of date (scripts/gen_docs.sh)";
+      << "docs/reference/viewer-params.md's atmosphere table is out of date (scripts/gen_docs.sh)";
 }
 
 // ---------------------------------------------------------------------------------------- the sky

@@ -117,11 +117,11 @@ TEST(MotionFormula, ZeroStrengthMeansNoMotion) {
 }
 
 TEST(MotionFormula, DocsTableIsCurrent) {
-  std::ifstream in(std::string(CLOUD_SOURCE_DIR) + "/docs/viewer.md");
+  std::ifstream in(std::string(CLOUD_SOURCE_DIR) + "/docs/reference/viewer-params.md");
   std::stringstream ss;
   ss << in.rdbuf();
   EXPECT_NE(ss.str().find(cloudgen::motion_markdown()), std::string::npos)
-      << "docs/viewer.md's motion table is out of date (scripts/gen_docs.sh)";
+      << "docs/reference/viewer-params.md's motion table is out of date (scripts/gen_docs.sh)";
 }
 
 TEST(MotionFormula, TableRejectsBadValuesWithTheRange) {

@@ -1168,13 +1168,15 @@ TEST(ViewerPanel, KeyBindingsUseTheTablesLimitsAndDefaults) {
   for (const KeyBinding& b : key_bindings()) EXPECT_NO_THROW(render_param(b.param)) << b.param;
 }
 
-// docs/viewer.md holds the generated parameter table and key list (regenerate with scripts/gen_docs.sh).
+// docs/reference/viewer-params.md holds the generated parameter table and key list (scripts/gen_docs.sh).
 TEST(ViewerPanel, DocsParameterListIsCurrent) {
-  std::ifstream in(std::string(CLOUD_SOURCE_DIR) + "/docs/viewer.md");
+  std::ifstream in(std::string(CLOUD_SOURCE_DIR) + "/docs/reference/viewer-params.md");
   std::stringstream ss;
   ss << in.rdbuf();
-  EXPECT_NE(ss.str().find(params_markdown()), std::string::npos) << "docs/viewer.md's parameter table is out of date";
-  EXPECT_NE(ss.str().find(key_help_markdown()), std::string::npos) << "docs/viewer.md's key list is out of date";
+  EXPECT_NE(ss.str().find(params_markdown()), std::string::npos)
+      << "docs/reference/viewer-params.md's parameter table is out of date";
+  EXPECT_NE(ss.str().find(key_help_markdown()), std::string::npos)
+      << "docs/reference/viewer-params.md's key list is out of date";
 }
 
 // ------------------------------------------------------------------ phase direction
