@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "../viewer/src/default_view.h"
+#include "../viewer/src/scene/default_view.h"
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
 #include "cloudgen/preset.h"

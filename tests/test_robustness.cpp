@@ -419,21 +419,8 @@ TEST(HostileInputs, ControlCharactersArePrintedEscaped) {
   EXPECT_EQ(printable("a\tb\x7f", true), "a\tb\\x7f");
 }
 
-TEST(ExitCodes, OneRuleMapsEveryErrorType) {
-  auto code = [](auto&& thrower) {
-    try {
-      thrower();
-    } catch (...) {
-      return exit_code_of(std::current_exception());
-    }
-    return -1;
-  };
-  EXPECT_EQ(code([] { throw InputError("x"); }), kExitInput);
-  EXPECT_EQ(code([] { throw noise3d::InvalidParameter("x", "y"); }), kExitInput);
-  EXPECT_EQ(code([] { throw IoError("x"); }), kExitIo);
-  EXPECT_EQ(code([] { throw std::bad_alloc(); }), kExitIo);
-  EXPECT_EQ(code([] { throw fs::filesystem_error("x", std::make_error_code(std::errc::io_error)); }), kExitIo);
-  EXPECT_EQ(code([] { throw std::logic_error("x"); }), kExitInternal);
+// The exit codes of every exception type: ExitCodes.OneRuleForBothPrograms (test_viewer.cpp).
+TEST(ExitCodes, MessagesEscapeControlCharacters) {
   try {
     throw InputError("bad\x1b value");
   } catch (...) {

@@ -1102,7 +1102,7 @@ TEST(ViewerSpeed, TrackKeysCarryTheirOwnSettings) {
 // lane at a time), so it must still be exactly i mod n. (The GL side, in float, is checked by the
 // tests that compare GL with the CPU reference on tiling volumes with skipping on, whose cells it
 // wraps: DistanceSkippingDoesNotChangeTheImage, ErodedFieldSkipsExactly.)
-#include "../viewer/src/glsl_cpp.h"  // last: defines IN/OUT/INOUT
+#include "../viewer/src/cpu/glsl_cpp.h"  // last: defines IN/OUT/INOUT
 namespace glsl_common {
 using namespace glm;
 struct Double {

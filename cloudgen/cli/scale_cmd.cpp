@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "cloudgen/exit_codes.h"
 #include "cloudgen/mpi_run.h"
 #include "cloudgen/scale.h"
 #include "commands.h"
@@ -309,22 +310,6 @@ void run_merge(const MergeArgs& a) {
     o << plan.dump(2) << "\n";
     if (!o.flush()) throw IoError(a.plan + ": write failed");
   });
-}
-
-int exit_code_of(const std::exception_ptr& e) {
-  try {
-    std::rethrow_exception(e);
-  } catch (const Cancelled&) {
-    return 130;
-  } catch (const noise3d::InvalidParameter&) {
-    return 1;
-  } catch (const InputError&) {
-    return 1;
-  } catch (const IoError&) {
-    return 2;
-  } catch (...) {
-    return 3;
-  }
 }
 
 }  // namespace

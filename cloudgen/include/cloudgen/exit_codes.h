@@ -2,10 +2,12 @@
 //   0 success, 1 bad input (a preset, flag or file that is wrong: the message says what is allowed),
 //   2 I/O or environment (disk full, permissions, missing device or library, out of memory),
 //   3 internal error (a bug: please report it), 130 interrupted (SIGINT/SIGTERM).
-// Exceptions map to codes by type, in one place:
-//   cloudgen::InputError, noise3d::InvalidParameter              -> 1
-//   cloudgen::IoError, std::filesystem::filesystem_error,
-//   std::ios_base::failure, std::bad_alloc                        -> 2
+// Exceptions (cloudgen/errors.h) map to codes by type, in this one place for both programs:
+//   InputError, noise3d::InvalidParameter                         -> 1
+//   IoError, EnvironmentError (cloudviewer's GlError),
+//   std::filesystem::filesystem_error, std::ios_base::failure,
+//   std::bad_alloc                                                -> 2
+//   Cancelled                                                     -> 130
 //   anything else                                                 -> 3
 #pragma once
 
@@ -18,6 +20,9 @@ enum ExitCode : int { kExitOk = 0, kExitInput = 1, kExitIo = 2, kExitInternal = 
 
 /// The exit code of exception `e` under the rule above.
 int exit_code_of(const std::exception_ptr& e);
+/// What kind of failure code `code` reports, for a message's prefix: "error", "I/O error",
+/// "interrupted", "internal error".
+const char* exit_kind(int code);
 /// The one-line (or, for lists of problems, multi-line) message to print for `e`, control
 /// characters escaped: "error: ...", "internal error: ...".
 std::string error_message_of(const std::exception_ptr& e);

@@ -15,12 +15,6 @@
 
 namespace cloudgen {
 
-/// Thrown when GenerateOptions::cancel becomes true (Ctrl-C in the CLI).
-class Cancelled : public Error {
- public:
-  Cancelled() : Error("cancelled") {}
-};
-
 inline constexpr uint32_t kBrick = 16;  ///< bricks are 16^3 voxels aligned to the volume origin
 /// Detail is kept or zeroed in blocks of 16 x 8 x 8 voxels (x, y, z): two VDB leaves, whole rows.
 inline constexpr uint32_t kDetailBlock = 8;

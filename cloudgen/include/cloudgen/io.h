@@ -43,7 +43,7 @@ void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o,
 void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o);
 Volume read_vdb(const std::string& path, uint64_t max_bytes = kDefaultReadBudget);
 /// NanoVDB (.nvdb): the grids and metadata of the .vdb export as NanoVDB float grids
-/// (src/nvdb_io.cpp; sparse access in cloudgen/nvdb.h). read_nvdb_volume densifies.
+/// (src/io/nvdb_io.cpp; sparse access in cloudgen/nvdb.h). read_nvdb_volume densifies.
 void write_nvdb(const Volume& v, const std::string& path, const ExportOptions& o, OutputBatch& batch);
 Volume read_nvdb_volume(const std::string& path, uint64_t max_bytes = kDefaultReadBudget);
 void write_raw(const Volume& v, const std::string& path, const ExportOptions& o, OutputBatch& batch);

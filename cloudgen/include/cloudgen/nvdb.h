@@ -1,6 +1,6 @@
 // NanoVDB (.nvdb): the sparse grids cloudgen writes, read back without densifying, for renderers
 // that march the tree itself (cloudviewer's render.volume=nanovdb, through PNanoVDB.h). No
-// OpenVDB or NanoVDB headers here: only src/nvdb_io.cpp sees them.
+// OpenVDB or NanoVDB headers here: only src/io/nvdb_io.cpp sees them.
 #pragma once
 
 #include <array>

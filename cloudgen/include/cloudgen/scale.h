@@ -1,6 +1,6 @@
 // Scale-out: building the one-process VDB from bricks generated elsewhere (MPI ranks) or from
 // tile files (farm jobs), without ever holding a dense copy of the whole volume.
-// No OpenVDB types here: the implementation lives in src/vdb_merge.cpp.
+// No OpenVDB types here: the implementation lives in src/scale/vdb_merge.cpp.
 #pragma once
 
 #include <array>

@@ -1,7 +1,7 @@
 // Baking cloud motion into a VDB sequence (`cloudgen generate PRESET --frames A:B --fps F -o
 // out/cloud_####.vdb`): each frame is the static volume displaced by motion.glsl's D(h, t) at
 // t = frame / fps, the formula the viewer evaluates, so a baked frame is the viewer's displaced
-// density. No OpenVDB here (write_vdb_frame lives in src/vdb_frame.cpp); docs/motion.md.
+// density. No OpenVDB here (write_vdb_frame lives in src/io/vdb_frame.cpp); docs/motion.md.
 #pragma once
 
 #include <array>

@@ -1,5 +1,5 @@
 // The in-memory cloud volume that cloudgen produces and every exporter and the viewer consume.
-// Plain data, no OpenVDB types: OpenVDB is confined to cloudgen/src/vdb_io.cpp.
+// Plain data, no OpenVDB types: OpenVDB is confined to cloudgen/src/io/vdb_io.cpp.
 #pragma once
 
 #include <array>
@@ -9,23 +9,9 @@
 #include <string>
 #include <vector>
 
-namespace cloudgen {
+#include "cloudgen/errors.h"
 
-/// Base of every error cloudgen throws. Library code throws, only `main` chooses exit codes.
-class Error : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-/// A user-facing input problem (file, field, value, what was allowed) already in the message.
-class InputError : public Error {
- public:
-  using Error::Error;
-};
-/// Reading or writing a file failed.
-class IoError : public Error {
- public:
-  using Error::Error;
-};
+namespace cloudgen {
 
 /// Dense channels in memory order x fastest, then y, then z: index = (z * dims.y + y) * dims.x + x.
 /// Voxel (i, j, k) covers world box origin + voxel_size * [i, i+1) x [j, j+1) x [k, k+1); its value

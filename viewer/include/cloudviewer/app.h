@@ -7,9 +7,9 @@
 
 namespace cloudviewer {
 
-/// Runs the viewer with argv-style arguments. Returns the process exit code: 0 success,
-/// 1 user-input error, 2 I/O or environment error (a file could not be read or written, OpenGL,
-/// shaders), 3 internal error (see exit_code in errors.h). Never throws. Messages go to `err`.
+/// Runs the viewer with argv-style arguments. Never throws; messages go to `err`. Returns the
+/// process exit code by the toolkit's one rule (cloudgen/exit_codes.h): 0 success, 1 user-input
+/// error, 2 I/O or environment (a file, OpenGL, shaders), 3 internal error, 130 interrupted.
 int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
 }  // namespace cloudviewer

@@ -1,15 +1,12 @@
-// Typed exceptions of the viewer library: cloudgen's hierarchy (cloudgen/volume.h), one set of
-// types for both programs, plus the OpenGL failures only the viewer has. Library code throws; only
-// run_cli picks the exit code, by the toolkit's one rule (exit_code below):
-//   1  InputError                 a user-input problem (file, flag, value, what was allowed)
-//   2  IoError, GlError           reading/writing a file failed; no OpenGL context, a shader failed
-//                                  (I/O and environment)
-//   3  anything else              an internal error
+// Typed exceptions of the viewer library: the toolkit's one hierarchy (cloudgen/errors.h), plus the
+// OpenGL failures only the viewer has. Library code throws; only run_cli picks the exit code, by the
+// toolkit's one rule, cloudgen::exit_code_of (cloudgen/exit_codes.h): 1 bad input, 2 I/O or
+// environment (a GlError: no OpenGL context, a shader that failed), 3 internal, 130 interrupted.
 #pragma once
 #include <exception>
 #include <string>
 
-#include "cloudgen/volume.h"
+#include "cloudgen/errors.h"
 
 namespace cloudviewer {
 
@@ -20,9 +17,9 @@ using InputError = cloudgen::InputError;
 using IoError = cloudgen::IoError;
 
 /// OpenGL / EGL / window-system failure (no context, incomplete framebuffer...).
-class GlError : public Error {
+class GlError : public cloudgen::EnvironmentError {
  public:
-  using Error::Error;
+  using cloudgen::EnvironmentError::EnvironmentError;
 };
 /// A shader failed to compile or link. what() holds "file:line: log".
 class ShaderError : public GlError {
@@ -36,8 +33,5 @@ class ShaderError : public GlError {
   std::string file_;
   int line_;
 };
-
-/// The exit code of a failure, by the rule above.
-int exit_code(const std::exception& e);
 
 }  // namespace cloudviewer

@@ -1,5 +1,7 @@
 #include "cloudviewer/app.h"
 
+#include "cloudgen/exit_codes.h"
+
 #include <chrono>
 #include <cmath>
 #include <iostream>
@@ -10,10 +12,11 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "cloudgen/exit_codes.h"
 #include "cloudgen/output.h"
 #include "cloudviewer/atmosphere.h"
 #include "cloudviewer/errors.h"
-#include "default_view.h"
+#include "scene/default_view.h"
 #include "internal.h"
 
 namespace cloudviewer {
@@ -437,24 +440,24 @@ Camera resolve_camera(const Options& o, const PreparedVolume& vol, int width, in
 
 Sun resolve_sun(const Options& o, const Camera& cam) { return default_view_sun(o, cam); }
 
-int exit_code(const std::exception& e) {
-  if (dynamic_cast<const InputError*>(&e)) return 1;
-  if (dynamic_cast<const IoError*>(&e) || dynamic_cast<const GlError*>(&e)) return 2;
-  return 3;
-}
-
 int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   try {
     return run(args, out, err);
-  } catch (const std::exception& e) {
-    const int code = exit_code(e);
-    const char* kind = code == 1 ? "error" : dynamic_cast<const GlError*>(&e) ? "OpenGL error"
-                     : code == 2 ? "I/O error" : "internal error";
-    err << "cloudviewer: " << kind << ": " << e.what() << "\n";
-    return code;
   } catch (...) {
-    err << "cloudviewer: internal error: unknown exception\n";
-    return 3;
+    const std::exception_ptr e = std::current_exception();
+    const int code = cloudgen::exit_code_of(e);
+    std::string what = "unknown exception";
+    try {
+      std::rethrow_exception(e);
+    } catch (const GlError& x) {
+      err << "cloudviewer: OpenGL error: " << x.what() << "\n";
+      return code;
+    } catch (const std::exception& x) {
+      what = x.what();
+    } catch (...) {
+    }
+    err << "cloudviewer: " << cloudgen::exit_kind(code) << ": " << what << "\n";
+    return code;
   }
 }
 

@@ -25,7 +25,7 @@
 #endif
 #include "cloudgen/motion.h"
 #include "cloudgen/phase.h"
-#include "glsl_cpp.h"  // last: defines IN/OUT/INOUT
+#include "cpu/glsl_cpp.h"  // last: defines IN/OUT/INOUT
 
 namespace cloudviewer {
 namespace {
@@ -222,24 +222,24 @@ struct CpuShader {
   vec3 curl_texel(ivec3 i) const { return cloudgen::curl_field_texel(i.x, i.y, i.z); }
 
 // The list and order of shaders/cloud_headers.glsl (after its GLSL-only bindings), plus post.glsl.
-#include "../shaders/modes.glsl"
-#include "../shaders/common.glsl"
-#include "../shaders/volume_nanovdb.glsl"
+#include "../../shaders/modes.glsl"
+#include "../../shaders/common.glsl"
+#include "../../shaders/volume_nanovdb.glsl"
 #include "cloudgen/phase_lobes.glsl"
-#include "../shaders/phase.glsl"
+#include "../../shaders/phase.glsl"
 #include "cloudgen/cloud_type.glsl"
 #include "cloudgen/erosion.glsl"
 #include "cloudgen/motion.glsl"
 #include "cloudgen/curl_distortion.glsl"
-#include "../shaders/medium.glsl"
-#include "../shaders/atmosphere.glsl"
-#include "../shaders/sky_atmosphere.glsl"
-#include "../shaders/lighting.glsl"
-#include "../shaders/march.glsl"
-#include "../shaders/sky.glsl"
-#include "../shaders/compose.glsl"
-#include "../shaders/temporal.glsl"
-#include "../shaders/post.glsl"
+#include "../../shaders/medium.glsl"
+#include "../../shaders/atmosphere.glsl"
+#include "../../shaders/sky_atmosphere.glsl"
+#include "../../shaders/lighting.glsl"
+#include "../../shaders/march.glsl"
+#include "../../shaders/sky.glsl"
+#include "../../shaders/compose.glsl"
+#include "../../shaders/temporal.glsl"
+#include "../../shaders/post.glsl"
 };
 
 struct Buffer {

@@ -5,7 +5,7 @@
 #include <sstream>
 
 #include "cloudviewer/errors.h"
-#include "param_parse.h"
+#include "scene/param_parse.h"
 
 namespace cloudviewer {
 namespace {

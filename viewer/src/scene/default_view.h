@@ -2,7 +2,7 @@
 // fov, sun, render.* settings; command-line flags override it), else a bare volume framed from
 // 30 degrees above its long side (cloudgen::frame_box, the framing `cloudgen blender` uses too).
 #pragma once
-#include "internal.h"
+#include "../internal.h"
 
 namespace cloudviewer {
 

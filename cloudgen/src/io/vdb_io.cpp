@@ -23,7 +23,7 @@
 #include "cloudgen/io.h"
 #include "cloudgen/motion.h"
 #include "cloudgen/view.h"
-#include "vdb_internal.h"
+#include "io/vdb_internal.h"
 
 namespace cloudgen {
 namespace vdb {

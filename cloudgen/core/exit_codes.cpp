@@ -4,8 +4,8 @@
 #include <ios>
 #include <new>
 
-#include "cloudgen/io.h"
-#include "cloudgen/volume.h"
+#include "cloudgen/errors.h"
+#include "cloudgen/printable.h"
 #include "noise3d/noise3d.h"
 
 namespace cloudgen {
@@ -13,11 +13,15 @@ namespace cloudgen {
 int exit_code_of(const std::exception_ptr& e) {
   try {
     std::rethrow_exception(e);
+  } catch (const Cancelled&) {
+    return kExitInterrupted;
   } catch (const InputError&) {
     return kExitInput;
   } catch (const noise3d::InvalidParameter&) {
     return kExitInput;
   } catch (const IoError&) {
+    return kExitIo;
+  } catch (const EnvironmentError&) {
     return kExitIo;
   } catch (const std::filesystem::filesystem_error&) {
     return kExitIo;
@@ -27,6 +31,15 @@ int exit_code_of(const std::exception_ptr& e) {
     return kExitIo;
   } catch (...) {
     return kExitInternal;
+  }
+}
+
+const char* exit_kind(int code) {
+  switch (code) {
+    case kExitInput: return "error";
+    case kExitIo: return "I/O error";
+    case kExitInterrupted: return "interrupted";
+    default: return "internal error";
   }
 }
 

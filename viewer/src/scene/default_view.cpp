@@ -1,4 +1,4 @@
-#include "default_view.h"
+#include "scene/default_view.h"
 
 #include <algorithm>
 #include <filesystem>

@@ -3,7 +3,7 @@
 // from panel_widgets(), so a key added to the table (the sky's, the motion's) appears here with no
 // code of its own; the atmosphere.* table has a section of its own, with the last LUT recompute's
 // GPU time. Follows imgui's examples/example_glfw_opengl3/main.cpp.
-#include "panel.h"
+#include "app/panel.h"
 
 #include <algorithm>
 #include <string>

@@ -11,7 +11,7 @@
 #include <filesystem>
 
 #include "cloudgen/io.h"
-#include "format_internal.h"
+#include "io/format_internal.h"
 
 namespace cloudgen {
 

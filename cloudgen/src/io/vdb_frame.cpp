@@ -5,7 +5,7 @@
 #include <openvdb/tree/LeafManager.h>
 
 #include "cloudgen/sequence.h"
-#include "vdb_internal.h"
+#include "io/vdb_internal.h"
 
 namespace cloudgen {
 

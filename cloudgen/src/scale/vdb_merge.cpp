@@ -13,7 +13,7 @@
 #include "cloudgen/motion.h"
 #include "cloudgen/scale.h"
 #include "cloudgen/view.h"
-#include "vdb_internal.h"
+#include "io/vdb_internal.h"
 
 namespace cloudgen {
 

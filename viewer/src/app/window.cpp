@@ -15,7 +15,7 @@
 
 #include "cloudviewer/errors.h"
 #include "internal.h"
-#include "panel.h"
+#include "app/panel.h"
 
 namespace cloudviewer {
 namespace {

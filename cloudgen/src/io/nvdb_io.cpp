@@ -20,8 +20,8 @@
 
 #include "cloudgen/io.h"
 #include "cloudgen/nvdb.h"
-#include "format_internal.h"
-#include "vdb_internal.h"
+#include "io/format_internal.h"
+#include "io/vdb_internal.h"
 
 namespace cloudgen {
 namespace {

@@ -6,7 +6,7 @@
 
 #include "cloudgen/io.h"
 #include "cloudgen/json_checked.h"
-#include "format_internal.h"
+#include "io/format_internal.h"
 
 namespace cloudgen {
 

@@ -16,8 +16,8 @@
 
 #include "cloudgen/output.h"
 #include "cloudviewer/errors.h"
-#include "param_parse.h"
-#include "glsl_cpp.h"  // last: defines IN/OUT/INOUT
+#include "scene/param_parse.h"
+#include "cpu/glsl_cpp.h"  // last: defines IN/OUT/INOUT
 
 namespace cloudviewer {
 namespace {
@@ -229,7 +229,7 @@ struct AtmosphereShader {
   vec3 orders_texel(int, ivec3) const { return vec3(0.0); }
   vec3 orders_irradiance_texel(int) const { return vec3(0.0); }
 
-#include "../shaders/atmosphere.glsl"
+#include "../../shaders/atmosphere.glsl"
 };
 
 // The same header at other LUT sizes (Num/Den times 256x64), for the size-against-error study only.
@@ -256,7 +256,7 @@ struct SizedAtmosphereShader {
   vec3 air_texel(int, ivec3) const { return vec3(0.0); }  // the camera's air LUT: the CPU renderer
   vec3 orders_texel(int, ivec3) const { return vec3(0.0); }
   vec3 orders_irradiance_texel(int) const { return vec3(0.0); }
-#include "../shaders/atmosphere.glsl"
+#include "../../shaders/atmosphere.glsl"
 #pragma pop_macro("CV_TRANSMITTANCE_W")
 #pragma pop_macro("CV_TRANSMITTANCE_H")
 };
@@ -299,7 +299,7 @@ struct SizedMsShader {
   vec3 air_texel(int, ivec3) const { return vec3(0.0); }  // the camera's air LUT: the CPU renderer
   vec3 orders_texel(int, ivec3) const { return vec3(0.0); }
   vec3 orders_irradiance_texel(int) const { return vec3(0.0); }
-#include "../shaders/atmosphere.glsl"
+#include "../../shaders/atmosphere.glsl"
 #pragma pop_macro("CV_MS_LUT_SIZE")
 };
 
@@ -341,7 +341,7 @@ struct OrdersShader {
   vec3 air_texel(int, ivec3) const { return vec3(0.0); }  // the camera's air LUT: the CPU renderer
   vec3 orders_texel(int p, ivec3 t) const { return (*part[size_t(p)])[orders_index(t)]; }
   vec3 orders_irradiance_texel(int t) const { return (*irr_orders)[size_t(t)]; }
-#include "../shaders/atmosphere.glsl"
+#include "../../shaders/atmosphere.glsl"
 };
 
 void compute_orders_table(const AtmosphereLuts& base, OrdersTable& out) {
@@ -420,7 +420,7 @@ struct ScatteringShader {
   vec3 air_texel(int, ivec3) const { return vec3(0.0); }  // the camera's air LUT: the CPU renderer
   vec3 orders_texel(int part, ivec3 t) const { return part == 4 ? base.orders_sum()[orders_index(t)] : vec3(0.0); }
   vec3 orders_irradiance_texel(int) const { return vec3(0.0); }
-#include "../shaders/atmosphere.glsl"
+#include "../../shaders/atmosphere.glsl"
 #pragma pop_macro("CV_SCATTERING_MU_S")
 #pragma pop_macro("CV_SCATTERING_MU")
 #pragma pop_macro("CV_SCATTERING_R")
