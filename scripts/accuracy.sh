@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# The marcher's lighting against the path tracer (docs/accuracy.md, issue 10): for the cumulus and
+# The marcher's lighting against the path tracer (docs/notes/accuracy.md, issue 10): for the cumulus and
 # thesis presets at their default views, the path tracer (`--backend pathtrace`, two seeds of
 # SPP paths per pixel: their mean is the reference, their difference its noise) against the CPU
 # reference of the marcher at render.ms_octaves = 1..4, RMSE of the display image and mean
-# brightness; and the picture docs/accuracy.md shows. Bloom off, so pixels compare one to one.
+# brightness; and the picture docs/notes/accuracy.md shows. Bloom off, so pixels compare one to one.
 # Usage: scripts/accuracy.sh [SPP] [WxH]   (default 128, 160x90; after scripts/test.sh built build/)
 set -euo pipefail
 cd "$(dirname "$0")/.."

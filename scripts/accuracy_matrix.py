@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Every lighting option of the marcher against the path tracer (docs/accuracy.md, issue 10).
+"""Every lighting option of the marcher against the path tracer (docs/notes/accuracy.md, issue 10).
 
 For the thesis, cumulus and cumulonimbus presets, each at its default view, back-lit (the sun
 opposite its default azimuth, 20 degrees up) and at sunset (the sun to the side, 3 degrees up):
@@ -9,7 +9,7 @@ without the sky ambient (reference: the path tracer with the default settings), 
 phase function (reference: the path tracer with the Mie phase, the physical one). Scores: the mean display luminance of the
 cloud pixels (transmittance below 0.95) relative to the path tracer's, the RMSE of the display
 image, and the CPU reference's whole-process time. Bloom off, so pixels compare one to one.
-Rewrites the block between the accuracy-matrix markers in docs/accuracy.md and draws
+Rewrites the block between the accuracy-matrix markers in docs/notes/accuracy.md and draws
 docs/images/accuracy_views.png (default lighting beside the path tracer, per preset and view).
 
 Usage: scripts/accuracy_matrix.py [SPP] [WxH]   (default 128, 160x90; after scripts/test.sh)
@@ -109,7 +109,7 @@ def main():
     stamp = "Measured %s on %d cores with `scripts/accuracy_matrix.py %s %s` (load %s at the end)." % (
         time.strftime("%Y-%m-%d", time.gmtime()), os.cpu_count(), SPP, SIZE, open("/proc/loadavg").read().split()[0])
     block = "\n".join(table) + "\n\n" + stamp + "\n"
-    doc = os.path.join(ROOT, "docs/accuracy.md")
+    doc = os.path.join(ROOT, "docs/notes/accuracy.md")
     text = open(doc).read()
     b0 = text.index("<!-- BEGIN accuracy-matrix")
     b0 = text.index("\n", b0) + 1

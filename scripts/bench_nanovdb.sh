@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# docs/nanovdb.md: frame time of render.volume=dense against =nanovdb on the thesis preset, issue
+# docs/notes/nanovdb.md: frame time of render.volume=dense against =nanovdb on the thesis preset, issue
 # 13's outside and below views, 320x180, one llvmpipe thread. The storage is not a bench
 # configuration (the volume is prepared once per process), so the two run in alternating
 # processes, ROUNDS times each, and the best frame of each counts (the machine is shared).

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Scale-out benchmarks for docs/scale-out.md: strong scaling of `generate` (one process with 1 and
+# Scale-out benchmarks for docs/notes/scale-out.md: strong scaling of `generate` (one process with 1 and
 # 2 threads, MPI with 1 and 2 ranks of 1 thread), whole-process wall time best of N and peak memory
 # of the writing process, then the per-brick costs (thread time of each brick kind) on cumulus-field.
 # Usage: scripts/bench_scale.sh [REPEATS]   (after building build/bin/cloudgen with MPI)

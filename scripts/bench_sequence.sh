@@ -2,7 +2,7 @@
 # Cost of baking a motion sequence (`cloudgen generate --frames`), per frame, against the static
 # export of the same preset measured in the same run: wall time of the static run (generate +
 # write one .vdb) and of a 24-frame run, and cloudgen's own split of a frame into displacement
-# and VDB write. Prints a markdown table for docs/motion.md.
+# and VDB write. Prints a markdown table for docs/notes/motion.md.
 # Usage: scripts/bench_sequence.sh [THREADS]   (after building build/bin/cloudgen)
 set -euo pipefail
 cd "$(dirname "$0")/.."

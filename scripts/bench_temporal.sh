@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Temporal upsampling and motion figures for docs/motion.md (issue 11): builds the cumulus preset,
+# Temporal upsampling and motion figures for docs/notes/motion.md (issue 11): builds the cumulus preset,
 # runs build/bin/bench_temporal on it (frame time of render.temporal against full resolution at
 # 8..128 steps, the error along a moving camera + wind track, the cost of the motion) and draws
-# the pictures docs/motion.md shows (the clouds at three times, the temporal convergence).
+# the pictures docs/notes/motion.md shows (the clouds at three times, the temporal convergence).
 # Usage: scripts/bench_temporal.sh [--size WxH]   (after scripts/run.sh or test.sh built build/)
 # llvmpipe runs on one thread (LP_NUM_THREADS=1 unless set): with two, the full-resolution pass
 # spreads over both cores and the quarter-resolution sparse pass hardly does, so the ratio would

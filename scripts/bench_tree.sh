@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# docs/nanovdb.md, render.skipping=tree (issue 13's hierarchical DDA through the NanoVDB tree):
+# docs/notes/nanovdb.md, render.skipping=tree (issue 13's hierarchical DDA through the NanoVDB tree):
 # frame time and loop trips per pixel of no skipping, the distance field and the tree's empty
 # nodes, on the thesis views (bench/tracks/nanovdb_tree.json) and on the sparse cumulus-field
 # (nanovdb_tree_field.json), the clouds still and moving (--time 60), render.volume=nanovdb,

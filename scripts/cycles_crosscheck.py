@@ -1,4 +1,4 @@
-"""The path tracer against Blender's Cycles on one scene (docs/accuracy.md, issue 10).
+"""The path tracer against Blender's Cycles on one scene (docs/notes/accuracy.md, issue 10).
 
 Run inside headless Blender by scripts/cycles_crosscheck.sh:
   blender -b --python-exit-code 1 --python scripts/cycles_crosscheck.py -- render SCENE.blend OUT.exr SAMPLES BOUNCES SEED SUN.json STEP_RATE

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The path tracer (`cloudviewer --backend pathtrace`) against Blender's Cycles, an independent
-# renderer, on one scene (docs/accuracy.md, issue 10): cumulus at 96 voxels, the default view, lit
+# renderer, on one scene (docs/notes/accuracy.md, issue 10): cumulus at 96 voxels, the default view, lit
 # by the sun alone (no sky light, no ground, the analytic sky's constant sun colour), HG g 0.3,
 # albedo 1. Cycles renders the scene `cloudgen blender` writes, re-lit by scripts/cycles_crosscheck.py
 # (black world, transparent film), twice with two seeds; the path tracer's cloud radiance is its

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The path tracer's noise per phase function (docs/phase.md, issue 10).
+"""The path tracer's noise per phase function (docs/notes/phase.md, issue 10).
 
 Renders the cumulus preset at its default view with `--backend pathtrace` twice (two seeds) per
 phase function and per viewer binary given, and prints each one's noise: the RMS difference of the

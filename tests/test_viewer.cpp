@@ -3,6 +3,7 @@
 // transmittance through a uniform slab, shader error reporting and bad inputs.
 // A failure to create the EGL context is a failure, not a skip: CI runs on this kind of machine.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstddef>
 #include <filesystem>
@@ -1388,4 +1389,66 @@ TEST(ViewerMath, MiePhaseShowsTheFogbowAndTheGloryWithTheSunBehind) {
   EXPECT_GT(r(36, 43), 1.5 * r(48, 52)) << "the fogbow";
   EXPECT_LT(hg(0, 3), hg(10, 20)) << "HG: no glory";
   EXPECT_LT(hg(36, 43), hg(48, 52)) << "HG: no bow, the light only grows with the path through the slab";
+}
+
+// ---------------------------------------------------------------------------------------------
+// Help for people: every line of both programs' --help, each cloudgen command's --help and
+// --help-params fits in 100 characters and carries no lab notes (machine names, timings, the
+// seed documents' numbers); those belong in docs/notes/.
+
+namespace {
+
+std::vector<std::string> help_problems(const std::string& where, const std::string& text) {
+  std::vector<std::string> problems;
+  std::istringstream lines(text);
+  std::string line;
+  for (int n = 1; std::getline(lines, line); ++n) {
+    const std::string at = where + ":" + std::to_string(n) + ": ";
+    if (line.size() > 100) problems.push_back(at + std::to_string(line.size()) + " characters: " + line);
+    std::string lower = line;
+    for (char& c : lower) c = char(std::tolower((unsigned char)c));
+    for (const char* word : {"llvmpipe", "seed 00", "h100", "h200", "tpcs"})
+      if (lower.find(word) != std::string::npos) problems.push_back(at + "says '" + word + "': " + line);
+    // A timing: a number followed by "ms" or "s" as a unit of a measurement, e.g. "0.1-0.3 s".
+    for (size_t i = 0; (i = lower.find(" ms", i)) != std::string::npos; ++i)
+      if (i > 0 && std::isdigit((unsigned char)lower[i - 1])) problems.push_back(at + "a timing: " + line);
+  }
+  return problems;
+}
+
+}  // namespace
+
+TEST(HelpText, EveryLineFitsAndCarriesNoLabNotes) {
+  std::vector<std::string> problems;
+  auto add = [&](const std::string& where, const std::string& text) {
+    ASSERT_GT(text.size(), 100u) << where << " printed almost nothing:\n" << text;
+    for (const std::string& p : help_problems(where, text)) problems.push_back(p);
+  };
+  for (const char* flag : {"--help", "--help-params"}) {
+    std::string out, err;
+    ASSERT_EQ(run({flag}, &err, &out), 0) << err;
+    add(std::string("cloudviewer ") + flag, out);
+  }
+  std::string top;
+  ASSERT_EQ(testutil::run_cli("--help", &top), 0) << top;
+  add("cloudgen --help", top);
+  // Every command the top-level help lists.
+  const size_t list = top.find("Subcommands:");
+  ASSERT_NE(list, std::string::npos) << top;
+  std::istringstream lines(top.substr(list));
+  std::string line;
+  std::getline(lines, line);
+  int commands = 0;
+  while (std::getline(lines, line) && !line.empty()) {
+    std::istringstream words(line);
+    std::string command;
+    words >> command;
+    if (line.rfind("  ", 0) != 0 || line.rfind("   ", 0) == 0) continue;  // a wrapped description
+    std::string text;
+    ASSERT_EQ(testutil::run_cli(command + " --help", &text), 0) << command << ": " << text;
+    add("cloudgen " + command + " --help", text);
+    ++commands;
+  }
+  EXPECT_GE(commands, 8);
+  for (const std::string& p : problems) ADD_FAILURE() << p;
 }

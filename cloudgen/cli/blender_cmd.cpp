@@ -318,7 +318,8 @@ void add_blender_command(CLI::App& app, std::function<void()>& run) {
   c->footer("Runs Debian's `blender` headless (package blender; CLOUDGEN_BLENDER overrides the executable) with\n"
             "scripts/blender_scene.py. Example:\n"
             "  cloudgen blender cumulus -o out/cumulus.blend --render out/cumulus.png --size 320x180 --samples 32\n"
-            "  cloudgen blender out/cloud_####.vdb --frames 0:47 -o out/cloud.blend --render out/f12.png --render-frame 12");
+            "  cloudgen blender out/cloud_####.vdb --frames 0:47 -o out/cloud.blend \\\n"
+            "      --render out/f12.png --render-frame 12");
   c->callback([a, &run] { run = [a] { run_blender(*a); }; });
 }
 

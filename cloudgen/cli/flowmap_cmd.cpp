@@ -42,7 +42,7 @@ void add_flowmap_command(CLI::App& app, std::function<void()>& run) {
   auto a = std::make_shared<FlowmapArgs>();
   CLI::App* c = app.add_subcommand("flowmap", "Write the procedural flow map as a PNG to paint over (motion.flow_map).");
   c->footer(
-      "A flow map (seed 003) moves the clouds over time: at time t it is looked up at the phases\n"
+      "A flow map moves the clouds over time: at time t it is looked up at the phases\n"
       "frac(t * motion.flow_speed) and that + 0.5, blended so that the flow never jumps, and scaled by\n"
       "the height fraction and motion.flow_up / motion.flow_forward (metres). Layout: x = the flow phase\n"
       "(one cycle, the left edge follows the right), y = the height fraction (top row = top of the\n"
@@ -50,7 +50,8 @@ void add_flowmap_command(CLI::App& app, std::function<void()>& run) {
       "Examples:\n"
       "  cloudgen flowmap -o out/flow.png                 # the built-in flow, 256x64, 16-bit\n"
       "  cloudviewer cloud.vdb --set motion.flow_map=out/flow.png --time 30 --out t30.png\n"
-      "  cloudgen generate cumulus --set motion.flow_map=out/flow.png --frames 1:48 --fps 24 -o out/cloud_####.vdb");
+      "  cloudgen generate cumulus --set motion.flow_map=out/flow.png --frames 1:48 --fps 24 \\\n"
+      "      -o out/cloud_####.vdb");
   c->add_option("-o,--output", a->out, "Output image (.png)")->required();
   c->add_option("--size", a->size, "WIDTHxHEIGHT in texels (default 256x64)");
   c->add_flag("-q,--quiet", a->quiet, "No summary line");

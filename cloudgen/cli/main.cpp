@@ -14,6 +14,7 @@
 
 #include "cloudgen/cli_parse.h"
 #include "cloudgen/exit_codes.h"
+#include "cloudgen/help_text.h"
 #include "cloudgen/generate.h"
 #include "cloudgen/view.h"
 #include "cloudgen/io.h"
@@ -293,6 +294,7 @@ int main(int argc, char** argv) {
   add_scale_commands(app, run);
 
   try {
+    wrap_cli_help(app);
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     const int rc = app.exit(e);  // prints the message (or the help)

@@ -154,7 +154,7 @@ void add_noise_command(CLI::App& app, std::function<void()>& run) {
       "amplitudes), worley and perlin-worley in [0, 1].\n\n"
       "Examples:\n"
       "  cloudgen noise --kind worley --period 4 --octaves 5 --size 128 -o worley.raw\n"
-      "  cloudgen noise --kind perlin --reference --at 3.14,42,7   # Perlin's ImprovedNoise: 0.13691995878400012");
+      "  cloudgen noise --kind perlin --reference --at 3.14,42,7   # Perlin's ImprovedNoise: 0.136919958784");
   for (int i = 0; i < kNoiseFlags; ++i) {
     const FieldSpec& f = noise_flags()[size_t(i)];
     a->value[size_t(i)] = f.default_value;

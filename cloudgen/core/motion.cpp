@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <sstream>
 
+#include "cloudgen/help_text.h"
 #include "cloudgen/volume.h"
 
 namespace cloudgen {
@@ -28,7 +29,7 @@ const std::vector<MotionKey>& motion_keys() {
       {"wind_shear", &MotionParams::wind_shear, 0, 10, "",
        "height shear: the top of the layer moves (1 + shear) times faster than its base"},
       {"flow_speed", &MotionParams::flow_speed, 0, 10, "1/s",
-       "flow-map cycles per second (seed 003's speed; the flow repeats every 1/speed seconds)"},
+       "flow-map cycles per second (the flow repeats every 1/speed seconds)"},
       {"flow_up", &MotionParams::flow_up, 0, 1e5, "m",
        "flow-map amplitude along up at the top of the layer (scaled by the height fraction)"},
       {"flow_forward", &MotionParams::flow_forward, 0, 1e5, "m",
@@ -128,11 +129,12 @@ void set_motion_height_box(std::vector<std::pair<std::string, std::string>>& met
 
 std::string motion_help() {
   MotionParams d;
-  std::string s = "motion parameters (--set motion.KEY=VALUE; seed 003 flow map + wind):\n";
+  std::string s = "motion parameters (--set motion.KEY=VALUE: a flow map and the wind):\n";
   for (const MotionKey& k : motion_keys())
-    s += "  motion." + k.key + " " + range(k) + (k.unit.empty() ? "" : " " + k.unit) + " (default " +
-         fmt(d.*k.member) + "): " + k.doc + "\n";
-  s += std::string("  motion.") + kFlowMapKey + " procedural | FILE.png (default procedural): " + kFlowMapDoc + "\n";
+    s += help_entry("motion." + k.key + " " + range(k) + (k.unit.empty() ? "" : " " + k.unit) + " (default " +
+                        fmt(d.*k.member) + ")",
+                    k.doc);
+  s += help_entry(std::string("motion.") + kFlowMapKey + " procedural | FILE.png (default procedural)", kFlowMapDoc);
   return s;
 }
 

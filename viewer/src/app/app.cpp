@@ -1,6 +1,7 @@
 #include "cloudviewer/app.h"
 
 #include "cloudgen/exit_codes.h"
+#include "cloudgen/help_text.h"
 
 #include <chrono>
 #include <cmath>
@@ -146,7 +147,7 @@ std::string params_help() {
   std::string s = "render parameters (--set render.KEY=VALUE):\n";
   RenderSettings d;
   for (const ParamDef& p : render_params())
-    s += "  " + p.key + " (" + p.type + ", " + p.range + ", default " + p.get(d) + "): " + p.doc + "\n";
+    s += cloudgen::help_entry(p.key + " (" + p.type + ", " + p.range + ", default " + p.get(d) + ")", p.doc);
   return s + atmosphere_params_help() + cloudgen::motion_help();
 }
 
@@ -253,13 +254,14 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   app.add_option("--bench-reference", o.bench_reference, "also render each track frame with the CPU reference at this step count and report RMSE");
   app.add_option("--bench-repeat", o.bench_repeat, "timing rounds over all configurations and frames (best of N per frame)")->check(CLI::Range(1, 100));
   app.add_flag("--help-params", help_params, "list every render.KEY with type, range, default and meaning");
-  app.add_flag("--params-markdown", params_md, "the render.KEY table as Markdown (docs/viewer.md)");
-  app.add_flag("--atmosphere-markdown", atmo_md, "the atmosphere.KEY table as Markdown (docs/viewer.md)");
-  app.add_flag("--motion-markdown", motion_md, "the motion.KEY table as Markdown (docs/viewer.md, docs/motion.md)");
-  app.add_flag("--keys-markdown", keys_md, "the window's parameter key bindings as Markdown (docs/viewer.md)");
+  app.add_flag("--params-markdown", params_md, "the render.KEY table as Markdown (docs/reference/viewer-params.md)");
+  app.add_flag("--atmosphere-markdown", atmo_md, "the atmosphere.KEY table as Markdown (docs/reference/viewer-params.md)");
+  app.add_flag("--motion-markdown", motion_md, "the motion.KEY table as Markdown (docs/reference/viewer-params.md)");
+  app.add_flag("--keys-markdown", keys_md, "the window's parameter key bindings as Markdown (docs/reference/viewer-params.md)");
   std::vector<std::string> argv_rest(args.begin() + (args.empty() ? 0 : 1), args.end());
   std::reverse(argv_rest.begin(), argv_rest.end());
   try {
+    cloudgen::wrap_cli_help(app);
     app.parse(argv_rest);
   } catch (const CLI::ParseError& e) {
     int code = app.exit(e, out, err);

@@ -16,6 +16,7 @@
 
 #include "cloudgen/output.h"
 #include "cloudviewer/errors.h"
+#include "cloudgen/help_text.h"
 #include "scene/param_parse.h"
 #include "cpu/glsl_cpp.h"  // last: defines IN/OUT/INOUT
 
@@ -164,7 +165,7 @@ std::string atmosphere_params_help() {
   std::string s = "atmosphere parameters (--set atmosphere.KEY=VALUE):\n";
   AtmosphereSettings d;
   for (const AtmosphereParamDef& p : atmosphere_params())
-    s += "  " + p.key + " (" + p.type + ", " + p.range + ", default " + p.get(d) + "): " + p.doc + "\n";
+    s += cloudgen::help_entry(p.key + " (" + p.type + ", " + p.range + ", default " + p.get(d) + ")", p.doc);
   return s;
 }
 
