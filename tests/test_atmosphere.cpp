@@ -12,7 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "cloudviewer/app.h"
-#include "cloudviewer/atmosphere.h"
+#include "cloudviewer/atmosphere_luts.h"
 #include "cloudviewer/errors.h"
 #include "cloudviewer/image.h"
 #include "cloudviewer/renderer.h"
@@ -435,12 +435,12 @@ TEST(AtmosphereSky, AirLutSkyMatchesTheMarchAndTheCpuReference) {
     FrameSetup air = sky_frame(kW, kH, v.az, v.el, v.eye, v.target, v.fov, {"render.air_lut=true"});
     r.render(march);
     FrameImages gl_march = r.read_back();
-    EXPECT_EQ(r.air_lut_builds(), builds) << v.name;  // off: never built
+    EXPECT_EQ(r.stats().air_lut_builds, builds) << v.name;  // off: never built
     r.render(air);
     FrameImages gl_air = r.read_back();
     const bool space = std::string(v.name) == "space";
     if (!space) ++builds;  // each view: another altitude or sun
-    EXPECT_EQ(r.air_lut_builds(), builds) << v.name;
+    EXPECT_EQ(r.stats().air_lut_builds, builds) << v.name;
     if (space) {
       EXPECT_EQ(max_abs_diff(gl_air.linear, gl_march.linear), 0.0);
       continue;
@@ -457,16 +457,16 @@ TEST(AtmosphereSky, AirLutSkyMatchesTheMarchAndTheCpuReference) {
   // The last view turned and moved sideways at the same altitude: the same table.
   FrameSetup turned = sky_frame(160, 90, 40, 20, {5e3, 1e4, 0}, {-3e4, 0, -1e4}, 60, {"render.air_lut=true"});
   r.render(turned);
-  EXPECT_EQ(r.air_lut_builds(), builds);
+  EXPECT_EQ(r.stats().air_lut_builds, builds);
   // Higher, or another sun: built again.
   r.render(sky_frame(160, 90, 40, 20, {5e3, 1.1e4, 0}, {-3e4, 0, -1e4}, 60, {"render.air_lut=true"}));
-  EXPECT_EQ(r.air_lut_builds(), ++builds);
+  EXPECT_EQ(r.stats().air_lut_builds, ++builds);
   r.render(sky_frame(160, 90, 50, 20, {5e3, 1.1e4, 0}, {-3e4, 0, -1e4}, 60, {"render.air_lut=true"}));
-  EXPECT_EQ(r.air_lut_builds(), ++builds);
+  EXPECT_EQ(r.stats().air_lut_builds, ++builds);
   // An atmosphere key: the LUTs and the table again.
   r.render(sky_frame(160, 90, 50, 20, {5e3, 1.1e4, 0}, {-3e4, 0, -1e4}, 60,
                      {"render.air_lut=true", "atmosphere.mie_height=2000"}));
-  EXPECT_EQ(r.air_lut_builds(), ++builds);
+  EXPECT_EQ(r.stats().air_lut_builds, ++builds);
 }
 
 // Looking up from the ground (fov 90: the bottom row at the horizon, the top row at the zenith),

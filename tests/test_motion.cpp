@@ -804,19 +804,19 @@ TEST(TemporalUpsampling, HeldFramesKeepTheGroundTheyWouldDraw) {
       redraw.insert(f);
     }
     t.frame = f;
-    const int before = kept.ground_draws();
+    const int before = kept.stats().ground_draws;
     GpuTimings gk, gd;
     kept.render(make_frame(vol, t, cam, sun, w, h), &gk);
     drawn.render(make_frame(vol, t, cam, sun, w, h), &gd);
     const bool held = pass_ran(gk, "clouds_sparse_held");
     EXPECT_EQ(held, redraw.count(f) == 0) << "frame " << f;
-    EXPECT_EQ(kept.ground_draws() - before, held ? 0 : 1) << "frame " << f;
+    EXPECT_EQ(kept.stats().ground_draws - before, held ? 0 : 1) << "frame " << f;
     EXPECT_EQ(pass_ran(gk, "ground"), !held) << "frame " << f;
     EXPECT_TRUE(pass_ran(gd, "ground")) << "frame " << f;
     EXPECT_EQ(max_abs_diff(kept.read_back().linear, drawn.read_back().linear), 0.0) << "frame " << f;
   }
-  EXPECT_EQ(kept.ground_draws(), int(redraw.size()));
-  EXPECT_EQ(drawn.ground_draws(), 22);
+  EXPECT_EQ(kept.stats().ground_draws, int(redraw.size()));
+  EXPECT_EQ(drawn.stats().ground_draws, 22);
   // The ground is in the picture (not the sky everywhere), so keeping it is not keeping nothing.
   const Image distance = kept.read_target("scene", 1);
   int ground = 0;
@@ -843,7 +843,7 @@ TEST(TemporalUpsampling, ReloadedShadersRecomputeTheCachesAndTheHistory) {
     r.render(make_frame(vol, t, cam, sun, w, h), &g);
   }
   ASSERT_TRUE(pass_ran(g, "clouds_sparse_held")) << "the second frame holds the history";
-  const int light = r.light_volume_builds(), shadow = r.shadow_map_builds();
+  const int light = r.stats().light_volume_builds, shadow = r.stats().shadow_map_builds;
   ASSERT_GT(light, 0);
   ASSERT_GT(shadow, 0);
   r.reload_shaders();
@@ -851,8 +851,8 @@ TEST(TemporalUpsampling, ReloadedShadersRecomputeTheCachesAndTheHistory) {
   r.render(make_frame(vol, t, cam, sun, w, h), &g);
   EXPECT_TRUE(pass_ran(g, "clouds_sparse")) << "after a reload the history is not held";
   EXPECT_FALSE(pass_ran(g, "clouds_sparse_held"));
-  EXPECT_EQ(r.light_volume_builds(), light + 1);
-  EXPECT_EQ(r.shadow_map_builds(), shadow + 1);
+  EXPECT_EQ(r.stats().light_volume_builds, light + 1);
+  EXPECT_EQ(r.stats().shadow_map_builds, shadow + 1);
 }
 
 // A camera pan and moving clouds: the reprojected, neighbourhood-clamped history must not leave

@@ -152,7 +152,7 @@ TEST(MsVolume, GlMatchesTheCpuReferenceAndRebuildsOnlyWhenTheLightChanges) {
   ASSERT_EQ(f.params.ms_volume_on, 1.0);
   EXPECT_EQ(f.params.ms_volume_dims.x, double((vol.dims[0] + 3) / 4));
   r.render(f);
-  EXPECT_EQ(r.ms_volume_builds(), 1);
+  EXPECT_EQ(r.stats().ms_volume_builds, 1);
   MsDiffusionResult solve = r.last_ms_solve();
   std::cout << "diffusion volume " << f.params.ms_volume_dims.x << "x" << f.params.ms_volume_dims.y << "x"
             << f.params.ms_volume_dims.z << ": " << solve.iterations << " iterations\n";
@@ -175,18 +175,18 @@ TEST(MsVolume, GlMatchesTheCpuReferenceAndRebuildsOnlyWhenTheLightChanges) {
   Camera moved = cam;
   moved.eye += glm::dvec3(40.0, 10.0, -20.0);
   r.render(make_frame(vol, s, moved, sun, W, H));
-  EXPECT_EQ(r.ms_volume_builds(), 1) << "a camera move keeps the solve";
+  EXPECT_EQ(r.stats().ms_volume_builds, 1) << "a camera move keeps the solve";
   Sun later = sun;
   later.elevation_deg += 5;
   r.render(make_frame(vol, s, moved, later, W, H));
-  EXPECT_EQ(r.ms_volume_builds(), 2) << "a new sun solves again";
+  EXPECT_EQ(r.stats().ms_volume_builds, 2) << "a new sun solves again";
   RenderSettings grey = s;
   grey.albedo = 0.9;
   r.render(make_frame(vol, grey, moved, later, W, H));
-  EXPECT_EQ(r.ms_volume_builds(), 3) << "a new albedo solves again";
+  EXPECT_EQ(r.stats().ms_volume_builds, 3) << "a new albedo solves again";
   grey.ms_volume = false;
   r.render(make_frame(vol, grey, moved, later, W, H));
-  EXPECT_EQ(r.ms_volume_builds(), 3) << "off: not solved";
+  EXPECT_EQ(r.stats().ms_volume_builds, 3) << "off: not solved";
 }
 
 // Against the path tracer on the dense blob (every order of scattering; 64 paths per pixel, the

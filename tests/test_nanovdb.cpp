@@ -223,12 +223,12 @@ TEST(NanoVdb, GridsGoToTheGpuOnlyWhenALookupReadsThem) {
   testutil::gl_context();
   GlRenderer r{ShaderSource()};
   r.set_volume(nano);
-  EXPECT_FALSE(r.nano_grids_on_gpu());
+  EXPECT_FALSE(r.stats().nano_grids_on_gpu);
   r.render(frame_for(nano, atlas, 64, 36));
-  EXPECT_FALSE(r.nano_grids_on_gpu()) << "the atlas frame uploaded the grids";
+  EXPECT_FALSE(r.stats().nano_grids_on_gpu) << "the atlas frame uploaded the grids";
   const FrameImages via_atlas = r.read_back();
   r.render(frame_for(nano, table, 64, 36));
-  EXPECT_TRUE(r.nano_grids_on_gpu());
+  EXPECT_TRUE(r.stats().nano_grids_on_gpu);
   const FrameImages via_table = r.read_back();
   // (float rounding apart: this renderer's light volume and air tables come from its first frame;
   // a frame through the placeholders would read no cloud at all)
@@ -236,7 +236,7 @@ TEST(NanoVdb, GridsGoToTheGpuOnlyWhenALookupReadsThem) {
   EXPECT_GT(psnr(via_atlas.display, via_table.display), 45.0);  // the two lookups, as in SameView...
   // A new volume puts placeholders back until a lookup reads it again.
   r.set_volume(nano);
-  EXPECT_FALSE(r.nano_grids_on_gpu());
+  EXPECT_FALSE(r.stats().nano_grids_on_gpu);
   const uint64_t skipping = nano.occ.size() * 2;
   EXPECT_EQ(volume_gpu_bytes(nano, NanoLookup::Atlas), skipping);
   EXPECT_GE(volume_gpu_bytes(nano, NanoLookup::Table), nano_grid_bytes(nano) + skipping);

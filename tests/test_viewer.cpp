@@ -19,6 +19,7 @@
 
 #include "cloudgen/exit_codes.h"
 #include "cloudgen/phase.h"
+#include "cloudviewer/controls.h"
 #include "cloudviewer/app.h"
 #include "cloudviewer/errors.h"
 #include "cloudviewer/image.h"

@@ -714,10 +714,10 @@ TEST(ViewerSpeed, LightVolumeRebuildsOnSunChangeNotOnCameraMove) {
   RenderSettings s = with({"render.light_volume=true", "render.exact_filter=true", "render.steps=96"});
   Camera cam = default_camera(vol, 60, kAspect);
   Sun sun = default_sun(cam);
-  EXPECT_EQ(r.light_volume_builds(), 0);
+  EXPECT_EQ(r.stats().light_volume_builds, 0);
   FrameSetup f = make_frame(vol, s, cam, sun, kW, kH);
   r.render(f);
-  EXPECT_EQ(r.light_volume_builds(), 1);
+  EXPECT_EQ(r.stats().light_volume_builds, 1);
   FrameImages a = r.read_back();
   FrameImages ref = render_cpu(vol, f);
   double p = psnr(a.display, ref.display);
@@ -728,24 +728,24 @@ TEST(ViewerSpeed, LightVolumeRebuildsOnSunChangeNotOnCameraMove) {
     moved.eye += glm::dvec3(37.0 * i, 11.0, -23.0);
     r.render(make_frame(vol, s, moved, sun, kW, kH));
   }
-  EXPECT_EQ(r.light_volume_builds(), 1) << "camera moves alone keep the light volume";
+  EXPECT_EQ(r.stats().light_volume_builds, 1) << "camera moves alone keep the light volume";
   Sun later = sun;
   later.elevation_deg += 5;
   r.render(make_frame(vol, s, moved, later, kW, kH));
-  EXPECT_EQ(r.light_volume_builds(), 2) << "a new sun rebuilds it";
+  EXPECT_EQ(r.stats().light_volume_builds, 2) << "a new sun rebuilds it";
   RenderSettings denser = s;
   denser.density = 2;
   r.render(make_frame(vol, denser, moved, later, kW, kH));
-  EXPECT_EQ(r.light_volume_builds(), 3) << "a lighting key rebuilds it";
+  EXPECT_EQ(r.stats().light_volume_builds, 3) << "a lighting key rebuilds it";
   r.render(make_frame(vol, denser, moved, later, 320, 180));
-  EXPECT_EQ(r.light_volume_builds(), 3) << "a new viewport size does not";
+  EXPECT_EQ(r.stats().light_volume_builds, 3) << "a new viewport size does not";
   r.set_volume(vol);
   r.render(make_frame(vol, denser, moved, later, 320, 180));
-  EXPECT_EQ(r.light_volume_builds(), 4) << "a new volume rebuilds it";
+  EXPECT_EQ(r.stats().light_volume_builds, 4) << "a new volume rebuilds it";
   RenderSettings off = denser;
   off.light_volume = false;
   r.render(make_frame(vol, off, moved, later, 320, 180));
-  EXPECT_EQ(r.light_volume_builds(), 4) << "off: never built";
+  EXPECT_EQ(r.stats().light_volume_builds, 4) << "off: never built";
 }
 
 // Moving clouds: the light volume spans the march box and is rebuilt every frame from the moving
@@ -785,7 +785,7 @@ TEST(ViewerSpeed, MovingCloudsRebuildTheLightVolumeWhereItPays) {
   EXPECT_EQ(frame(temporal, 95.0, cam, 4 * w, 4 * h).params.light_volume_on, 1.0);
 
   r.render(moving);
-  EXPECT_EQ(r.light_volume_builds(), 1);
+  EXPECT_EQ(r.stats().light_volume_builds, 1);
   FrameImages gl = r.read_back();
   FrameImages cpu = render_cpu(vol, moving);
   const double p = psnr(gl.display, cpu.display);
@@ -805,11 +805,11 @@ TEST(ViewerSpeed, MovingCloudsRebuildTheLightVolumeWhereItPays) {
   Camera moved = cam;
   moved.eye += glm::dvec3(41.0, 7.0, -29.0);
   r.render(frame(s, 95.0, moved, w, h));
-  EXPECT_EQ(r.light_volume_builds(), 1) << "a camera move at the same time keeps it";
+  EXPECT_EQ(r.stats().light_volume_builds, 1) << "a camera move at the same time keeps it";
   r.render(frame(s, 95.0 + 1.0 / 24.0, moved, w, h));
-  EXPECT_EQ(r.light_volume_builds(), 2) << "the next frame's time rebuilds it";
+  EXPECT_EQ(r.stats().light_volume_builds, 2) << "the next frame's time rebuilds it";
   r.render(frame(s, 95.0 + 1.0 / 24.0, moved, small_w, small_h));
-  EXPECT_EQ(r.light_volume_builds(), 2) << "a small frame marches and builds nothing";
+  EXPECT_EQ(r.stats().light_volume_builds, 2) << "a small frame marches and builds nothing";
 }
 
 // render.shadow_map: the ground's cloud shadow from a 2D map of the ground pass's own march. At a
@@ -891,7 +891,7 @@ TEST(ViewerSpeed, ShadowMapRebuildsOnSunChangeNotOnCameraMove) {
   const Sun sun{210, 40};
   FrameSetup f = make_frame(vol, s, cam, sun, kW, kH);
   r.render(f);
-  EXPECT_EQ(r.shadow_map_builds(), 1);
+  EXPECT_EQ(r.stats().shadow_map_builds, 1);
   const FrameImages a = r.read_back();
   const double p = psnr(a.display, render_cpu(vol, f).display);
   std::cout << "shadow map: PSNR GL vs CPU " << p << " dB\n";
@@ -908,19 +908,19 @@ TEST(ViewerSpeed, ShadowMapRebuildsOnSunChangeNotOnCameraMove) {
     moved.eye += glm::dvec3(37.0 * i, 11.0, -23.0);
     r.render(make_frame(vol, s, moved, sun, kW, kH));
   }
-  EXPECT_EQ(r.shadow_map_builds(), 1) << "camera moves alone keep the map";
+  EXPECT_EQ(r.stats().shadow_map_builds, 1) << "camera moves alone keep the map";
   r.render(make_frame(vol, s, moved, Sun{210, 45}, kW, kH));
-  EXPECT_EQ(r.shadow_map_builds(), 2) << "a new sun rebuilds it";
+  EXPECT_EQ(r.stats().shadow_map_builds, 2) << "a new sun rebuilds it";
   RenderSettings denser = s;
   denser.density = 2;
   r.render(make_frame(vol, denser, moved, Sun{210, 45}, kW, kH));
-  EXPECT_EQ(r.shadow_map_builds(), 3) << "a lighting key rebuilds it";
+  EXPECT_EQ(r.stats().shadow_map_builds, 3) << "a lighting key rebuilds it";
   RenderSettings light_keys = denser;
   light_keys.light_samples = 9;  // the light march's, not the shadow march's
   r.render(make_frame(vol, light_keys, moved, Sun{210, 45}, kW, kH));
-  EXPECT_EQ(r.shadow_map_builds(), 3) << "a key of the light march alone does not";
+  EXPECT_EQ(r.stats().shadow_map_builds, 3) << "a key of the light march alone does not";
   r.render(make_frame(vol, denser, moved, Sun{210, 45}, 320, 180));
-  EXPECT_EQ(r.shadow_map_builds(), 3) << "a new viewport size does not";
+  EXPECT_EQ(r.stats().shadow_map_builds, 3) << "a new viewport size does not";
   RenderSettings moving = denser;
   apply_setting(moving, "motion.wind_speed=20");
   for (double t : {10.0, 11.0}) {
@@ -929,7 +929,7 @@ TEST(ViewerSpeed, ShadowMapRebuildsOnSunChangeNotOnCameraMove) {
     ASSERT_EQ(fm.params.shadow_map_on, 1.0);
     r.render(fm);
   }
-  EXPECT_EQ(r.shadow_map_builds(), 5) << "moving clouds rebuild it every frame";
+  EXPECT_EQ(r.stats().shadow_map_builds, 5) << "moving clouds rebuild it every frame";
   // ...so they march per pixel instead while the map has over a quarter of the frame's pixels
   // (125 x 146 texels; 160 x 90 pixels); still clouds always use it.
   FrameSetup small = make_frame(vol, moving, moved, Sun{210, 45}, kW, kH);
@@ -937,14 +937,14 @@ TEST(ViewerSpeed, ShadowMapRebuildsOnSunChangeNotOnCameraMove) {
   EXPECT_EQ(small.params.shadow_map_on, 0.0);
   EXPECT_EQ(make_frame(vol, denser, moved, Sun{210, 45}, kW, kH).params.shadow_map_on, 1.0);
   r.render(small);
-  EXPECT_EQ(r.shadow_map_builds(), 5);
+  EXPECT_EQ(r.stats().shadow_map_builds, 5);
   r.set_volume(vol);
   r.render(make_frame(vol, denser, moved, Sun{210, 45}, 320, 180));
-  EXPECT_EQ(r.shadow_map_builds(), 6) << "a new volume rebuilds it";
+  EXPECT_EQ(r.stats().shadow_map_builds, 6) << "a new volume rebuilds it";
   RenderSettings off = denser;
   off.shadow_map = false;
   r.render(make_frame(vol, off, moved, Sun{210, 45}, 320, 180));
-  EXPECT_EQ(r.shadow_map_builds(), 6) << "off: never built";
+  EXPECT_EQ(r.stats().shadow_map_builds, 6) << "off: never built";
   // The frame line reports a build when there is one: once over two still frames, never when off.
   auto reports = [](const char* set) {
     std::ostringstream out, err;
@@ -1009,8 +1009,8 @@ TEST(ViewerSpeed, CompiledModesKeepTheImage) {
   auto render_counting = [&r, &counted](const FrameSetup& f) {
     GpuTimings t;
     r.render(f, &t);
-    EXPECT_EQ(t.programs_linked, r.program_count() - counted);
-    counted = r.program_count();
+    EXPECT_EQ(t.programs_linked, r.stats().program_count - counted);
+    counted = r.stats().program_count;
     EXPECT_EQ(t.compile_ms > 0, t.programs_linked > 0) << t.compile_ms << " ms for " << t.programs_linked;
     return t;
   };
@@ -1020,7 +1020,7 @@ TEST(ViewerSpeed, CompiledModesKeepTheImage) {
     if (after_first == 0) first = a;
     render_counting(frame(c, false));
     FrameImages b = r.read_back();
-    if (after_first == 0) after_first = r.program_count();
+    if (after_first == 0) after_first = r.stats().program_count;
     double scale = std::max(image_stats(b.linear).max, 1e-6);
     double diff = max_abs_diff(a.linear, b.linear) / scale;
     std::cout << c.name << ": compiled vs generic max |diff| / max " << diff << "\n";
@@ -1028,11 +1028,11 @@ TEST(ViewerSpeed, CompiledModesKeepTheImage) {
     EXPECT_LE(diff, 1e-6) << c.name;
   }
   // Every case above has its own set of modes: each compiled its own programs...
-  const int all = r.program_count();
+  const int all = r.stats().program_count;
   EXPECT_GT(all, after_first + 3);
   // ...and going back to the first links nothing new and renders the same picture, bit for bit.
   const GpuTimings again = render_counting(frame(cases[0], true));
-  EXPECT_EQ(r.program_count(), all);
+  EXPECT_EQ(r.stats().program_count, all);
   EXPECT_EQ(again.programs_linked, 0);
   EXPECT_EQ(again.compile_ms, 0.0);
   EXPECT_EQ(max_abs_diff(first.linear, r.read_back().linear), 0.0);

@@ -1,3 +1,4 @@
+#include "cloudviewer/controls.h"
 #include "cloudviewer/app.h"
 
 #include "cloudgen/exit_codes.h"
@@ -15,7 +16,7 @@
 
 #include "cloudgen/exit_codes.h"
 #include "cloudgen/output.h"
-#include "cloudviewer/atmosphere.h"
+#include "cloudviewer/atmosphere_luts.h"
 #include "cloudviewer/errors.h"
 #include "scene/default_view.h"
 #include "internal.h"
@@ -381,7 +382,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
       out << label << "gpu: " << o.width << "x" << o.height << " total " << t.total_ms << " ms (atmosphere LUTs "
           << t.atmosphere_ms << ", ground " << t.ground_ms << ", clouds " << t.cloud_ms << ", post " << t.post_ms
           << ")\n";
-      if (renderer->shadow_map_builds() > shadow_builds)  // (the pass's timer reads a few ns even when it is skipped)
+      if (renderer->stats().shadow_map_builds > shadow_builds)  // (the pass's timer reads a few ns even when it is skipped)
         out << label << "gpu: ground shadow map " << frame.params.shadow_map_nx << "x" << frame.params.shadow_map_nz
             << " texels of " << frame.params.shadow_map_texel_m << " m built in " << t.shadow_map_ms << " ms\n";
       if (t.programs_linked > 0)  // the driver's compile is seconds on some GPUs: say where a first frame's time went
@@ -400,15 +401,15 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
         for (const auto& p : t.passes) out << " " << p.first << " " << p.second << " ms;";
         out << "\n";
       }
-      if (o.stats && frame.params.ms_volume_on > 0.5 && renderer->ms_volume_builds() > ms_builds) {
+      if (o.stats && frame.params.ms_volume_on > 0.5 && renderer->stats().ms_volume_builds > ms_builds) {
         const MsDiffusionResult ms = renderer->last_ms_solve();
         out << label << "ms volume: " << frame.params.ms_volume_dims.x << "x" << frame.params.ms_volume_dims.y << "x"
             << frame.params.ms_volume_dims.z << " cells, " << ms.iterations << " iterations (+" << ms.coarse_iterations
             << " on coarser grids), " << (ms.converged ? "converged" : "NOT converged") << ", solved in "
             << ms.seconds * 1e3 << " ms on the CPU (inside the ms_volume pass's time)\n";
       }
-      ms_builds = renderer->ms_volume_builds();
-      shadow_builds = renderer->shadow_map_builds();
+      ms_builds = renderer->stats().ms_volume_builds;
+      shadow_builds = renderer->stats().shadow_map_builds;
     }
     if (o.stats && i == 0 && s.sky == SkyMode::Precomputed) {
       const std::shared_ptr<const AtmosphereLuts> luts = shared_atmosphere_luts(s.atmosphere);

@@ -14,6 +14,7 @@
 #include <backends/imgui_impl_glfw.h>
 #include <backends/imgui_impl_opengl3.h>
 
+#include "cloudviewer/controls.h"
 #include "cloudviewer/errors.h"
 
 namespace cloudviewer {

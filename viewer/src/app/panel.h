@@ -3,6 +3,7 @@
 #pragma once
 #include <memory>
 
+#include "cloudviewer/controls.h"
 #include "cloudviewer/renderer.h"
 #include "cloudviewer/settings.h"
 

@@ -13,6 +13,7 @@
 #include <epoxy/gl.h>
 #include <GLFW/glfw3.h>
 
+#include "cloudviewer/controls.h"
 #include "cloudviewer/errors.h"
 #include "internal.h"
 #include "app/panel.h"

@@ -1,7 +1,8 @@
 // The atmosphere parameter table and the CPU reference of the atmosphere LUTs: shaders/atmosphere.glsl
 // compiled as C++ in double precision inside a class (as cpu_renderer.cpp does for the cloud
 // headers; Bruneton's reference/functions.cc pattern).
-#include "cloudviewer/atmosphere.h"
+#include "cloudviewer/atmosphere_luts.h"
+#include "cloudviewer/testing.h"
 
 #include <chrono>
 #include <cmath>

@@ -16,7 +16,7 @@
 #define PNANOVDB_C
 #include <nanovdb/PNanoVDB.h>
 
-#include "cloudviewer/atmosphere.h"
+#include "cloudviewer/atmosphere_luts.h"
 #include "cloudviewer/constants.h"
 #include "cloudviewer/renderer.h"
 

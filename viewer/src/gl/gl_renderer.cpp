@@ -17,7 +17,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "cloudgen/motion.h"
-#include "cloudviewer/atmosphere.h"
+#include "cloudviewer/atmosphere_luts.h"
 #include "cloudviewer/constants.h"
 #include "cloudviewer/errors.h"
 #include "cloudviewer/renderer.h"
@@ -1521,15 +1521,18 @@ std::vector<glm::vec3> GlRenderer::transmittance_dump(const AtmosphereSettings& 
   return out;
 }
 
-int GlRenderer::light_volume_builds() const { return impl_->light_builds; }
-int GlRenderer::shadow_map_builds() const { return impl_->shadow_builds; }
-int GlRenderer::ground_draws() const { return impl_->ground_draws; }
+RendererStats GlRenderer::stats() const {
+  RendererStats st;
+  st.light_volume_builds = impl_->light_builds;
+  st.shadow_map_builds = impl_->shadow_builds;
+  st.ground_draws = impl_->ground_draws;
+  st.air_lut_builds = impl_->air_builds;
+  st.program_count = int(impl_->program_cache.size());
+  st.ms_volume_builds = impl_->ms_builds;
+  st.nano_grids_on_gpu = impl_->grids_up;
+  return st;
+}
 void GlRenderer::set_ground_reuse(bool on) { impl_->ground_reuse = on; }
-bool GlRenderer::nano_grids_on_gpu() const { return impl_->grids_up; }
-int GlRenderer::air_lut_builds() const { return impl_->air_builds; }
-int GlRenderer::program_count() const { return int(impl_->program_cache.size()); }
-
-int GlRenderer::ms_volume_builds() const { return impl_->ms_builds; }
 
 MsDiffusionResult GlRenderer::last_ms_solve() const { return impl_->ms_last; }
 

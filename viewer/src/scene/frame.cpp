@@ -6,6 +6,7 @@
 #include "cloudgen/motion.h"
 #include "cloudgen/phase.h"
 #include "cloudgen/view.h"
+#include "cloudviewer/atmosphere_luts.h"
 #include "cloudviewer/constants.h"
 #include "cloudviewer/errors.h"
 #include "cloudviewer/scene.h"

@@ -23,14 +23,6 @@
 
 namespace cloudviewer {
 
-bool has_cloudgen() {
-#ifdef CLOUDVIEWER_HAS_CLOUDGEN
-  return true;
-#else
-  return false;
-#endif
-}
-
 cloudgen::Volume load_volume(const std::string& input) {
   if (input.rfind("synthetic:", 0) == 0) return synthetic_volume(input.substr(10));
   std::error_code ec;

@@ -1,3 +1,4 @@
+#include "cloudviewer/controls.h"
 #include "cloudviewer/settings.h"
 
 #include <algorithm>

@@ -1,0 +1,30 @@
+// The viewer's inputs: files cloudgen reads or generates, synthetic volumes, and open_input, which
+// turns any of them into a PreparedVolume.
+#pragma once
+#include <string>
+
+#include "cloudgen/volume.h"
+#include "cloudviewer/prepared_volume.h"
+#include "cloudviewer/settings.h"
+
+namespace cloudviewer {
+
+/// Loads INPUT: `synthetic:sphere|slab|blob|noise` or a file cloudgen reads / generates from.
+/// Throws InputError (missing file, unknown kind, not a cloud volume, too large for the memory) with
+/// the path in the message; cloudgen's IoError (the file could not be read) passes through.
+cloudgen::Volume load_volume(const std::string& input);
+
+/// Synthetic volumes for development and tests (no cloudgen needed):
+///  sphere: 64^3 voxels of 10 m, a soft ball with hash-noise detail channels;
+///  slab:   32x8x32 voxels of 5 m, density 1 everywhere (160 x 40 x 160 m), no detail;
+///  blob:   96x48x96 voxels of 12 m, fBm-shaped cumulus with height profile and detail.
+cloudgen::Volume synthetic_volume(const std::string& kind);
+
+/// The viewer's input dispatch, everything before OpenGL in one call (what main, the window, the
+/// bench and a fuzz target use): load_volume then prepare_volume with the settings' occupancy grid,
+/// or, when use_nanovdb says so, the NanoVDB grids (.nvdb read sparse, .vdb converted sparse,
+/// other inputs converted from their dense channels) through prepare_nano.
+/// Throws InputError / IoError as those do; never allocates what check_memory refuses.
+PreparedVolume open_input(const std::string& input, const RenderSettings& s);
+
+}  // namespace cloudviewer
