@@ -433,6 +433,37 @@ std::vector<float> ground_mesh(GLint& quad_first, GLsizei& quad_count, GLint& gr
 
 }  // namespace
 
+namespace {
+
+/// What a frame's temporal history was rendered with: a later frame reprojects it only when every
+/// field matches (its time and frame index advance every frame by design and are left out).
+struct HistoryKey {
+  std::string settings;  ///< render.* and motion.* values (describe_settings)
+  double sun_azimuth_deg = 0, sun_elevation_deg = 0;
+  int width = 0, height = 0;
+  bool operator==(const HistoryKey& o) const {
+    return settings == o.settings && sun_azimuth_deg == o.sun_azimuth_deg &&
+           sun_elevation_deg == o.sun_elevation_deg && width == o.width && height == o.height;
+  }
+  bool operator!=(const HistoryKey& o) const { return !(*this == o); }
+};
+
+HistoryKey history_key_of(const FrameSetup& f) {
+  RenderSettings keyed = f.settings;
+  keyed.frame = 0;
+  keyed.time = 0;
+  return {describe_settings(keyed), f.sun.azimuth_deg, f.sun.elevation_deg, f.width, f.height};
+}
+
+/// Stores `key` in `stored` and says whether it differs from what was there (a cache to rebuild).
+bool changed(std::vector<double>& stored, std::vector<double> key) {
+  const bool dirty = key != stored;
+  stored = std::move(key);
+  return dirty;
+}
+
+}  // namespace
+
 struct GlRenderer::Impl {
   ShaderSource shaders;
   std::vector<Target> targets = make_targets();
@@ -589,7 +620,7 @@ struct GlRenderer::Impl {
   bool history_valid = false;
   bool history_held = false;  // this frame: temporal, history valid, nothing moved (clouds_sparse_held
                               // runs instead of clouds_sparse, temporal_resolve and temporal_compose)
-  std::string history_key;       // settings, sun and size it was rendered with
+  HistoryKey history_key;        // settings, sun and size it was rendered with
   glm::dvec3 history_eye{0.0};
   glm::dmat4 history_view_proj{1.0};
   double history_time = 0;
@@ -1031,6 +1062,24 @@ struct GlRenderer::Impl {
   }
   // After every frame: this frame's copy becomes "NAME@prev". A held temporal frame swaps back
   // first (render()), so that it draws into last frame's copy in place.
+  // The steps of a frame (GlRenderer::render).
+  /// Which caches this frame rebuilds (each pass that builds one runs only then).
+  struct Rebuilds {
+    bool atmosphere = false, air = false, light = false, shadow = false, ms = false;
+    bool any() const { return atmosphere || air || light || shadow || ms; }
+  };
+  /// The volume's storage for this frame (NanoVDB grids, page table or brick atlas); true: the atlas.
+  bool choose_storage(const FrameSetup& f);
+  /// The frame block, with the temporal history's state (and the history's key updated).
+  FrameBlock frame_block(const FrameSetup& f);
+  void upload_motion_table(const FrameSetup& f, bool history_usable);
+  /// The march box's occupancy for moving clouds; false when the frame has none.
+  bool upload_moved_occupancy(const FrameSetup& f);
+  void bind_inputs(const FrameSetup& f, bool atlas, bool moved_occ);
+  Rebuilds find_rebuilds(const FrameSetup& f);
+  void run_passes(const FrameSetup& f, const Rebuilds& r, bool ground_kept);
+  void read_timings(GpuTimings& timings, double compile_ms, int programs_linked);
+
   void swap_history() {
     for (Target& t : targets)
       if (t.history) {
@@ -1221,134 +1270,133 @@ void GlRenderer::set_distance_field(const PreparedVolume& vol) {
   m.light_key.clear();  // the light volume marches only the texels this field leaves readable
 }
 
-void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
-  Impl& m = *impl_;
-  if (!m.have_volume) throw GlError("GlRenderer::render before set_volume");
-  m.resize(f.width, f.height);
+
+// The steps of GlRenderer::render, in order. Each reads the frame and the renderer's state.
+
+bool GlRenderer::Impl::choose_storage(const FrameSetup& f) {
   // The nanovdb lookups' storage (nanovdb_storage.glsl) before the modes, so a change links once more.
   // Tree skipping (render.skipping=tree) walks the grids whatever the lookup: they go up too. The
   // atlas programs read them from a storage buffer; grids beyond one (128 MiB on llvmpipe) take
   // the page table's buffer texture instead.
-  const bool tree = m.nvdb_on && f.params.skip_tree > 0.5;
-  const bool atlas_wanted = m.nvdb_on && f.settings.nanovdb_lookup == NanoLookup::Atlas;
-  if (atlas_wanted && tree && !m.nvdb_ssbo && !m.tree_atlas_noted) {
+  const bool tree = nvdb_on && f.params.skip_tree > 0.5;
+  const bool atlas_wanted = nvdb_on && f.settings.nanovdb_lookup == NanoLookup::Atlas;
+  if (atlas_wanted && tree && !nvdb_ssbo && !tree_atlas_noted) {
     std::cerr << "cloudviewer: render.skipping=tree walks grids larger than a storage buffer here: the frames read them "
                  "through the page table, not the brick atlas\n";
-    m.tree_atlas_noted = true;
+    tree_atlas_noted = true;
   }
-  const bool atlas = atlas_wanted && (!tree || m.nvdb_ssbo) && m.ensure_atlas();
-  if (m.nvdb_on && (!atlas || tree)) m.ensure_grids();
-  m.use_storage(!m.nvdb_on ? 0 : atlas ? 3 : m.nvdb_ssbo ? 1 : 2);
-  m.use_modes(f);  // and render.compute's programs
-  const double compile_ms = m.compile_ms;
-  const int programs_linked = m.programs_linked;
-  m.compile_ms = 0, m.programs_linked = 0;
-  gpu::CloudParams cp = to_gpu(f.params);
-  glNamedBufferSubData(m.ubo_cloud, 0, sizeof(cp), &cp);
-  const Target& bloom = m.target("bloom_a");
+  const bool atlas = atlas_wanted && (!tree || nvdb_ssbo) && ensure_atlas();
+  if (nvdb_on && (!atlas || tree)) ensure_grids();
+  use_storage(!nvdb_on ? 0 : atlas ? 3 : nvdb_ssbo ? 1 : 2);
+  return atlas;
+}
+
+FrameBlock GlRenderer::Impl::frame_block(const FrameSetup& f) {
+  const Target& bloom = target("bloom_a");
   FrameBlock fb;
   fb.inv_view_proj = glm::mat4(f.inv_view_proj);
   fb.view_proj = glm::mat4(f.view_proj);
-  fb.viewport = glm::vec4(m.w, m.h, bloom.w, bloom.h);
+  fb.viewport = glm::vec4(w, h, bloom.w, bloom.h);
   fb.post = glm::vec4(float(f.settings.exposure), float(int(f.settings.tonemap)), float(f.settings.bloom),
                       float(f.settings.bloom_threshold));
   // Temporal: the history is usable when it was rendered with the same settings, sun and size; it
   // maps pixel to pixel when the camera and the clouds have not moved since.
   const bool temporal = temporal_on(f);
-  RenderSettings keyed = f.settings;
-  keyed.frame = 0;  // the frame index and the time advance every frame by design
-  keyed.time = 0;
-  std::string key = describe_settings(keyed) + "sun=" + std::to_string(f.sun.azimuth_deg) + "," +
-                    std::to_string(f.sun.elevation_deg) + " size=" + std::to_string(f.width) + "x" + std::to_string(f.height);
-  const bool valid = temporal && m.history_valid && key == m.history_key;
-  const bool clouds_still = f.params.motion_on < 0.5 ? m.history_time == f.settings.time || f.settings.time == 0
-                                                     : m.history_time == f.settings.time;
-  const bool still = valid && f.camera.eye == m.history_eye && f.view_proj == m.history_view_proj && clouds_still;
+  const HistoryKey key = history_key_of(f);
+  const bool valid = temporal && history_valid && key == history_key;
+  const bool clouds_still = f.params.motion_on < 0.5 ? history_time == f.settings.time || f.settings.time == 0
+                                                     : history_time == f.settings.time;
+  const bool still = valid && f.camera.eye == history_eye && f.view_proj == history_view_proj && clouds_still;
   glm::ivec2 offset = reference_cross_matrix_offset(f.settings.frame);
   // Last frame's clip from this frame's camera-relative position p: world = p + eye.
-  glm::dmat4 prev = m.history_view_proj * glm::translate(glm::dmat4(1.0), f.camera.eye - m.history_eye);
+  glm::dmat4 prev = history_view_proj * glm::translate(glm::dmat4(1.0), f.camera.eye - history_eye);
   fb.prev_view_proj = glm::mat4(valid ? prev : f.view_proj);
   fb.temporal = glm::vec4(valid ? 1.f : 0.f, still ? 1.f : 0.f, float(offset.x), float(offset.y));
-  m.history_held = still;
-  if (f.params.motion_on > 0.5) {  // this frame's D(h), and the last frame's for the reprojection
-    std::vector<glm::dvec3> rows = f.motion_table;
-    if (valid) {
-      std::vector<glm::dvec3> prev_row = motion_table_row(f.settings, m.history_time);
-      std::copy(prev_row.begin(), prev_row.end(), rows.begin() + CV_MOTION_LUT_SIZE);
-    }
-    std::vector<glm::vec4> texels(rows.size());
-    for (size_t i = 0; i < rows.size(); ++i) texels[i] = glm::vec4(glm::vec3(rows[i]), 0.f);
-    glTextureSubImage2D(m.tex_motion, 0, 0, 0, CV_MOTION_LUT_SIZE, 2, GL_RGBA, GL_FLOAT, texels.data());
+  history_held = still;
+  if (f.params.motion_on > 0.5) upload_motion_table(f, valid);
+  history_valid = temporal;
+  history_key = key;
+  history_eye = f.camera.eye;
+  history_view_proj = f.view_proj;
+  history_time = f.settings.time;
+  return fb;
+}
+
+void GlRenderer::Impl::upload_motion_table(const FrameSetup& f, bool history_usable) {
+  // This frame's D(h), and the last frame's for the reprojection.
+  std::vector<glm::dvec3> rows = f.motion_table;
+  if (history_usable) {
+    std::vector<glm::dvec3> prev_row = motion_table_row(f.settings, history_time);
+    std::copy(prev_row.begin(), prev_row.end(), rows.begin() + CV_MOTION_LUT_SIZE);
   }
-  const bool moved_occ = !f.moved_occupancy.empty();  // the march box's occupancy at this time (medium.glsl occupied)
-  if (moved_occ) {
-    const glm::ivec3 n(f.params.moved_occ_dims);
-    if (n != m.moved_occ_dims) {
-      if (m.tex_moved_occ) glDeleteTextures(1, &m.tex_moved_occ);
-      glCreateTextures(GL_TEXTURE_3D, 1, &m.tex_moved_occ);
-      glTextureStorage3D(m.tex_moved_occ, 1, GL_R8, n.x, n.y, n.z);
-      glTextureParameteri(m.tex_moved_occ, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-      glTextureParameteri(m.tex_moved_occ, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-      m.moved_occ_dims = n;
-    }
-    upload_mask(m.tex_moved_occ, n, f.moved_occupancy);
+  std::vector<glm::vec4> texels(rows.size());
+  for (size_t i = 0; i < rows.size(); ++i) texels[i] = glm::vec4(glm::vec3(rows[i]), 0.f);
+  glTextureSubImage2D(tex_motion, 0, 0, 0, CV_MOTION_LUT_SIZE, 2, GL_RGBA, GL_FLOAT, texels.data());
+}
+
+bool GlRenderer::Impl::upload_moved_occupancy(const FrameSetup& f) {
+  if (f.moved_occupancy.empty()) return false;  // the march box's occupancy at this time (medium.glsl occupied)
+  const glm::ivec3 n(f.params.moved_occ_dims);
+  if (n != moved_occ_dims) {
+    if (tex_moved_occ) glDeleteTextures(1, &tex_moved_occ);
+    glCreateTextures(GL_TEXTURE_3D, 1, &tex_moved_occ);
+    glTextureStorage3D(tex_moved_occ, 1, GL_R8, n.x, n.y, n.z);
+    glTextureParameteri(tex_moved_occ, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(tex_moved_occ, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    moved_occ_dims = n;
   }
-  m.history_valid = temporal;
-  m.history_key = key;
-  m.history_eye = f.camera.eye;
-  m.history_view_proj = f.view_proj;
-  m.history_time = f.settings.time;
-  glNamedBufferSubData(m.ubo_frame, 0, sizeof(fb), &fb);
-  glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_CLOUD, m.ubo_cloud);
-  glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_FRAME, m.ubo_frame);
-  glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_ATMOSPHERE, m.ubo_atmo);
-  glBindTextureUnit(CV_UNIT_VOLUME, atlas ? m.tex_atlas : m.tex_volume);
-  glBindTextureUnit(CV_UNIT_OCCUPANCY, moved_occ ? m.tex_moved_occ : m.tex_occ);
-  glBindTextureUnit(CV_UNIT_DISTANCE, m.tex_dist);
-  glBindTextureUnit(CV_UNIT_NANOVDB_GRIDS, m.tex_nano);
+  upload_mask(tex_moved_occ, n, f.moved_occupancy);
+  return true;
+}
+
+void GlRenderer::Impl::bind_inputs(const FrameSetup& f, bool atlas, bool moved_occ) {
+  glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_CLOUD, ubo_cloud);
+  glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_FRAME, ubo_frame);
+  glBindBufferBase(GL_UNIFORM_BUFFER, CV_BINDING_ATMOSPHERE, ubo_atmo);
+  glBindTextureUnit(CV_UNIT_VOLUME, atlas ? tex_atlas : tex_volume);
+  glBindTextureUnit(CV_UNIT_OCCUPANCY, moved_occ ? tex_moved_occ : tex_occ);
+  glBindTextureUnit(CV_UNIT_DISTANCE, tex_dist);
+  glBindTextureUnit(CV_UNIT_NANOVDB_GRIDS, tex_nano);
   // Beyond a storage block the shaders read the buffer texture; the storage binding then covers
   // only the first 32 bytes (a binding larger than GL_MAX_SHADER_STORAGE_BLOCK_SIZE is an error).
-  if (m.nvdb_ssbo) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CV_BINDING_NANOVDB, m.buf_nano);
-  else glBindBufferRange(GL_SHADER_STORAGE_BUFFER, CV_BINDING_NANOVDB, m.buf_nano, 0, 32);
-  glBindTextureUnit(CV_UNIT_NANOVDB_PAGES, atlas ? m.tex_atlas_index : m.tex_pages);
-  m.nvdb_table = m.nvdb_pages_ok && f.settings.nanovdb_lookup == NanoLookup::Table ? 1 : 0;
-  if (int(f.params.phase_mode) == CV_PHASE_MIE) m.ensure_mie_texture();
-  glBindTextureUnit(CV_UNIT_MIE, m.tex_mie);
-  glBindTextureUnit(CV_UNIT_COVERAGE, m.tex_coverage);
-  glBindTextureUnit(CV_UNIT_MOTION, m.tex_motion);
-  if (f.params.curl_amplitude_m > 0) m.ensure_curl_texture();
-  glBindTextureUnit(CV_UNIT_CURL, m.tex_curl);
+  if (nvdb_ssbo) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CV_BINDING_NANOVDB, buf_nano);
+  else glBindBufferRange(GL_SHADER_STORAGE_BUFFER, CV_BINDING_NANOVDB, buf_nano, 0, 32);
+  glBindTextureUnit(CV_UNIT_NANOVDB_PAGES, atlas ? tex_atlas_index : tex_pages);
+  nvdb_table = nvdb_pages_ok && f.settings.nanovdb_lookup == NanoLookup::Table ? 1 : 0;
+  if (int(f.params.phase_mode) == CV_PHASE_MIE) ensure_mie_texture();
+  glBindTextureUnit(CV_UNIT_MIE, tex_mie);
+  glBindTextureUnit(CV_UNIT_COVERAGE, tex_coverage);
+  glBindTextureUnit(CV_UNIT_MOTION, tex_motion);
+  if (f.params.curl_amplitude_m > 0) ensure_curl_texture();
+  glBindTextureUnit(CV_UNIT_CURL, tex_curl);
   glDisable(GL_BLEND);
   glDisable(GL_CULL_FACE);
   glDisable(GL_FRAMEBUFFER_SRGB);
+}
+
+GlRenderer::Impl::Rebuilds GlRenderer::Impl::find_rebuilds(const FrameSetup& f) {
+  Rebuilds r;
   // The analytic sky reads no LUT: skip the precompute (and keep the LUTs' state for later frames).
-  bool atmo_dirty = f.settings.sky == SkyMode::Precomputed && m.atmosphere_dirty(f.settings.atmosphere);
-  if (atmo_dirty) m.atmo_generation += 1;
+  r.atmosphere = f.settings.sky == SkyMode::Precomputed && atmosphere_dirty(f.settings.atmosphere);
+  if (r.atmosphere) atmo_generation += 1;
   // The air LUT: rebuilt when the sun, the camera's altitude, its source or the atmosphere changes.
-  bool air_dirty = false;
   if (f.params.air_lut > 0.5) {
-    Target& air = m.target("air");
-    if (m.ensure_volume_target(air, f)) m.air_key.clear();
-    std::vector<double> akey = {f.params.sun_dir.x, f.params.sun_dir.y, f.params.sun_dir.z, f.params.sky_altitude_m,
-                                f.params.sky_lut, double(m.atmo_generation)};
-    air_dirty = akey != m.air_key;
-    m.air_key = akey;
+    if (ensure_volume_target(target("air"), f)) air_key.clear();
+    r.air = changed(air_key, {f.params.sun_dir.x, f.params.sun_dir.y, f.params.sun_dir.z, f.params.sky_altitude_m,
+                              f.params.sky_lut, double(atmo_generation)});
   }
   // Never sample the air LUT while its pass writes it.
   {
-    const Target& air = m.target("air");
-    const bool bound = f.params.air_lut > 0.5 && !air_dirty && air.tex[0].size() == 2;
+    const Target& air = target("air");
+    const bool bound = f.params.air_lut > 0.5 && !r.air && air.tex[0].size() == 2;
     glBindTextureUnit(CV_UNIT_AIR, bound ? air.tex[0][0] : 0);
     glBindTextureUnit(CV_UNIT_AIR_MIE, bound ? air.tex[0][1] : 0);
   }
   // The light volume: rebuilt when its key changes (not when only the camera moves).
-  Target& light = m.target("light_volume");
-  bool light_dirty = false;
+  Target& light = target("light_volume");
   if (f.params.light_volume_on > 0.5) {
-    if (m.ensure_volume_target(light, f)) m.light_key.clear();
-    std::vector<double> lkey = m.light_volume_key(f);
-    light_dirty = lkey != m.light_key;
-    m.light_key = lkey;
+    if (ensure_volume_target(light, f)) light_key.clear();
+    r.light = changed(light_key, light_volume_key(f));
     // Wrapped like the volume (the key holds tiles_xz).
     GLint wrap_xz = f.params.tiles_xz > 0.5 ? GL_REPEAT : GL_CLAMP_TO_EDGE;
     glTextureParameteri(light.tex[0][0], GL_TEXTURE_WRAP_S, wrap_xz);
@@ -1356,26 +1404,98 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
     glTextureParameteri(light.tex[0][0], GL_TEXTURE_WRAP_R, wrap_xz);
   }
   // Never sample the light volume while its pass writes it.
-  glBindTextureUnit(CV_UNIT_LIGHT_VOLUME, light_dirty || light.tex[0].empty() ? 0 : light.tex[0][0]);
+  glBindTextureUnit(CV_UNIT_LIGHT_VOLUME, r.light || light.tex[0].empty() ? 0 : light.tex[0][0]);
   // The ground shadow map: rebuilt when its key changes. Its target always exists (one texel when
   // off), since the ground pass binds it.
-  Target& smap = m.target("shadow_map");
-  if (m.ensure_volume_target(smap, f)) m.shadow_key.clear();
-  bool shadow_dirty = false;
-  if (f.params.shadow_map_on > 0.5) {
-    std::vector<double> skey = m.shadow_map_key(f);
-    shadow_dirty = skey != m.shadow_key;
-    m.shadow_key = skey;
-  }
+  if (ensure_volume_target(target("shadow_map"), f)) shadow_key.clear();
+  if (f.params.shadow_map_on > 0.5) r.shadow = changed(shadow_key, shadow_map_key(f));
   // The diffusion volume: solved again when its key changes.
-  bool ms_dirty = false;
   if (f.params.ms_volume_on > 0.5) {
-    if (m.ensure_volume_target(m.target("ms_source"), f)) m.ms_key.clear();
-    std::vector<double> mkey = m.ms_volume_key(f);
-    ms_dirty = mkey != m.ms_key;
-    m.ms_key = mkey;
+    if (ensure_volume_target(target("ms_source"), f)) ms_key.clear();
+    r.ms = changed(ms_key, ms_volume_key(f));
   }
-  glBindTextureUnit(CV_UNIT_MS_VOLUME, ms_dirty ? 0 : m.tex_ms);
+  glBindTextureUnit(CV_UNIT_MS_VOLUME, r.ms ? 0 : tex_ms);
+  return r;
+}
+
+void GlRenderer::Impl::run_passes(const FrameSetup& f, const Rebuilds& r, bool ground_kept) {
+  glQueryCounter(queries[0], GL_TIMESTAMP);
+  for (Pass& p : passes) p.drew = false;
+  for (size_t i = 0; i < passes.size(); ++i) {
+    Pass& p = passes[i];
+    if (p.driven) {
+      // run by the orders loop inside its parent pass
+    } else if (p.precompute) {
+      run_lut(p, f, r.atmosphere, f.settings.sky == SkyMode::Precomputed);
+    } else if (p.light_volume) {
+      if (r.light) {
+        run(p, f);
+        light_builds += 1;
+        glBindTextureUnit(CV_UNIT_LIGHT_VOLUME, target("light_volume").tex[0][0]);
+      }
+    } else if (p.shadow_map) {
+      if (r.shadow) {
+        run(p, f);
+        shadow_builds += 1;
+      }
+    } else if (p.air_lut) {
+      if (r.air) {
+        run(p, f);
+        air_builds += 1;
+        const Target& air = target("air");
+        glBindTextureUnit(CV_UNIT_AIR, air.tex[0][0]);
+        glBindTextureUnit(CV_UNIT_AIR_MIE, air.tex[0][1]);
+      }
+    } else if (p.ms_volume) {
+      if (r.ms) {  // its timing includes the read-back, the CPU solve and the upload
+        run(p, f);
+        solve_ms_volume(f);
+        glBindTextureUnit(CV_UNIT_MS_VOLUME, tex_ms);
+      }
+    } else if (p.mesh && ground_kept) {
+      // last frame's ground is still in "scene"
+    } else {
+      run(p, f);
+      if (p.mesh && p.drew) ground_draws += 1;
+    }
+    glQueryCounter(queries[i + 1], GL_TIMESTAMP);
+  }
+}
+
+void GlRenderer::Impl::read_timings(GpuTimings& timings, double compile, int linked) {
+  std::vector<GLuint64> t(queries.size());
+  for (size_t i = 0; i < t.size(); ++i) glGetQueryObjectui64v(queries[i], GL_QUERY_RESULT, &t[i]);
+  timings = GpuTimings{};
+  for (size_t i = 0; i < passes.size(); ++i) {
+    double ms = double(t[i + 1] - t[i]) * 1e-6;
+    if (passes[i].drew) timings.passes.push_back({passes[i].name + (passes[i].compute ? " (compute)" : ""), ms});
+    Group g = passes[i].group;
+    (g == Group::Atmosphere ? timings.atmosphere_ms : g == Group::Light ? timings.light_volume_ms
+     : g == Group::Shadow ? timings.shadow_map_ms : g == Group::Ground ? timings.ground_ms
+     : g == Group::Clouds ? timings.cloud_ms : timings.post_ms) += ms;
+  }
+  timings.total_ms = double(t.back() - t.front()) * 1e-6;
+  timings.compile_ms = compile;
+  timings.programs_linked = linked;
+}
+
+void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
+  Impl& m = *impl_;
+  if (!m.have_volume) throw GlError("GlRenderer::render before set_volume");
+  m.resize(f.width, f.height);
+  const bool atlas = m.choose_storage(f);
+  m.use_modes(f);  // and render.compute's programs
+  const double compile_ms = m.compile_ms;
+  const int programs_linked = m.programs_linked;
+  m.compile_ms = 0, m.programs_linked = 0;
+  gpu::CloudParams cp = to_gpu(f.params);
+  glNamedBufferSubData(m.ubo_cloud, 0, sizeof(cp), &cp);
+  FrameBlock fb = m.frame_block(f);
+  const bool still = m.history_held;
+  const bool moved_occ = m.upload_moved_occupancy(f);
+  glNamedBufferSubData(m.ubo_frame, 0, sizeof(fb), &fb);
+  m.bind_inputs(f, atlas, moved_occ);
+  const Impl::Rebuilds r = m.find_rebuilds(f);
 
   // A held frame changes only the pixels it marches: last frame's resolved layer and composed
   // image stay where they are (the composed image in "hdr", which only the cloud passes write).
@@ -1383,68 +1503,13 @@ void GlRenderer::render(const FrameSetup& f, GpuTimings* timings) {
   // Nor does it change the ground: "scene", which only the ground pass writes, holds last frame's,
   // drawn with the same settings, sun, size, camera, time and volume (what `still` compares),
   // unless a table the ground reads (the shadow map, the sky's LUTs, the air) is rebuilt now.
-  const bool ground_kept = still && m.ground_reuse && !atmo_dirty && !air_dirty && !shadow_dirty && !light_dirty &&
-                           !ms_dirty;
-  glQueryCounter(m.queries[0], GL_TIMESTAMP);
-  for (Pass& p : m.passes) p.drew = false;
-  for (size_t i = 0; i < m.passes.size(); ++i) {
-    if (m.passes[i].driven) {
-      // run by the orders loop inside its parent pass
-    } else if (m.passes[i].precompute) {
-      m.run_lut(m.passes[i], f, atmo_dirty, f.settings.sky == SkyMode::Precomputed);
-    } else if (m.passes[i].light_volume) {
-      if (light_dirty) {
-        m.run(m.passes[i], f);
-        m.light_builds += 1;
-        glBindTextureUnit(CV_UNIT_LIGHT_VOLUME, light.tex[0][0]);
-      }
-    } else if (m.passes[i].shadow_map) {
-      if (shadow_dirty) {
-        m.run(m.passes[i], f);
-        m.shadow_builds += 1;
-      }
-    } else if (m.passes[i].air_lut) {
-      if (air_dirty) {
-        m.run(m.passes[i], f);
-        m.air_builds += 1;
-        const Target& air = m.target("air");
-        glBindTextureUnit(CV_UNIT_AIR, air.tex[0][0]);
-        glBindTextureUnit(CV_UNIT_AIR_MIE, air.tex[0][1]);
-      }
-    } else if (m.passes[i].ms_volume) {
-      if (ms_dirty) {  // its timing includes the read-back, the CPU solve and the upload
-        m.run(m.passes[i], f);
-        m.solve_ms_volume(f);
-        glBindTextureUnit(CV_UNIT_MS_VOLUME, m.tex_ms);
-      }
-    } else if (m.passes[i].mesh && ground_kept) {
-      // last frame's ground is still in "scene"
-    } else {
-      m.run(m.passes[i], f);
-      if (m.passes[i].mesh && m.passes[i].drew) m.ground_draws += 1;
-    }
-    glQueryCounter(m.queries[i + 1], GL_TIMESTAMP);
-  }
+  const bool ground_kept = still && m.ground_reuse && !r.any();
+  m.run_passes(f, r, ground_kept);
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   m.swap_history();
   GLenum err = glGetError();
   if (err != GL_NO_ERROR) throw GlError("OpenGL error 0x" + std::to_string(err) + " while rendering");
-  if (timings) {
-    std::vector<GLuint64> t(m.queries.size());
-    for (size_t i = 0; i < t.size(); ++i) glGetQueryObjectui64v(m.queries[i], GL_QUERY_RESULT, &t[i]);
-    *timings = GpuTimings{};
-    for (size_t i = 0; i < m.passes.size(); ++i) {
-      double ms = double(t[i + 1] - t[i]) * 1e-6;
-      if (m.passes[i].drew) timings->passes.push_back({m.passes[i].name + (m.passes[i].compute ? " (compute)" : ""), ms});
-      Group g = m.passes[i].group;
-      (g == Group::Atmosphere ? timings->atmosphere_ms : g == Group::Light ? timings->light_volume_ms
-       : g == Group::Shadow ? timings->shadow_map_ms : g == Group::Ground ? timings->ground_ms
-       : g == Group::Clouds ? timings->cloud_ms : timings->post_ms) += ms;
-    }
-    timings->total_ms = double(t.back() - t.front()) * 1e-6;
-    timings->compile_ms = compile_ms;
-    timings->programs_linked = programs_linked;
-  }
+  if (timings) m.read_timings(*timings, compile_ms, programs_linked);
 }
 
 namespace {

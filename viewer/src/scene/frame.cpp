@@ -261,26 +261,40 @@ bool fit_distance_field(PreparedVolume& vol, const RenderSettings& s) {
   return true;
 }
 
-FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const Camera& cam,
-                      const Sun& sun, int width, int height) {
-  FrameSetup f;
-  f.width = width;
-  f.height = height;
-  f.camera = cam;
-  f.sun = sun;
-  f.settings = s;
-  const bool layer = s.mode == PlaceMode::Layer;
-  if (layer && !vol.tiles)
+namespace {
+
+/// The march's geometry for a volume and settings: the placed size, the small step, the thesis
+/// scheme's large step and what the distance field may prove.
+struct MarchGeometry {
+  bool layer = false;
+  glm::dvec3 size{0.0};  ///< world size of the box (layer: the texture stretched over the layer)
+  glm::dvec2 alt{0.0};   ///< layer bottom and top altitudes (layer mode)
+  double min_voxel = 0, max_extent = 0, diag = 0;
+  double dt = 0;         ///< the small step
+  double cell_m = 0;     ///< a coarse cell's edge in the smallest world voxel edge
+  int large_steps = 0;   ///< the thesis scheme's large step in small steps (0: see make_frame)
+  bool field_ok = false; ///< the distance field serves this frame (field_covers)
+  int reach = 1;         ///< moved-grid cells per still cell (moved_reach_cells)
+  int moved_large_steps = 0;
+};
+
+MarchGeometry march_geometry(const PreparedVolume& vol, const RenderSettings& s) {
+  MarchGeometry g;
+  g.layer = s.mode == PlaceMode::Layer;
+  if (g.layer && !vol.tiles)
     throw InputError("render.mode=layer repeats the texture over the sky, so it needs a tileable volume "
                      "(x and z wrap; cloudgen presets and synthetic:noise tile, this input does not)");
-  glm::dvec3 size = vol.size();
-  glm::dvec2 alt = layer ? layer_altitudes(vol, s) : glm::dvec2(0.0);
-  if (layer) size.y = alt.y - alt.x;  // the texture's height stretches over the layer
-  glm::dvec3 voxel = size / glm::dvec3(vol.dims[0], vol.dims[1], vol.dims[2]);
-  double min_voxel = std::min(voxel.x, std::min(voxel.y, voxel.z));
-  double max_extent = std::max(size.x, std::max(size.y, size.z));
-  double dt = max_extent / s.steps;
-  double cell_m = vol.occ_cell * min_voxel;
+  g.size = vol.size();
+  if (g.layer) {
+    g.alt = layer_altitudes(vol, s);
+    g.size.y = g.alt.y - g.alt.x;  // the texture's height stretches over the layer
+  }
+  const glm::dvec3 voxel = g.size / glm::dvec3(vol.dims[0], vol.dims[1], vol.dims[2]);
+  g.min_voxel = std::min(voxel.x, std::min(voxel.y, voxel.z));
+  g.max_extent = std::max(g.size.x, std::max(g.size.y, g.size.z));
+  g.diag = glm::length(g.size);
+  g.dt = g.max_extent / s.steps;
+  g.cell_m = vol.occ_cell * g.min_voxel;
   // Large step: k small steps, just under the padding's clearance less half a voxel. Why that is
   // safe: the grid is the cells holding density dilated by P = occ_padding cells per axis (a box
   // dilation, wrapped where the volume tiles), so from a point of an unoccupied cell every cell
@@ -294,25 +308,28 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   // In layer mode cells are measured in the smallest world voxel edge (the texture may be stretched
   // vertically); the Earth's curvature bends a large step by d^2/2R, far below half a voxel.
   double clearance_voxels = vol.occ_padding * vol.occ_cell;
-  if (vol.tiles || layer)
+  if (vol.tiles || g.layer)
     for (int a : {0, 2}) {
       const int w = vol.dims[size_t(a)] % vol.occ_cell;  // the partial cell at the seam, if any
       if (w != 0) clearance_voxels = std::min(clearance_voxels, double((vol.occ_padding - 1) * vol.occ_cell + w));
     }
-  int k = int(std::floor(0.999 * (clearance_voxels - 0.5) * min_voxel / dt));  // 0: see below apply_motion
+  g.large_steps = int(std::floor(0.999 * (clearance_voxels - 0.5) * g.min_voxel / g.dt));  // 0: see make_frame
   // The distance field serves this frame only if it was built for an erosion and motion no
   // stronger than the frame's (field_covers); otherwise the thesis scheme on the padded grid.
-  const bool field_ok = !vol.dist.empty() && field_covers(vol.dist_rule, field_rule(vol, s));
-  const int reach = layer || !field_ok ? 1 : moved_reach_cells(vol);
-  const double moved_clearance = reach * cell_m - 0.5 * min_voxel;  // from a point of an unmarked moved cell
-  const int k_moved = int(std::floor(0.999 * moved_clearance / dt));
-  double diag = glm::length(size);
-  ref::CloudParams& p = f.params;
-  p = ref::CloudParams{};  // zero: layer fields stay 0 in box mode
+  g.field_ok = !vol.dist.empty() && field_covers(vol.dist_rule, field_rule(vol, s));
+  g.reach = g.layer || !g.field_ok ? 1 : moved_reach_cells(vol);
+  const double moved_clearance = g.reach * g.cell_m - 0.5 * g.min_voxel;  // from a point of an unmarked moved cell
+  g.moved_large_steps = int(std::floor(0.999 * moved_clearance / g.dt));
+  return g;
+}
+
+/// The volume's placement and the medium: where the box is, its grids, the sun and the extinction.
+void set_volume_params(const PreparedVolume& vol, const RenderSettings& s, const Camera& cam, const Sun& sun,
+                       const MarchGeometry& g, ref::CloudParams& p) {
   p.volume_min_m = vol.origin - cam.eye;
   p.voxel_size_m = vol.voxel_size;
-  p.volume_size_m = size;  // box mode only
-  p.tiles_xz = vol.tiles || layer ? 1.0 : 0.0;
+  p.volume_size_m = g.size;  // box mode only
+  p.tiles_xz = vol.tiles || g.layer ? 1.0 : 0.0;
   p.volume_dims = glm::dvec3(vol.dims[0], vol.dims[1], vol.dims[2]);
   p.has_detail = vol.has_detail ? 1.0 : 0.0;
   p.occ_dims = glm::dvec3(vol.occ_dims[0], vol.occ_dims[1], vol.occ_dims[2]);
@@ -326,18 +343,24 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   p.albedo = s.albedo;
   // Auto values follow the voxel size, not the box, so a VDB cropped to its active voxels renders
   // like the dense texture it came from.
-  p.sigma_t_per_m = s.sigma_t > 0 ? s.sigma_t : cloudgen::default_extinction_per_metre(min_voxel);
+  p.sigma_t_per_m = s.sigma_t > 0 ? s.sigma_t : cloudgen::default_extinction_per_metre(g.min_voxel);
   p.erosion = s.erosion;
   p.density_scale = s.density;
   p.powder_c = s.powder_c;
-  p.step_m = dt;
-  p.large_step_count = k;
+}
+
+/// The primary march: steps, their growth and empty-space skipping. Returns whether the frame
+/// skips by a distance (the field's or the NanoVDB tree's).
+bool set_march_params(const PreparedVolume& vol, const RenderSettings& s, const MarchGeometry& g,
+                      ref::CloudParams& p) {
+  p.step_m = g.dt;
+  p.large_step_count = g.large_steps;
   p.max_distance_m = s.max_distance;
   // Layer rays can run to the horizon: cap the loop (use render.adaptive=true there).
-  p.max_iterations = layer ? 2048.0 + 8.0 * s.steps : 4.0 * std::ceil(diag / dt) + 64.0;
+  p.max_iterations = g.layer ? 2048.0 + 8.0 * s.steps : 4.0 * std::ceil(g.diag / g.dt) + 64.0;
   p.adaptive = s.adaptive ? 1 : 0;
-  p.adaptive_start_m = s.adaptive_start > 0 ? s.adaptive_start : 0.25 * max_extent;
-  p.adaptive_growth_per_m = s.adaptive_growth > 0 ? s.adaptive_growth : 4.0 / max_extent;
+  p.adaptive_start_m = s.adaptive_start > 0 ? s.adaptive_start : 0.25 * g.max_extent;
+  p.adaptive_growth_per_m = s.adaptive_growth > 0 ? s.adaptive_growth : 4.0 / g.max_extent;
   const bool skipping = s.occupancy && s.skipping != Skipping::None;
   // Tree skipping proves its jumps from the NanoVDB tree (lighting.glsl tree_radius_seen): the
   // distance skipping's paths with another radius, and no field to fit.
@@ -345,21 +368,28 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   if (tree && !vol.nano)
     throw InputError("render.skipping=tree jumps through the NanoVDB tree's empty nodes, so it needs "
                      "render.volume=nanovdb (this volume is on the dense path; or use render.skipping=distance)");
-  const bool distance = skipping && ((s.skipping == Skipping::Distance && field_ok) || tree);
+  const bool distance = skipping && ((s.skipping == Skipping::Distance && g.field_ok) || tree);
   p.occupancy_skip = skipping ? 1 : 0;
   p.skip_distance = distance ? 1 : 0;
   p.skip_tree = tree ? 1 : 0;
   // The distance field's empty radius (march.glsl, empty_radius): d cells of the smallest world
   // cell edge, less the half voxel trilinear density reaches past a non-empty cell.
-  p.df_cell_m = cell_m;
-  p.df_margin_m = 0.5 * min_voxel;
+  p.df_cell_m = g.cell_m;
+  p.df_margin_m = 0.5 * g.min_voxel;
   p.light_mode = !s.light_march ? CV_LIGHT_OFF : (skipping && s.occupancy_light ? CV_LIGHT_MARCH_SKIP_EMPTY : CV_LIGHT_MARCH);
   p.df_light = distance && s.occupancy_light ? 1 : 0;
   p.transmittance_cutoff = s.transmittance_cutoff;
   p.density_step = s.density_step;
   p.density_step_below = s.density_step_below;
+  return distance;
+}
+
+/// The lighting: the light volume's and the diffusion volume's grids, the light march, the phase
+/// function and the multiple-scattering octaves.
+void set_light_params(const PreparedVolume& vol, const RenderSettings& s, const MarchGeometry& g,
+                      ref::CloudParams& p) {
   // The light volume: box mode only (layer mode's coverage map does not repeat with the texture).
-  p.light_volume_on = s.light_volume && s.light_march && !layer ? 1 : 0;
+  p.light_volume_on = s.light_volume && s.light_march && !g.layer ? 1 : 0;
   // Its grid: the voxels / scale per axis, the scale doubled until at most kMaxLightVolumeTexels
   // (16 MiB of R32F; the 128^3 thesis volume fits at scale 1), so a large field neither exhausts
   // memory nor spends minutes rebuilding on a CPU rasteriser.
@@ -373,12 +403,12 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   for (int i = 0; i < 3; ++i)
     p.light_volume_dims[i] = std::max(1, (vol.dims[size_t(i)] + lv_scale - 1) / lv_scale);
   // The diffusion volume (box mode too): its cells the same way, at most kMaxMsVolumeCells.
-  p.ms_volume_on = s.ms_volume && !layer ? 1 : 0;
+  p.ms_volume_on = s.ms_volume && !g.layer ? 1 : 0;
   int ms_scale = s.ms_volume_scale;
   while (lv_texels(ms_scale) > double(kMaxMsVolumeCells)) ms_scale *= 2;
   for (int i = 0; i < 3; ++i) p.ms_volume_dims[i] = std::max(1, (vol.dims[size_t(i)] + ms_scale - 1) / ms_scale);
   p.light_samples = s.light_samples;
-  p.light_step_m = s.light_step > 0 ? s.light_step : 2.5 * min_voxel;
+  p.light_step_m = s.light_step > 0 ? s.light_step : 2.5 * g.min_voxel;
   p.light_growth = s.light_growth;
   set_phase_params(p, s);
   p.mie_table_size = CV_MIE_TABLE_SIZE;  // the table itself is computed only for Mie frames
@@ -391,8 +421,14 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   p.frame_index = s.frame;
   p.exact_filter = s.exact_filter ? 1 : 0;
   p.output_mode = double(int(s.output));
-  double gh = ground_height(vol, s);
-  f.ground_half_extent = layer ? 2e5 : 5e4;
+}
+
+/// The ground, the sky and the sunlight's colour (the precomputed atmosphere's when it is on).
+void set_ground_and_sky(const PreparedVolume& vol, const RenderSettings& s, const Camera& cam, const Sun& sun,
+                        const MarchGeometry& g, FrameSetup& f) {
+  ref::CloudParams& p = f.params;
+  const double gh = ground_height(vol, s);
+  f.ground_half_extent = g.layer ? 2e5 : 5e4;
   p.ground_y_m = gh - cam.eye.y;
   p.ground_albedo = s.ground_albedo;
   p.ground_on = s.ground ? 1 : 0;
@@ -418,17 +454,17 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
     p.ambient_color = a.above;
     p.ambient_below_color = a.below;
   }
-  if (layer) {
-    double period = size.x * s.coverage_tiles;
+  if (g.layer) {
+    double period = g.size.x * s.coverage_tiles;
     p.layer_on = 1.0;
-    p.layer_bottom_m = alt.x;
-    p.layer_top_m = alt.y;
+    p.layer_bottom_m = g.alt.x;
+    p.layer_top_m = g.alt.y;
     p.camera_altitude_m = cam.eye.y - gh;
-    p.camera_tile_x_m = glm::mod(cam.eye.x, size.x);
-    p.camera_tile_z_m = glm::mod(cam.eye.z, size.z);
+    p.camera_tile_x_m = glm::mod(cam.eye.x, g.size.x);
+    p.camera_tile_z_m = glm::mod(cam.eye.z, g.size.z);
     p.coverage_period_m = period;
-    p.tile_x_m = size.x;
-    p.tile_z_m = size.z;
+    p.tile_x_m = g.size.x;
+    p.tile_z_m = g.size.z;
     p.camera_coverage_x_m = glm::mod(cam.eye.x, period);
     p.camera_coverage_z_m = glm::mod(cam.eye.z, period);
     p.coverage_bias = s.coverage;
@@ -436,7 +472,14 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   }
   p.height_min_m = vol.height_min - cam.eye.y;
   p.height_size_m = vol.height_size;
-  apply_motion(s, vol.baked_motion, layer ? size.y : vol.height_size, k_moved, p);
+}
+
+/// Moving clouds: the motion table, the skipping they allow, the moved occupancy grid and the
+/// light volume over the march box. Also the large step's floor, which holds still or moving.
+void set_motion(const PreparedVolume& vol, const RenderSettings& s, const MarchGeometry& g, bool distance,
+                int width, int height, FrameSetup& f) {
+  ref::CloudParams& p = f.params;
+  apply_motion(s, vol.baked_motion, g.layer ? g.size.y : vol.height_size, g.moved_large_steps, p);
   if (p.motion_on > 0.5) {
     f.motion_table = motion_table_row(s, s.time);
     f.motion_table.insert(f.motion_table.end(), f.motion_table.begin(), f.motion_table.end());
@@ -463,15 +506,15 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   // (GL binds the still grid, which no call reads).
   const bool reads_occupied = (p.occupancy_skip > 0.5 && p.skip_distance < 0.5) ||
                               (int(p.light_mode) == CV_LIGHT_MARCH_SKIP_EMPTY && p.df_light < 0.5);
-  if (p.motion_on > 0.5 && !layer && reads_occupied)
-    build_moved_occupancy(vol, f.motion_table, reach, field_ok, p, f.moved_occupancy);
+  if (p.motion_on > 0.5 && !g.layer && reads_occupied)
+    build_moved_occupancy(vol, f.motion_table, g.reach, g.field_ok, p, f.moved_occupancy);
   // Moving clouds (box mode): the light volume over the march box from this frame's moving
   // density, rebuilt every frame (lighting.glsl light_volume_position), with the still grid's
   // texel. A rebuild marches toward the sun from every texel, the per-sample march from every
   // cloud sample of every pixel, so it pays when the grid has no more texels than the frame
   // marches pixels (then one cloud sample per pixel already costs as much); smaller frames, and
   // larger grids, march per sample as before. Temporal upsampling marches one pixel in 16.
-  if (p.motion_on > 0.5 && !layer && s.light_volume && s.light_march) {
+  if (p.motion_on > 0.5 && !g.layer && s.light_volume && s.light_march) {
     const double marched = double(width) * double(height) / (s.temporal ? 16.0 : 1.0);
     const glm::dvec3 texel = p.volume_size_m / p.light_volume_dims;
     glm::dvec3 dims(1.0);
@@ -482,6 +525,26 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
       p.light_volume_dims = dims;
     }
   }
+}
+
+}  // namespace
+
+FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const Camera& cam,
+                      const Sun& sun, int width, int height) {
+  FrameSetup f;
+  f.width = width;
+  f.height = height;
+  f.camera = cam;
+  f.sun = sun;
+  f.settings = s;
+  const MarchGeometry g = march_geometry(vol, s);
+  ref::CloudParams& p = f.params;
+  p = ref::CloudParams{};  // zero: layer fields stay 0 in box mode
+  set_volume_params(vol, s, cam, sun, g, p);
+  const bool distance = set_march_params(vol, s, g, p);
+  set_light_params(vol, s, g, p);
+  set_ground_and_sky(vol, s, cam, sun, g, f);
+  set_motion(vol, s, g, distance, width, height, f);
   set_shadow_map(s, width, height, p);
   f.params = rounded_to_float(p);
   f.view_proj = view_projection(cam, width, height);
