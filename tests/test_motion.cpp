@@ -391,7 +391,7 @@ TEST(ViewerMotion, MovedOccupancyLeavesOutOnlyEmptySpace) {
 // The moved grid is built for its readers only: the thesis scheme's march, and the light march
 // skipping empty cells (render.occupancy_light; while the clouds move it reads the grid under either
 // scheme, apply_motion). Distance skipping alone, the defaults, no skipping and layer mode leave it
-// empty, and their images stay those of no skipping (ViewerSpeed.DistanceSkippingStaysExactWhileMoving).
+// empty, and their images stay those of no skipping (Skipping.DistanceSkippingStaysExactWhileMoving).
 TEST(ViewerMotion, MovedGridIsBuiltForItsReadersOnly) {
   PreparedVolume vol = prepare_volume(testutil::synthetic("noise"), 4, 2);  // tiles: layer mode too
   struct Case { const char* name; Skipping skipping; bool light; bool layer; bool built; };

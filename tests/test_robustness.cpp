@@ -522,37 +522,61 @@ TEST(RoundTrip, RawReadsTheOccupancyFileItWroteAndRefusesADamagedOne) {
   EXPECT_EQ(read_raw(dir / "t.raw").occupancy, v.occupancy);
 }
 
-TEST(RoundTrip, EveryVolumeFieldSurvivesRawAndKtx2) {
+// Every texel format through both texture files (.raw with its .json sidecar, .ktx2): the values
+// within the format's rounding (rgba8 half a step, rgba16f 11 significant bits, rgba32f exact) and
+// every other field of the volume exactly: placement, tiling, channel names, metadata, occupancy.
+struct TextureCase {
+  const char* texel;
+  const char* ext;
+};
+class TextureRoundTrip : public ::testing::TestWithParam<TextureCase> {};
+TEST_P(TextureRoundTrip, KeepsEveryFieldWithinTheTexelsRounding) {
   Volume v;
   v.dims = {{5, 3, 4}};
   v.voxel_size = 7.25;
   v.origin = {{-1000.5, 2500, 12}};
   v.tiles_xz = true;
   v.density.resize(v.voxel_count());
-  for (size_t i = 0; i < v.density.size(); ++i) v.density[i] = float(i % 7) / 6.0f;
-  v.detail[0].assign(v.voxel_count(), 0.25f);
-  v.detail[1].assign(v.voxel_count(), 0.75f);
+  v.detail[0].resize(v.voxel_count());
+  v.detail[1].resize(v.voxel_count());
+  for (size_t i = 0; i < v.density.size(); ++i) {
+    v.density[i] = float(i % 7) / 6.0f;
+    v.detail[0][i] = float(i % 5) / 4.0f;
+    v.detail[1][i] = float((i * 7) % 11) / 10.0f;
+  }
   v.detail_names = {{"erosion", "wisps", "detail_a"}};
   v.metadata = {{"preset", "unit test"}, {"seed", "42"}};
   build_occupancy(v);
   TempDir dir;
   ExportOptions o;
-  o.texel = Texel::Rgba32f;
-  for (const char* name : {"v.raw", "v.ktx2"}) {
-    SCOPED_TRACE(name);
-    write_volume(v, dir / name, format_from_path(name), o);
-    Volume r = read_volume(dir / name);
-    EXPECT_EQ(r.dims, v.dims);
-    EXPECT_EQ(r.voxel_size, v.voxel_size);
-    EXPECT_EQ(r.origin, v.origin);
-    EXPECT_EQ(r.tiles_xz, v.tiles_xz);
-    EXPECT_EQ(r.density, v.density);
-    EXPECT_EQ(r.detail[0], v.detail[0]);
-    EXPECT_EQ(r.detail[1], v.detail[1]);
-    EXPECT_TRUE(r.detail[2].empty()) << "a channel that was not written stays absent";
-    EXPECT_EQ(r.detail_names[0], "erosion");
-    EXPECT_EQ(r.detail_names[1], "wisps");
-    EXPECT_EQ(r.metadata, v.metadata);
-    EXPECT_EQ(r.occupancy, v.occupancy);
+  const std::string texel = GetParam().texel, name = std::string("v") + GetParam().ext;
+  o.texel = parse_texel(texel);
+  const double tol = texel == "rgba8" ? 0.5 / 255 + 1e-7 : texel == "rgba16f" ? 1.0 / 2048 : 0.0;
+  write_volume(v, dir / name, format_from_path(name), o);
+  Volume r = read_volume(dir / name);
+  ASSERT_EQ(r.dims, v.dims);
+  double err = 0;
+  for (size_t i = 0; i < v.voxel_count(); ++i)
+    for (double d : {r.density[i] - v.density[i], r.detail[0][i] - v.detail[0][i], r.detail[1][i] - v.detail[1][i]})
+      err = std::max(err, std::fabs(d));
+  EXPECT_LE(err, tol);
+  EXPECT_EQ(r.voxel_size, v.voxel_size);
+  EXPECT_EQ(r.origin, v.origin);
+  EXPECT_EQ(r.tiles_xz, v.tiles_xz);
+  EXPECT_TRUE(r.detail[2].empty()) << "a channel that was not written stays absent";
+  EXPECT_EQ(r.detail_names[0], "erosion");
+  EXPECT_EQ(r.detail_names[1], "wisps");
+  EXPECT_EQ(r.metadata, v.metadata);
+  EXPECT_EQ(r.occupancy, v.occupancy);
+  if (std::string(GetParam().ext) == ".raw") {
+    EXPECT_TRUE(fs::exists(dir / "v.json"));
+    EXPECT_TRUE(fs::exists(dir / "v.occupancy.raw"));
   }
 }
+INSTANTIATE_TEST_SUITE_P(EveryTexelAndFile, TextureRoundTrip,
+                         ::testing::Values(TextureCase{"rgba8", ".raw"}, TextureCase{"rgba8", ".ktx2"},
+                                           TextureCase{"rgba16f", ".raw"}, TextureCase{"rgba16f", ".ktx2"},
+                                           TextureCase{"rgba32f", ".raw"}, TextureCase{"rgba32f", ".ktx2"}),
+                         [](const ::testing::TestParamInfo<TextureCase>& i) {
+                           return std::string(i.param.texel) + (i.param.ext[1] == 'r' ? "Raw" : "Ktx2");
+                         });

@@ -357,25 +357,7 @@ TEST(Sequence, AFailedFrameLeavesNoFrame) {
   EXPECT_FALSE(fs::exists(dir / "c_0000.vdb"));
 }
 
-// Interrupted with the first frame staged, or with every frame staged but none published: no frame
-// appears, an older frame file stays byte for byte, no temporaries are left (test hook, no sleeps).
-TEST(Sequence, InterruptedSequenceLeavesNoFrame) {
-  for (const char* where : {"frames", "commit"}) {
-    SCOPED_TRACE(where);
-    TempDir dir;
-    testutil::write_text(dir / "c_0001.vdb", "previous contents");
-    testutil::Process p;
-    p.args = {"generate", "tiny", "-q", "--frames", "0:3", "-o", dir / "c_####.vdb"};
-    p.env = {std::string("CLOUDGEN_TEST_HOLD=") + where};
-    p.signal_on = std::string("test hold at ") + where;
-    const auto r = p.run();
-    ASSERT_TRUE(r.signalled) << r.out;
-    EXPECT_EQ(r.code, 130) << r.out;
-    EXPECT_NE(r.out.find("no output was written or replaced"), std::string::npos) << r.out;
-    EXPECT_EQ(testutil::list_dir(dir.path), std::vector<std::string>{"c_0001.vdb"});
-    EXPECT_EQ(testutil::read_text(dir / "c_0001.vdb"), "previous contents");
-  }
-}
+// Interrupted sequences: Interrupted.RunLeavesNoPartialOutput (test_cloudgen.cpp).
 
 // The preset's `motion` section is read through the parameter table: defaults = MotionParams'
 // initialisers, values range-checked with the file, field, value and range, unknown keys named.

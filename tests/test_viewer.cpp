@@ -428,7 +428,7 @@ TEST(ViewerRender, OccupancyComparisonCatchesMissedIsolatedVoxels) {
     uint32_t x = next() % 64, y = next() % 64, z = next() % 64;
     v.density[v.index(x, y, z)] = 1.f;
   }
-  // The thesis scheme relies on the padding (distance skipping does not: test_viewer_speed.cpp).
+  // The thesis scheme relies on the padding (distance skipping does not: test_skipping.cpp).
   RenderSettings on = with({"render.sigma_t=0.5", "render.steps=256", "render.ground=false", "render.skipping=thesis"});
   RenderSettings off = on;
   off.occupancy = false;
