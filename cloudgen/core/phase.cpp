@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "cloudgen/glsl_prelude.h"
 #include "cloudgen/volume.h"
 
 namespace cloudgen::phase {
@@ -150,9 +151,8 @@ BulkPhase mie_population(const DropletSizes& sz, double wavelength_nm, const std
 }
 
 namespace lobes {
-using Number = double;
-using std::exp;
-using std::sqrt;
+CV_GLSL_DOUBLE_TYPES;
+CV_GLSL_BUILTINS;
 #include "cloudgen/phase_lobes.glsl"
 }  // namespace lobes
 

@@ -1,5 +1,5 @@
-// Everything a pass that marches the clouds needs, in dependency order (see march.glsl for what
-// each header holds). src/cpu_renderer.cpp includes the same list inside its C++ class.
+// Everything a pass that marches the clouds needs: the GLSL-only parameter blocks and bindings,
+// then the cloud maths the CPU reference compiles too (cloud_math.glsl).
 #include "prelude_glsl.glsl"
 #include "constants.glsl"
 #include "cloud_params.glsl"
@@ -8,19 +8,4 @@
 #include "cloud_bindings.glsl"
 #include "atmosphere_params.glsl"
 #include "atmosphere_bindings.glsl"
-#include "common.glsl"
-#include "volume_nanovdb.glsl"
-#include "phase_lobes.glsl"
-#include "phase.glsl"
-#include "cloud_type.glsl"
-#include "erosion.glsl"
-#include "motion.glsl"
-#include "curl_distortion.glsl"
-#include "medium.glsl"
-#include "atmosphere.glsl"
-#include "sky_atmosphere.glsl"
-#include "lighting.glsl"
-#include "march.glsl"
-#include "sky.glsl"
-#include "compose.glsl"
-#include "temporal.glsl"
+#include "cloud_math.glsl"

@@ -41,6 +41,20 @@ Number trilinear_weight(vec3 f, int k) {
   vec3 w = mix(vec3(1.0) - f, f, vec3(ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1)));
   return w.x * w.y * w.z;
 }
+// The lower corner i0 and the fractions f of a trilinear lookup at uvw (0..1 over n texels, texel
+// centres at (i + 0.5) / n): the set-up every hand-written filter shares with the texture unit.
+struct TrilinearCell {
+  ivec3 i0;
+  vec3 f;
+};
+TrilinearCell trilinear_cell(vec3 uvw, ivec3 n) {
+  vec3 x = uvw * vec3(n) - 0.5;
+  vec3 fl = floor(x);
+  TrilinearCell c;
+  c.i0 = ivec3(fl);
+  c.f = x - fl;
+  return c;
+}
 
 // Entry and exit distances of a ray from the origin along unit `rd` through the box [bmin, bmax];
 // entry clamped to 0 (camera inside). No hit when x >= y.

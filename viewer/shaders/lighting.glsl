@@ -182,10 +182,9 @@ Number light_volume_value(ivec3 texel) {
 vec4 grid_trilinear(bool ms, vec3 uvw) {
   ivec3 n = ivec3(ms ? u_cloud.ms_volume_dims : u_cloud.light_volume_dims);
   bool tiles = !ms && CV_MODE_TILES > 0.5;  // the diffusion volume never wraps (see ms_volume_source)
-  vec3 x = uvw * vec3(n) - 0.5;
-  vec3 fl = floor(x);
-  vec3 f = x - fl;
-  ivec3 i0 = ivec3(fl);
+  TrilinearCell cell = trilinear_cell(uvw, n);
+  ivec3 i0 = cell.i0;
+  vec3 f = cell.f;
   vec4 acc = vec4(0.0);
   for (int k = 0; k < 8; ++k) {
     ivec3 c = trilinear_corner(i0, k, n, tiles);

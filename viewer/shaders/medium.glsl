@@ -12,10 +12,9 @@
 vec4 volume_trilinear(vec3 uvw) {
   ivec3 n = ivec3(u_cloud.volume_dims);
   bool tiles = CV_MODE_TILES > 0.5;
-  vec3 x = uvw * vec3(n) - 0.5;
-  vec3 fl = floor(x);
-  vec3 f = x - fl;
-  ivec3 i0 = ivec3(fl);
+  TrilinearCell cell = trilinear_cell(uvw, n);
+  ivec3 i0 = cell.i0;
+  vec3 f = cell.f;
   vec4 acc = vec4(0.0);
   for (int k = 0; k < 8; ++k) acc += trilinear_weight(f, k) * volume_texel(trilinear_corner(i0, k, n, tiles));
   return acc;

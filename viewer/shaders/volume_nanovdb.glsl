@@ -22,10 +22,9 @@ vec4 nanovdb_texel(ivec3 texel) {
 vec4 nanovdb_filtered(vec3 uvw) {
   ivec3 n = ivec3(u_cloud.volume_dims);
   bool tiles = CV_MODE_TILES > 0.5;
-  vec3 x = uvw * vec3(n) - 0.5;
-  vec3 fl = floor(x);
-  vec3 f = x - fl;
-  ivec3 i0 = ivec3(fl);
+  TrilinearCell cell = trilinear_cell(uvw, n);
+  ivec3 i0 = cell.i0;
+  vec3 f = cell.f;
   ivec3 corner[8];
   Number dens[8];
   bool any = false;

@@ -3,6 +3,8 @@
 #pragma once
 #include <algorithm>
 
+#include "cloudgen/glsl_prelude.h"
+
 namespace cloudgen {
 
 namespace erosion_glsl {
@@ -10,10 +12,8 @@ namespace erosion_glsl {
 namespace {
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wunused-function"  // each includer uses some of the functions
-using Number = double;
-inline Number clamp(Number x, Number lo, Number hi) { return std::min(std::max(x, lo), hi); }
-inline Number mix(Number x, Number y, Number a) { return x * (1 - a) + y * a; }
-using std::max;
+CV_GLSL_DOUBLE_TYPES;
+CV_GLSL_BUILTINS;
 #include "cloudgen/erosion.glsl"
 #pragma GCC diagnostic pop
 }  // namespace

@@ -11,6 +11,8 @@
 
 #include <glm/glm.hpp>
 
+#include "cloudgen/glsl_prelude.h"
+
 namespace cloudgen {
 
 /// A flow map given as an image (seed 003's flow texture): per texel the flow (up, forward) in
@@ -107,17 +109,8 @@ std::string motion_markdown();
 namespace motion_glsl {
 // Internal linkage: the GLSL text defines plain functions, and every includer gets its own copy.
 namespace {
-using Number = double;
-using vec2 = glm::dvec2;
-using vec3 = glm::dvec3;
-using ivec3 = glm::ivec3;
-using glm::clamp;
-using glm::floor;
-using glm::fract;
-using glm::mix;
-using std::abs;
-using std::cos;
-using std::sin;
+CV_GLSL_DOUBLE_TYPES;
+CV_GLSL_BUILTINS;
 #include "cloudgen/motion.glsl"
 vec3 curl_texel(ivec3 i) { return curl_field_texel(i.x, i.y, i.z); }
 #include "cloudgen/curl_distortion.glsl"

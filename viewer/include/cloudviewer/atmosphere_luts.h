@@ -67,8 +67,6 @@ struct AtmosphereLuts {
   /// transmittance_to_sun(r, mu_s) of atmosphere.glsl: the sunlight's transmittance to radius r
   /// (0 in the Earth's shadow, a smooth set at the horizon).
   glm::dvec3 sun_transmittance(double r, double mu_s) const;
-  /// multiple_scattering_at(r, mu_s) of atmosphere.glsl: Psi_ms for unit solar irradiance.
-  glm::dvec3 psi_ms(double r, double mu_s) const;
   /// atmosphere_scattering() of atmosphere.glsl: the sky's radiance from altitude `alt` along unit
   /// `v` (zenith +y) with the sun along unit `s` and unit solar irradiance, to the top or the ground
   /// or over the first `t_max` metres (aerial perspective), marched per pixel.

@@ -559,11 +559,6 @@ glm::dvec3 AtmosphereLuts::sun_transmittance(double r, double mu_s) const {
   return sh.transmittance_to_sun(r, mu_s);
 }
 
-glm::dvec3 AtmosphereLuts::psi_ms(double r, double mu_s) const {
-  AtmosphereShader sh{params, &transmittance, &multiple_scattering, &irradiance};
-  return sh.multiple_scattering_at(r, mu_s);
-}
-
 glm::dvec3 AtmosphereLuts::ground_irradiance(double mu_s) const {
   AtmosphereShader sh{params, &transmittance, &multiple_scattering, &irradiance};
   return sh.ground_sky_irradiance(mu_s);

@@ -221,24 +221,9 @@ struct CpuShader {
   vec3 motion_texel(int i, int row) const { return (*motion)[size_t(row) * CV_MOTION_LUT_SIZE + size_t(i)]; }
   vec3 curl_texel(ivec3 i) const { return cloudgen::curl_field_texel(i.x, i.y, i.z); }
 
-// The list and order of shaders/cloud_headers.glsl (after its GLSL-only bindings), plus post.glsl.
+// The modes, the cloud maths in their one order (shaders/cloud_math.glsl), and the post passes.
 #include "../../shaders/modes.glsl"
-#include "../../shaders/common.glsl"
-#include "../../shaders/volume_nanovdb.glsl"
-#include "cloudgen/phase_lobes.glsl"
-#include "../../shaders/phase.glsl"
-#include "cloudgen/cloud_type.glsl"
-#include "cloudgen/erosion.glsl"
-#include "cloudgen/motion.glsl"
-#include "cloudgen/curl_distortion.glsl"
-#include "../../shaders/medium.glsl"
-#include "../../shaders/atmosphere.glsl"
-#include "../../shaders/sky_atmosphere.glsl"
-#include "../../shaders/lighting.glsl"
-#include "../../shaders/march.glsl"
-#include "../../shaders/sky.glsl"
-#include "../../shaders/compose.glsl"
-#include "../../shaders/temporal.glsl"
+#include "../../shaders/cloud_math.glsl"
 #include "../../shaders/post.glsl"
 };
 
