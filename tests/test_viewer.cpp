@@ -122,8 +122,7 @@ TEST(ViewerMath, AnalyticLobesAreCloudgensAndIntegrateToOne) {
 // makes the forward peak rise toward blue as (size parameter)^2: blue / red at 0 degrees is
 // (650 / 450)^2 = 2.09 for the same droplets (measured 2.07).
 TEST(ViewerMath, MieTableHasForwardPeakFogbowAndGloryInEachChannel) {
-  load_mie_table("");
-  const MiePhaseTable& t = mie_phase_table();
+  const MiePhaseTable& t = *computed_mie_table();
   const int n = t.size();
   ASSERT_EQ(n, CV_MIE_TABLE_SIZE);
   for (int c = 0; c < 3; ++c) {
@@ -152,8 +151,8 @@ TEST(ViewerMath, MieTableFromAFileIsResampledAndNormalised) {
     out << "# theta_degrees value\n";
     for (int d = 0; d <= 180; d += 2) out << d << " " << 3.0 * reference_phase(PhaseMode::HenyeyGreenstein, 0.5, std::cos(d * M_PI / 180)) << "\n";
   }
-  load_mie_table(path.string());
   RenderSettings mie = with({"render.phase=mie"});
+  mie.mie_table = read_mie_table(path.string());
   for (double d : {0.0, 31.0, 90.0, 151.0, 180.0}) {
     double c = std::cos(d * M_PI / 180);
     const glm::dvec3 got = reference_phase_rgb(mie, c);
@@ -170,7 +169,7 @@ TEST(ViewerMath, MieTableFromAFileIsResampledAndNormalised) {
           << "," << reference_phase(PhaseMode::HenyeyGreenstein, 0.7, c) << "\n";
     }
   }
-  load_mie_table(csv.string());
+  mie.mie_table = read_mie_table(csv.string());
   for (double d : {0.0, 31.0, 90.0, 151.0, 180.0}) {
     double c = std::cos(d * M_PI / 180);
     const glm::dvec3 got = reference_phase_rgb(mie, c);
@@ -178,21 +177,22 @@ TEST(ViewerMath, MieTableFromAFileIsResampledAndNormalised) {
     for (int k = 0; k < 3; ++k)
       EXPECT_NEAR(got[k] / reference_phase(PhaseMode::HenyeyGreenstein, want[k], c), 1.0, 0.01) << d << " channel " << k;
   }
-  load_mie_table("");
-  EXPECT_GT(mie_phase_table().at(0, 1), 100.f);  // the computed droplet table (forward peak ~600/sr) is back
+  // Reading a file changes only the settings that hold it: the computed droplet table (forward
+  // peak ~600/sr) stays what other frames read.
+  EXPECT_GT(computed_mie_table()->at(0, 1), 100.f);
+  EXPECT_NEAR(reference_phase_rgb(with({"render.phase=mie"}), 1.0).y, computed_mie_table()->at(0, 1), 1e-3);
   std::ofstream(output_dir() / "bad_mie.txt") << "0 1\n90 x\n";
   std::ofstream(output_dir() / "bad_mie3.csv") << "angle_deg,r,g,b\n0,1,1,1\n90,1,1\n";
   std::ofstream(output_dir() / "bad_red.csv") << "angle_deg,r,g,b\n0,0,1,1\n180,0,1,1\n";
   for (const char* bad : {"bad_mie.txt:2", "bad_mie3.csv:3", "bad_red.csv: the red channel"}) {
     const std::string name = std::string(bad).substr(0, std::string(bad).find(':'));
     try {
-      load_mie_table((output_dir() / name).string());
+      read_mie_table((output_dir() / name).string());
       ADD_FAILURE() << "accepted a bad table " << name;
     } catch (const InputError& e) {
       EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
     }
   }
-  load_mie_table("");
 }
 
 // The Mie table is cloudgen's Lorenz-Mie result (default droplets, per channel at 650, 550 and 450
@@ -202,8 +202,7 @@ TEST(ViewerMath, MieTableFromAFileIsResampledAndNormalised) {
 // peak stands ~1e4 above the side (MieTableHasForwardPeakFogbowAndGloryInEachChannel checks the rest
 // of its shape).
 TEST(ViewerMath, MieTableIsCloudgensSolutionInterpolatedInLogSpace) {
-  load_mie_table("");
-  const MiePhaseTable& t = mie_phase_table();
+  const MiePhaseTable& t = *computed_mie_table();
   ASSERT_EQ(t.size(), CV_MIE_TABLE_SIZE);
   std::vector<double> angles(size_t(t.size()));
   for (size_t j = 0; j < angles.size(); ++j) angles[j] = 180.0 * double(j) / double(angles.size() - 1);

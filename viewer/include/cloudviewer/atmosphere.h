@@ -15,6 +15,7 @@
 #include <glm/glm.hpp>
 
 #include "cloudviewer/constants.h"
+#include "cloudviewer/param_table.h"
 
 namespace cloudviewer {
 
@@ -45,16 +46,8 @@ struct AtmosphereSettings {
   bool operator!=(const AtmosphereSettings& o) const { return !(*this == o); }
 };
 
-/// One atmosphere.* parameter (the same shape as the render.* ParamDef, over AtmosphereSettings).
-struct AtmosphereParamDef {
-  std::string key;    ///< after "atmosphere."
-  std::string type;   ///< bool, float
-  std::string range;  ///< allowed values, as text
-  std::string doc;
-  std::function<void(AtmosphereSettings&, const std::string&)> set;  ///< throws InputError
-  std::function<std::string(const AtmosphereSettings&)> get;
-  double lo = 0, hi = 0;
-};
+/// An atmosphere.* parameter (param_table.h).
+using AtmosphereParamDef = Param<AtmosphereSettings>;
 
 /// The table, in documentation order.
 const std::vector<AtmosphereParamDef>& atmosphere_params();

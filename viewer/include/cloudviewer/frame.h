@@ -1,12 +1,15 @@
 // One frame's set-up: the parameter block both renderers consume (params.h), built from the
 // volume, the settings, the camera and the sun. No OpenGL here. src/scene/frame.cpp.
 #pragma once
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
 
 #include "cloudviewer/camera.h"
+#include "cloudviewer/coverage_map.h"
+#include "cloudviewer/mie_table.h"
 #include "cloudviewer/params.h"
 #include "cloudviewer/prepared_volume.h"
 #include "cloudviewer/settings.h"
@@ -41,6 +44,10 @@ struct FrameSetup {
   /// renderers' occupied() reads instead of the volume's grid (medium.glsl). Empty otherwise, and
   /// when no call reads occupied() (distance skipping without render.occupancy_light: make_frame).
   std::vector<uint8_t> moved_occupancy;
+  /// render.phase=mie: the table this frame reads (mie_table_of its settings); empty otherwise.
+  std::shared_ptr<const MiePhaseTable> mie;
+  /// Layer mode: the coverage map this frame reads (CV_COVERAGE_MAP_SIZE^2 RG texels); empty in box mode.
+  std::shared_ptr<const std::vector<float>> coverage;
 };
 
 /// motion_displacement (cloudgen/motion.glsl) at CV_MOTION_LUT_SIZE evenly spaced heights in

@@ -1,8 +1,10 @@
 // Multiple scattering by flux-limited diffusion (render.ms_volume): the grid, the solver and the
 // texels both renderers look up. src/cpu/ms_diffusion.cpp.
 #pragma once
+#include <memory>
 #include <vector>
 
+#include "cloudviewer/mie_table.h"
 #include "cloudviewer/scene.h"
 
 namespace cloudviewer {
@@ -46,8 +48,11 @@ MsDiffusionGrid ms_diffusion_grid(const ref::CloudParams& params);
 /// solve_ms_diffusion with the frame's albedo and its phase function's asymmetry.
 MsDiffusionGrid build_ms_source_cpu(const PreparedVolume& vol, const ref::CloudParams& params,
                                     const std::vector<double>* light_volume);
-MsDiffusionOptions ms_diffusion_options(const ref::CloudParams& params);
-/// The asymmetry parameter <cos theta> of the frame's phase function (green channel), integrated numerically.
-double phase_asymmetry(const ref::CloudParams& params);
+/// `mie`: render.phase=mie's table (FrameSetup::mie; empty: the computed one).
+MsDiffusionOptions ms_diffusion_options(const ref::CloudParams& params,
+                                        const std::shared_ptr<const MiePhaseTable>& mie = nullptr);
+/// The asymmetry parameter <cos theta> of the frame's phase function (green channel), integrated
+/// numerically; `mie` as for ms_diffusion_options.
+double phase_asymmetry(const ref::CloudParams& params, const std::shared_ptr<const MiePhaseTable>& mie = nullptr);
 
 }  // namespace cloudviewer

@@ -3,12 +3,15 @@
 // window's controls (controls.h).
 #pragma once
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "cloudgen/motion.h"
 #include "cloudviewer/atmosphere.h"
 #include "cloudviewer/constants.h"
+#include "cloudviewer/mie_table.h"
+#include "cloudviewer/param_table.h"
 
 namespace cloudviewer {
 
@@ -117,21 +120,15 @@ struct RenderSettings {
   NanoLookup nanovdb_lookup = NanoLookup::Atlas;  ///< GPU: brick atlas, leaf page table or PNanoVDB accessor
   // The atmosphere model (`--set atmosphere.KEY=VALUE`; its own table in atmosphere.h).
   AtmosphereSettings atmosphere;
+  /// render.phase=mie's table: a --mie-table file's (read_mie_table); empty: the computed one.
+  std::shared_ptr<const MiePhaseTable> mie_table;
 };
 
-enum class ParamKind { Bool, Int, Float, Enum, FloatOrAuto };
+/// The Mie table frames of settings `s` read: s.mie_table, or the computed one.
+std::shared_ptr<const MiePhaseTable> mie_table_of(const RenderSettings& s);
 
-struct ParamDef {
-  std::string key;    ///< after "render."
-  std::string type;   ///< bool, int, float, enum
-  std::string range;  ///< allowed values, as text
-  std::string doc;
-  std::function<void(RenderSettings&, const std::string&)> set;  ///< throws InputError
-  std::function<std::string(const RenderSettings&)> get;
-  ParamKind kind = ParamKind::Float;
-  double lo = 0, hi = 0;              ///< Int, Float, FloatOrAuto: the allowed range
-  std::vector<std::string> choices;   ///< Enum: the names, in code order
-};
+/// A render.* parameter (param_table.h).
+using ParamDef = Param<RenderSettings>;
 
 /// The parameter table, in documentation order.
 const std::vector<ParamDef>& render_params();

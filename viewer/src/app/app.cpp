@@ -289,7 +289,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   if (!dump_lut.empty()) return dump_atmosphere_lut(o, out);
   if (o.input.empty()) throw InputError("no INPUT given (try --help)");
   if (!fov_text.empty()) o.fov = parse_numbers("--fov", fov_text, 1, 1, 170)[0];
-  if (!o.mie_table.empty()) load_mie_table(o.mie_table);
+  if (!o.mie_table.empty()) o.settings.mie_table = read_mie_table(o.mie_table);
   if (!size_text.empty()) parse_size(size_text, o.width, o.height);
   else if (o.headless) o.width = 320, o.height = 180;
   else o.width = 1280, o.height = 720;

@@ -25,83 +25,50 @@ namespace cloudviewer {
 namespace {
 
 using param::fmt;
-double parse_number(const std::string& key, const std::string& v, double lo, double hi) {
-  return param::parse_number("atmosphere", key, v, lo, hi);
-}
 
-// Members by index: the table stores an index so one setter/getter pair serves every float key.
-double* real_member(AtmosphereSettings& s, int i) {
-  double* m[] = {&s.bottom_radius, &s.top_radius, &s.rayleigh_scattering.x, &s.rayleigh_scattering.y,
-                 &s.rayleigh_scattering.z, &s.rayleigh_height, &s.mie_extinction, &s.mie_scattering,
-                 &s.mie_height, &s.mie_g, &s.ozone_absorption.x, &s.ozone_absorption.y, &s.ozone_absorption.z,
-                 &s.ozone_bottom, &s.ozone_peak, &s.ozone_top, &s.ground_albedo, &s.sun_angular_radius_deg};
-  return m[i];
-}
-bool* bool_member(AtmosphereSettings& s, int i) {
-  bool* m[] = {&s.rayleigh, &s.mie, &s.ozone, &s.density_orders};
-  return m[i];
-}
+// A member, or a member of a member (a colour channel), as the row builders take it.
+#define CV_AT(field) [](auto& s) -> auto& { return s.field; }
 
-AtmosphereParamDef real(const std::string& key, int index, double lo, double hi, const std::string& doc) {
-  AtmosphereParamDef d;
-  d.key = key, d.type = "float", d.range = "[" + fmt(lo) + ", " + fmt(hi) + "]", d.doc = doc, d.lo = lo, d.hi = hi;
-  d.set = [=](AtmosphereSettings& s, const std::string& v) { *real_member(s, index) = parse_number(key, v, lo, hi); };
-  d.get = [=](const AtmosphereSettings& s) { return fmt(*real_member(const_cast<AtmosphereSettings&>(s), index)); };
-  return d;
+template <class At>
+AtmosphereParamDef real(const std::string& key, At at, double lo, double hi, const std::string& doc) {
+  return param::real<AtmosphereSettings>("atmosphere", key, at, lo, hi, doc);
 }
-AtmosphereParamDef boolean(const std::string& key, int index, const std::string& doc) {
-  AtmosphereParamDef d;
-  d.key = key, d.type = "bool", d.range = "true|false", d.doc = doc, d.lo = 0, d.hi = 1;
-  d.set = [=](AtmosphereSettings& s, const std::string& v) { *bool_member(s, index) = param::parse_bool("atmosphere", key, v); };
-  d.get = [=](const AtmosphereSettings& s) {
-    return std::string(*bool_member(const_cast<AtmosphereSettings&>(s), index) ? "true" : "false");
-  };
-  return d;
+template <class At>
+AtmosphereParamDef boolean(const std::string& key, At at, const std::string& doc) {
+  return param::boolean<AtmosphereSettings>("atmosphere", key, at, doc);
 }
-
-AtmosphereParamDef integer(const std::string& key, int AtmosphereSettings::*member, int lo, int hi,
-                           const std::string& doc) {
-  AtmosphereParamDef d;
-  d.key = key, d.type = "int", d.range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]", d.doc = doc;
-  d.lo = lo, d.hi = hi;
-  d.set = [=](AtmosphereSettings& s, const std::string& v) {
-    double x = parse_number(key, v, lo, hi);
-    if (x != std::floor(x))
-      throw InputError("atmosphere." + key + "=" + v + ": expected an integer in [" + std::to_string(lo) + ", " +
-                       std::to_string(hi) + "]");
-    s.*member = int(x);
-  };
-  d.get = [=](const AtmosphereSettings& s) { return std::to_string(s.*member); };
-  return d;
+template <class At>
+AtmosphereParamDef integer(const std::string& key, At at, int lo, int hi, const std::string& doc) {
+  return param::integer<AtmosphereSettings>("atmosphere", key, at, lo, hi, doc);
 }
 
 std::vector<AtmosphereParamDef> build() {
   std::vector<AtmosphereParamDef> t;
-  t.push_back(real("bottom_radius", 0, 1e3, 1e9, "planet radius (the ground), m"));
-  t.push_back(real("top_radius", 1, 1e3, 1e9, "radius of the top of the atmosphere, m (> bottom_radius)"));
-  t.push_back(boolean("rayleigh", 0, "Rayleigh scattering (air molecules) on"));
-  t.push_back(real("rayleigh_r", 2, 0, 1e-3, "Rayleigh scattering at sea level, 680 nm, 1/m"));
-  t.push_back(real("rayleigh_g", 3, 0, 1e-3, "Rayleigh scattering at sea level, 550 nm, 1/m"));
-  t.push_back(real("rayleigh_b", 4, 0, 1e-3, "Rayleigh scattering at sea level, 440 nm, 1/m"));
-  t.push_back(real("rayleigh_height", 5, 1, 1e6, "Rayleigh density scale height (density exp(-h/H)), m"));
-  t.push_back(boolean("mie", 1, "Mie scattering and absorption (aerosols) on"));
-  t.push_back(real("mie_extinction", 6, 0, 1e-2, "Mie extinction at sea level (all wavelengths), 1/m"));
-  t.push_back(real("mie_scattering", 7, 0, 1e-2, "Mie scattering at sea level (<= extinction), 1/m"));
-  t.push_back(real("mie_height", 8, 1, 1e6, "Mie density scale height, m"));
-  t.push_back(real("mie_g", 9, -0.999, 0.999, "Mie phase asymmetry (Cornette-Shanks)"));
-  t.push_back(boolean("ozone", 2, "ozone absorption on"));
-  t.push_back(real("ozone_r", 10, 0, 1e-3, "ozone absorption at the peak, 680 nm, 1/m"));
-  t.push_back(real("ozone_g", 11, 0, 1e-3, "ozone absorption at the peak, 550 nm, 1/m"));
-  t.push_back(real("ozone_b", 12, 0, 1e-3, "ozone absorption at the peak, 440 nm, 1/m"));
-  t.push_back(real("ozone_bottom", 13, 0, 1e6, "ozone tent profile: zero below this altitude, m"));
-  t.push_back(real("ozone_peak", 14, 0, 1e6, "ozone tent profile: density 1 at this altitude, m"));
-  t.push_back(real("ozone_top", 15, 0, 1e6, "ozone tent profile: zero above this altitude, m"));
-  t.push_back(real("ground_albedo", 16, 0, 1, "ground albedo of the planet beyond the ground mesh (seen through the air)"));
-  t.push_back(real("sun_angular_radius", 17, 0.01, 10, "sun angular radius, degrees (the disc, and the smooth set of the sunlight below the horizon)"));
-  t.push_back(integer("scattering_orders", &AtmosphereSettings::scattering_orders, 1, 64,
+  t.push_back(real("bottom_radius", CV_AT(bottom_radius), 1e3, 1e9, "planet radius (the ground), m"));
+  t.push_back(real("top_radius", CV_AT(top_radius), 1e3, 1e9, "radius of the top of the atmosphere, m (> bottom_radius)"));
+  t.push_back(boolean("rayleigh", CV_AT(rayleigh), "Rayleigh scattering (air molecules) on"));
+  t.push_back(real("rayleigh_r", CV_AT(rayleigh_scattering.x), 0, 1e-3, "Rayleigh scattering at sea level, 680 nm, 1/m"));
+  t.push_back(real("rayleigh_g", CV_AT(rayleigh_scattering.y), 0, 1e-3, "Rayleigh scattering at sea level, 550 nm, 1/m"));
+  t.push_back(real("rayleigh_b", CV_AT(rayleigh_scattering.z), 0, 1e-3, "Rayleigh scattering at sea level, 440 nm, 1/m"));
+  t.push_back(real("rayleigh_height", CV_AT(rayleigh_height), 1, 1e6, "Rayleigh density scale height (density exp(-h/H)), m"));
+  t.push_back(boolean("mie", CV_AT(mie), "Mie scattering and absorption (aerosols) on"));
+  t.push_back(real("mie_extinction", CV_AT(mie_extinction), 0, 1e-2, "Mie extinction at sea level (all wavelengths), 1/m"));
+  t.push_back(real("mie_scattering", CV_AT(mie_scattering), 0, 1e-2, "Mie scattering at sea level (<= extinction), 1/m"));
+  t.push_back(real("mie_height", CV_AT(mie_height), 1, 1e6, "Mie density scale height, m"));
+  t.push_back(real("mie_g", CV_AT(mie_g), -0.999, 0.999, "Mie phase asymmetry (Cornette-Shanks)"));
+  t.push_back(boolean("ozone", CV_AT(ozone), "ozone absorption on"));
+  t.push_back(real("ozone_r", CV_AT(ozone_absorption.x), 0, 1e-3, "ozone absorption at the peak, 680 nm, 1/m"));
+  t.push_back(real("ozone_g", CV_AT(ozone_absorption.y), 0, 1e-3, "ozone absorption at the peak, 550 nm, 1/m"));
+  t.push_back(real("ozone_b", CV_AT(ozone_absorption.z), 0, 1e-3, "ozone absorption at the peak, 440 nm, 1/m"));
+  t.push_back(real("ozone_bottom", CV_AT(ozone_bottom), 0, 1e6, "ozone tent profile: zero below this altitude, m"));
+  t.push_back(real("ozone_peak", CV_AT(ozone_peak), 0, 1e6, "ozone tent profile: density 1 at this altitude, m"));
+  t.push_back(real("ozone_top", CV_AT(ozone_top), 0, 1e6, "ozone tent profile: zero above this altitude, m"));
+  t.push_back(real("ground_albedo", CV_AT(ground_albedo), 0, 1, "ground albedo of the planet beyond the ground mesh (seen through the air)"));
+  t.push_back(real("sun_angular_radius", CV_AT(sun_angular_radius_deg), 0.01, 10, "sun angular radius, degrees (the disc, and the smooth set of the sunlight below the horizon)"));
+  t.push_back(integer("scattering_orders", CV_AT(scattering_orders), 1, 64,
                       "scattering orders of the sky: 1 = single scattering; N adds orders 2..N from the "
                       "multiple-scattering LUT (Hillaire 2020; large N tends to its infinite series L2 / (1 - f))"));
-  t.push_back(boolean("density_orders", 3,
+  t.push_back(boolean("density_orders", CV_AT(density_orders),
                       "with render.sky_lut=true: the orders 2..N by Bruneton's scattering-density passes (each order's "
                       "light from the last one's, with the true phase functions, in an 8x32x32x16 table; seconds of "
                       "precompute) instead of the Psi_ms series; the per-pixel march always uses Psi_ms"));
@@ -111,11 +78,13 @@ std::vector<AtmosphereParamDef> build() {
 }  // namespace
 
 bool AtmosphereSettings::operator==(const AtmosphereSettings& o) const {
-  for (int i = 0; i < 18; ++i)
-    if (*real_member(const_cast<AtmosphereSettings&>(*this), i) != *real_member(const_cast<AtmosphereSettings&>(o), i))
-      return false;
-  return rayleigh == o.rayleigh && mie == o.mie && ozone == o.ozone && scattering_orders == o.scattering_orders &&
-         density_orders == o.density_orders;
+  return bottom_radius == o.bottom_radius && top_radius == o.top_radius && rayleigh == o.rayleigh &&
+         rayleigh_scattering == o.rayleigh_scattering && rayleigh_height == o.rayleigh_height && mie == o.mie &&
+         mie_extinction == o.mie_extinction && mie_scattering == o.mie_scattering && mie_height == o.mie_height &&
+         mie_g == o.mie_g && ozone == o.ozone && ozone_absorption == o.ozone_absorption &&
+         ozone_bottom == o.ozone_bottom && ozone_peak == o.ozone_peak && ozone_top == o.ozone_top &&
+         ground_albedo == o.ground_albedo && sun_angular_radius_deg == o.sun_angular_radius_deg &&
+         scattering_orders == o.scattering_orders && density_orders == o.density_orders;
 }
 
 const std::vector<AtmosphereParamDef>& atmosphere_params() {

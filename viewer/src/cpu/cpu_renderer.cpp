@@ -44,7 +44,11 @@ struct CpuShader {
 
   const ref::CloudParams& u_cloud;
   const PreparedVolume& vol;
-  mutable const MiePhaseTable* mie = nullptr;  // fetched at the first Mie lookup (computing it takes seconds)
+  /// The frame's Mie table; without one, the computed table, fetched at the first Mie lookup
+  /// (computing it takes seconds).
+  mutable std::shared_ptr<const MiePhaseTable> mie;
+  /// The frame's coverage map (layer mode); without one, the procedural map.
+  mutable std::shared_ptr<const std::vector<float>> coverage;
   const AtmosphereLuts& lut;
   const ref::AtmosphereParams& u_atmo;
   const std::vector<dvec3>* motion = nullptr;  // FrameSetup::motion_table (2 rows)
@@ -53,7 +57,7 @@ struct CpuShader {
 
   CpuShader(const ref::CloudParams& p, const PreparedVolume& v, const AtmosphereLuts& t,
             const FrameSetup* frame = nullptr)
-      : u_cloud(p), vol(v), lut(t), u_atmo(t.params),
+      : u_cloud(p), vol(v), mie(frame ? frame->mie : nullptr), coverage(frame ? frame->coverage : nullptr), lut(t), u_atmo(t.params),
         motion(frame ? &frame->motion_table : nullptr), moved_occ(frame ? &frame->moved_occupancy : nullptr) {}
 
   vec3 transmittance_texel(ivec2 t) const { return lut.transmittance[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
@@ -210,11 +214,12 @@ struct CpuShader {
   }
   vec4 ms_volume_filtered(vec3 uvw) { return grid_trilinear(true, uvw); }
   vec3 mie_table_value(int i) const {
-    if (!mie) mie = &mie_phase_table();
+    if (!mie) mie = computed_mie_table();
     return vec3(mie->at(i, 0), mie->at(i, 1), mie->at(i, 2));
   }
   vec2 coverage_texel(ivec2 t) const {
-    const float* c = &coverage_map()[(size_t(t.y) * CV_COVERAGE_MAP_SIZE + size_t(t.x)) * 2];
+    if (!coverage) coverage = procedural_coverage_map();
+    const float* c = &(*coverage)[(size_t(t.y) * CV_COVERAGE_MAP_SIZE + size_t(t.x)) * 2];
     return vec2(c[0], c[1]);
   }
   ivec2 coverage_size() const { return ivec2(CV_COVERAGE_MAP_SIZE, CV_COVERAGE_MAP_SIZE); }
@@ -323,20 +328,22 @@ MsDiffusionGrid build_ms_source_cpu(const PreparedVolume& vol, const ref::CloudP
   return g;
 }
 
-double phase_asymmetry(const ref::CloudParams& params) {
+double phase_asymmetry(const ref::CloudParams& params, const std::shared_ptr<const MiePhaseTable>& mie) {
   // cloudgen's table angles: fine steps near the forward peak (the Mie table's is ~10^6 times its side value).
   const std::vector<double> angle = cloudgen::phase::table_angles();
   std::vector<double> value;
   PreparedVolume empty;
   CpuShader sh(params, empty, no_lut());
+  sh.mie = mie;
   for (double a : angle) value.push_back(sh.phase_function_rgb(std::cos(glm::radians(a))).y);
   return cloudgen::phase::asymmetry(angle, value);
 }
 
-MsDiffusionOptions ms_diffusion_options(const ref::CloudParams& params) {
+MsDiffusionOptions ms_diffusion_options(const ref::CloudParams& params,
+                                        const std::shared_ptr<const MiePhaseTable>& mie) {
   MsDiffusionOptions o;
   o.albedo = params.albedo;
-  o.asymmetry = std::clamp(phase_asymmetry(params), -0.99, 0.99);
+  o.asymmetry = std::clamp(phase_asymmetry(params, mie), -0.99, 0.99);
   return o;
 }
 
@@ -360,6 +367,7 @@ glm::dvec3 reference_phase_rgb(const RenderSettings& s, double cos_theta) {
   p.mie_table_size = CV_MIE_TABLE_SIZE;
   PreparedVolume empty;
   CpuShader sh(p, empty, no_lut());
+  if (s.phase == PhaseMode::Mie) sh.mie = mie_table_of(s);
   return sh.phase_function_rgb(cos_theta);
 }
 
@@ -492,7 +500,7 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame) {
   // The diffusion volume, when on: the same cells the ms_source pass computes, the same solver.
   std::vector<dvec4> ms_volume;
   if (P.ms_volume_on > 0.5) {
-    const MsDiffusionOptions o = ms_diffusion_options(P);
+    const MsDiffusionOptions o = ms_diffusion_options(P, frame.mie);
     ms_volume = ms_volume_texels(
         solve_ms_diffusion(build_ms_source_cpu(vol, P, P.light_volume_on > 0.5 ? &light_volume : nullptr), o),
         o.asymmetry);
@@ -572,12 +580,13 @@ struct PhaseSampler {
   std::vector<double> cdf;   // Mie: per bin, cumulative probability
   std::vector<double> mass;  // Mie: probability of each bin
   int bins = 0;
-  explicit PhaseSampler(const ref::CloudParams& p) : mode(int(p.phase_mode)), g(p.hg_g) {
+  PhaseSampler(const ref::CloudParams& p, const std::shared_ptr<const MiePhaseTable>& table)
+      : mode(int(p.phase_mode)), g(p.hg_g) {
     if (mode == CV_PHASE_TWO_LOBE_HG) lobe_g[0] = p.hg_g, lobe_g[1] = p.hg_g2, lobe_w = p.lobe_weight;
     if (mode == CV_PHASE_DRAINE_HG)
       lobe_g[0] = p.draine_g_hg, lobe_g[1] = p.draine_g_d, lobe_w = 1 - p.draine_w_d, draine_alpha = p.draine_alpha;
     if (mode != CV_PHASE_MIE) return;
-    const MiePhaseTable& mie = mie_phase_table();
+    const MiePhaseTable& mie = table ? *table : *computed_mie_table();
     bins = mie.size() - 1;
     double total = 0;
     for (int i = 0; i < bins; ++i) {
@@ -733,7 +742,7 @@ glm::dvec3 pathtrace_ray(const PreparedVolume& vol, const FrameSetup& frame, con
   Lookups look(frame);
   CpuShader sh(frame.params, vol, look.lut, &frame);
   sh.air = &look.air;
-  PhaseSampler phase(frame.params);
+  PhaseSampler phase(frame.params, frame.mie);
   PathTracer pt{sh, frame.params, phase, majorant_of(vol, frame.params), 4096};
   dvec3 sum(0.0);
   for (int i = 0; i < spp; ++i) {
@@ -748,7 +757,7 @@ FrameImages render_pathtrace(const PreparedVolume& vol, const FrameSetup& frame,
   ref::CloudParams P = frame.params;
   P.shadow_map_on = 0;  // the reference marches the ground's shadow per point (render.shadow_map is a speed knob)
   Lookups look(frame);
-  PhaseSampler phase(P);
+  PhaseSampler phase(P, frame.mie);
   const double majorant = majorant_of(vol, P);
   Buffer hdr(w, h);
   if (o.standard_error) *o.standard_error = Image(w, h);

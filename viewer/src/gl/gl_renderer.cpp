@@ -777,12 +777,12 @@ struct GlRenderer::Impl {
   // the CPU reference does), built and uploaded the first time a frame distorts the detail: it is
   // off by default, and building it costs a few milliseconds.
   // The Mie table (1D RGB float texture, fetched by index and interpolated by hand), uploaded for
-  // the first Mie frame (computing it takes seconds) and again after a --mie-table load.
-  int mie_generation = -1;
-  void ensure_mie_texture() {
-    const int generation = mie_table_generation();
-    if (tex_mie && generation == mie_generation) return;
-    const MiePhaseTable& mie = mie_phase_table();
+  // the first Mie frame (computing it takes seconds) and again when a frame brings another table.
+  uint64_t mie_uploaded = 0;
+  // The coverage map's texels, from the frame that last brought a map (layer mode).
+  const std::vector<float>* coverage_uploaded = nullptr;
+  void ensure_mie_texture(const MiePhaseTable& mie) {
+    if (tex_mie && mie.id == mie_uploaded) return;
     if (!tex_mie) {
       glCreateTextures(GL_TEXTURE_1D, 1, &tex_mie);
       glTextureStorage1D(tex_mie, 1, GL_RGB32F, CV_MIE_TABLE_SIZE);
@@ -790,7 +790,7 @@ struct GlRenderer::Impl {
       glTextureParameteri(tex_mie, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     }
     glTextureSubImage1D(tex_mie, 0, 0, GLsizei(mie.size()), GL_RGB, GL_FLOAT, mie.rgb.data());
-    mie_generation = generation;
+    mie_uploaded = mie.id;
   }
   void ensure_curl_texture() {
     if (tex_curl) return;
@@ -850,7 +850,7 @@ struct GlRenderer::Impl {
     std::vector<double> k = light_volume_key(f);
     k.insert(k.end(), {p.light_volume_on, p.ms_volume_dims.x, p.ms_volume_dims.y, p.ms_volume_dims.z, p.albedo,
                        p.phase_mode, p.hg_g, p.hg_g2, p.lobe_weight, p.draine_g_hg, p.draine_g_d, p.draine_alpha,
-                       p.draine_w_d, double(p.phase_mode == CV_PHASE_MIE ? mie_table_generation() : 0)});
+                       p.draine_w_d, double(p.phase_mode == CV_PHASE_MIE && f.mie ? f.mie->id : 0)});
     return k;
   }
   // After the ms_volume pass: its cells read back, the diffusion solved, the fluence uploaded.
@@ -861,7 +861,7 @@ struct GlRenderer::Impl {
     glGetTextureImage(t.tex[0][0], 0, GL_RG, GL_FLOAT, GLsizei(cells * sizeof(glm::vec2)), px.data());
     MsDiffusionGrid g = ms_diffusion_grid(f.params);  // its dims are the target's (ms_volume_dims)
     for (size_t i = 0; i < cells; ++i) g.sigma_t[i] = px[i].x, g.source[i] = px[i].y;
-    const MsDiffusionOptions o = ms_diffusion_options(f.params);
+    const MsDiffusionOptions o = ms_diffusion_options(f.params, f.mie);
     ms_last = solve_ms_diffusion(g, o);
     const std::vector<glm::dvec4> texels = ms_volume_texels(ms_last, o.asymmetry);
     std::vector<glm::vec4> data(texels.begin(), texels.end());
@@ -1111,11 +1111,9 @@ GlRenderer::GlRenderer(ShaderSource shaders) : impl_(std::make_unique<Impl>()) {
   glVertexArrayAttribBinding(m.vao_ground, 0, 0);
   m.queries.resize(m.passes.size() + 1);
   glCreateQueries(GL_TIMESTAMP, GLsizei(m.queries.size()), m.queries.data());
-  const std::vector<float>& cov = coverage_map();
-  const int n = CV_COVERAGE_MAP_SIZE;
+  const int n = CV_COVERAGE_MAP_SIZE;  // its texels come with the first layer frame (FrameSetup::coverage)
   glCreateTextures(GL_TEXTURE_2D, 1, &m.tex_coverage);
   glTextureStorage2D(m.tex_coverage, 1, GL_RG32F, n, n);
-  glTextureSubImage2D(m.tex_coverage, 0, 0, 0, n, n, GL_RG, GL_FLOAT, cov.data());
   glTextureParameteri(m.tex_coverage, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTextureParameteri(m.tex_coverage, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   glCreateTextures(GL_TEXTURE_2D, 1, &m.tex_motion);  // medium.glsl's motion table, 2 rows
@@ -1363,8 +1361,13 @@ void GlRenderer::Impl::bind_inputs(const FrameSetup& f, bool atlas, bool moved_o
   else glBindBufferRange(GL_SHADER_STORAGE_BUFFER, CV_BINDING_NANOVDB, buf_nano, 0, 32);
   glBindTextureUnit(CV_UNIT_NANOVDB_PAGES, atlas ? tex_atlas_index : tex_pages);
   nvdb_table = nvdb_pages_ok && f.settings.nanovdb_lookup == NanoLookup::Table ? 1 : 0;
-  if (int(f.params.phase_mode) == CV_PHASE_MIE) ensure_mie_texture();
+  if (int(f.params.phase_mode) == CV_PHASE_MIE) ensure_mie_texture(f.mie ? *f.mie : *computed_mie_table());
   glBindTextureUnit(CV_UNIT_MIE, tex_mie);
+  if (f.coverage && f.coverage.get() != coverage_uploaded) {
+    const int n = CV_COVERAGE_MAP_SIZE;
+    glTextureSubImage2D(tex_coverage, 0, 0, 0, n, n, GL_RG, GL_FLOAT, f.coverage->data());
+    coverage_uploaded = f.coverage.get();
+  }
   glBindTextureUnit(CV_UNIT_COVERAGE, tex_coverage);
   glBindTextureUnit(CV_UNIT_MOTION, tex_motion);
   if (f.params.curl_amplitude_m > 0) ensure_curl_texture();

@@ -546,6 +546,8 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   set_ground_and_sky(vol, s, cam, sun, g, f);
   set_motion(vol, s, g, distance, width, height, f);
   set_shadow_map(s, width, height, p);
+  if (int(p.phase_mode) == CV_PHASE_MIE) f.mie = mie_table_of(s);
+  if (g.layer) f.coverage = procedural_coverage_map();
   f.params = rounded_to_float(p);
   f.view_proj = view_projection(cam, width, height);
   f.inv_view_proj = glm::dmat4(glm::mat4(glm::inverse(f.view_proj)));

@@ -4,6 +4,7 @@
 // in log space (the forward peak is ~3e5 times the side value), so both are normalised under that
 // interpolant.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -18,9 +19,7 @@
 namespace cloudviewer {
 
 namespace {
-std::mutex g_mie_mutex;
-MiePhaseTable g_mie_override;
-int g_mie_generation = 0;
+std::atomic<uint64_t> g_next_mie_id{1};
 const double kWavelengthsNm[3] = {650.0, 550.0, 450.0};
 
 // 2 pi int p(theta) sin(theta) dtheta of the table over equal steps in theta = 0..pi, p between two
@@ -53,17 +52,12 @@ MiePhaseTable normalised(const std::vector<double> (&channels)[3], const std::st
     if (!(integral > 0) || !std::isfinite(integral)) throw InputError(what + ": the phase function integrates to 0");
     for (int i = 0; i < n; ++i) t.rgb[size_t(i) * 3 + size_t(c)] = float(channels[c][size_t(i)] / integral);
   }
+  t.id = g_next_mie_id++;
   return t;
 }
 }  // namespace
 
-void load_mie_table(const std::string& path) {
-  std::lock_guard<std::mutex> lock(g_mie_mutex);
-  ++g_mie_generation;
-  if (path.empty()) {
-    g_mie_override = MiePhaseTable{};
-    return;
-  }
+std::shared_ptr<const MiePhaseTable> read_mie_table(const std::string& path) {
   const std::string what = "--mie-table " + path;
   std::error_code ec;
   if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
@@ -127,19 +121,18 @@ void load_mie_table(const std::string& path) {
       t[c][size_t(i)] = value[c][j] + f * (value[c][j + 1] - value[c][j]);
     }
   }
-  g_mie_override = normalised(t, what);
+  return std::make_shared<const MiePhaseTable>(normalised(t, what));
 }
 
-int mie_table_generation() {
-  std::lock_guard<std::mutex> lock(g_mie_mutex);
-  return g_mie_generation;
+std::shared_ptr<const MiePhaseTable> mie_table_of(const RenderSettings& s) {
+  return s.mie_table ? s.mie_table : computed_mie_table();
 }
 
-const MiePhaseTable& mie_phase_table() {
-  static MiePhaseTable table;
-  std::lock_guard<std::mutex> lock(g_mie_mutex);
-  if (!g_mie_override.rgb.empty()) return g_mie_override;
-  if (!table.rgb.empty()) return table;
+std::shared_ptr<const MiePhaseTable> computed_mie_table() {
+  static std::mutex mutex;
+  static std::shared_ptr<const MiePhaseTable> table;
+  std::lock_guard<std::mutex> lock(mutex);
+  if (table) return table;
   // cloudgen's Mie solver over its default droplet population (effective radius 10 um, variance
   // 0.111) at the table's own angles, per channel.
   const int n = CV_MIE_TABLE_SIZE;
@@ -148,7 +141,7 @@ const MiePhaseTable& mie_phase_table() {
   std::vector<double> acc[3];
   for (int c = 0; c < 3; ++c)
     acc[c] = cloudgen::phase::mie_population(cloudgen::phase::DropletSizes{}, kWavelengthsNm[c], angles).value;
-  table = normalised(acc, "the computed Mie table");
+  table = std::make_shared<const MiePhaseTable>(normalised(acc, "the computed Mie table"));
   return table;
 }
 

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "cloudviewer/errors.h"
+#include "cloudviewer/param_table.h"
 
 namespace cloudviewer::param {
 
@@ -41,6 +42,38 @@ inline double parse_number(const std::string& prefix, const std::string& key, co
   if (used != v.size() || v.empty() || !std::isfinite(d) || d < lo || d > hi)
     bad(prefix, key, v, "a number in [" + fmt(lo) + ", " + fmt(hi) + "]");
   return d;
+}
+
+/// An accessor of a member: what the row builders below take, so a row can name a member of a
+/// member (`[](auto& s) -> auto& { return s.rayleigh_scattering.x; }`) as well as a member.
+template <class S, class T>
+auto member(T S::*m) {
+  return [m](auto& s) -> auto& { return s.*m; };
+}
+
+// The rows of a table with prefix PREFIX over settings S: each parses and checks its value, and
+// prints it back, the same way in every table.
+template <class S, class At>
+Param<S> boolean(const char* prefix, const std::string& key, At at, const std::string& doc) {
+  return {key, "bool", "true|false", doc, [=](S& s, const std::string& v) { at(s) = parse_bool(prefix, key, v); },
+          [=](const S& s) { return std::string(at(s) ? "true" : "false"); }, ParamKind::Bool, 0, 1, {}};
+}
+template <class S, class At>
+Param<S> real(const char* prefix, const std::string& key, At at, double lo, double hi, const std::string& doc) {
+  return {key, "float", "[" + fmt(lo) + ", " + fmt(hi) + "]", doc,
+          [=](S& s, const std::string& v) { at(s) = parse_number(prefix, key, v, lo, hi); },
+          [=](const S& s) { return fmt(at(s)); }, ParamKind::Float, lo, hi, {}};
+}
+template <class S, class At>
+Param<S> integer(const char* prefix, const std::string& key, At at, int lo, int hi, const std::string& doc) {
+  const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+  return {key, "int", range, doc,
+          [=](S& s, const std::string& v) {
+            const double d = parse_number(prefix, key, v, lo, hi);
+            if (d != std::floor(d)) bad(prefix, key, v, "an integer in " + range);
+            at(s) = int(d);
+          },
+          [=](const S& s) { return std::to_string(at(s)); }, ParamKind::Int, double(lo), double(hi), {}};
 }
 
 }  // namespace cloudviewer::param

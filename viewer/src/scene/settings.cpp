@@ -15,31 +15,18 @@ using param::fmt;
 [[noreturn]] void bad(const std::string& key, const std::string& value, const std::string& allowed) {
   param::bad("render", key, value, allowed);
 }
-bool parse_bool(const std::string& key, const std::string& v) { return param::parse_bool("render", key, v); }
 double parse_double(const std::string& key, const std::string& v, double lo, double hi) {
   return param::parse_number("render", key, v, lo, hi);
 }
 
-int parse_int(const std::string& key, const std::string& v, int lo, int hi) {
-  double d = parse_double(key, v, lo, hi);
-  if (d != std::floor(d)) bad(key, v, "an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-  return int(d);
-}
-
 ParamDef boolean(const std::string& key, bool RenderSettings::*m, const std::string& doc) {
-  return {key, "bool", "true|false", doc,
-          [key, m](RenderSettings& s, const std::string& v) { s.*m = parse_bool(key, v); },
-          [m](const RenderSettings& s) { return std::string(s.*m ? "true" : "false"); }, ParamKind::Bool, 0, 1, {}};
+  return param::boolean<RenderSettings>("render", key, param::member(m), doc);
 }
 ParamDef real(const std::string& key, double RenderSettings::*m, double lo, double hi, const std::string& doc) {
-  return {key, "float", "[" + fmt(lo) + ", " + fmt(hi) + "]", doc,
-          [key, m, lo, hi](RenderSettings& s, const std::string& v) { s.*m = parse_double(key, v, lo, hi); },
-          [m](const RenderSettings& s) { return fmt(s.*m); }, ParamKind::Float, lo, hi, {}};
+  return param::real<RenderSettings>("render", key, param::member(m), lo, hi, doc);
 }
 ParamDef integer(const std::string& key, int RenderSettings::*m, int lo, int hi, const std::string& doc) {
-  return {key, "int", "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]", doc,
-          [key, m, lo, hi](RenderSettings& s, const std::string& v) { s.*m = parse_int(key, v, lo, hi); },
-          [m](const RenderSettings& s) { return std::to_string(s.*m); }, ParamKind::Int, double(lo), double(hi), {}};
+  return param::integer<RenderSettings>("render", key, param::member(m), lo, hi, doc);
 }
 template <class E>
 ParamDef enumeration(const std::string& key, E RenderSettings::*m, std::vector<std::string> names,
