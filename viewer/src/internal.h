@@ -66,7 +66,9 @@ struct BenchPlan {
 /// Parses and checks a track (`where` names it in messages): every field typed and ranged,
 /// InputError naming the JSON pointer otherwise. Everything --bench does before OpenGL.
 BenchPlan parse_track(const std::string& text, const std::string& where, const Options& o, const PreparedVolume& vol);
-int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, std::ostream& err);
+class Session;
+/// --bench over the session's volume (opened; the bench starts its renderer).
+int run_bench(const Options& o, Session& session, std::ostream& out, std::ostream& err);
 int run_window(const Options& o, std::ostream& out, std::ostream& err);
 
 }  // namespace cloudviewer

@@ -19,6 +19,7 @@
 #include "cloudviewer/atmosphere_luts.h"
 #include "cloudviewer/errors.h"
 #include "scene/default_view.h"
+#include "app/session.h"
 #include "internal.h"
 
 namespace cloudviewer {
@@ -210,33 +211,33 @@ int dump_atmosphere_lut(const Options& o, std::ostream& out) {
   return 0;
 }
 
-int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  Options o;
-  std::string size_text, camera_text, sun_text, time_text;
+// The command line's words beside Options: texts parsed after CLI11, and the flags that print a
+// reference and exit.
+struct CliText {
+  std::string size, camera, fov, sun, time, dump_lut, lighting_json;
   bool help_params = false, params_md = false, keys_md = false, atmo_md = false, motion_md = false;
-  std::string dump_lut;
-  std::string lighting_json;
-  CLI::App app{"cloudviewer: real-time volumetric cloud ray marcher (OpenGL 4.5) with a CPU reference"};
+};
+
+void add_options(CLI::App& app, Options& o, CliText& t) {
   app.add_option("input", o.input,
                  "volume to view: .vdb, .nvdb, .raw/.json, .ktx2 (cloudgen), a preset .json, or synthetic:sphere|slab|blob|noise");
   app.add_flag("--headless", o.headless, "render without a display through EGL and exit");
-  app.add_option("--size", size_text, "image size WIDTHxHEIGHT (default 320x180 headless, 1280x720 window)");
-  app.add_option("--camera", camera_text, "camera EX,EY,EZ:TX,TY,TZ in world metres (default: frames the volume)");
-  std::string fov_text;
-  app.add_option("--fov", fov_text, "vertical field of view in degrees, 1..170 (default 60)");
-  app.add_option("--sun", sun_text, "sun AZIMUTH,ELEVATION in degrees (azimuth clockwise from -z; default behind the viewer)");
+  app.add_option("--size", t.size, "image size WIDTHxHEIGHT (default 320x180 headless, 1280x720 window)");
+  app.add_option("--camera", t.camera, "camera EX,EY,EZ:TX,TY,TZ in world metres (default: frames the volume)");
+  app.add_option("--fov", t.fov, "vertical field of view in degrees, 1..170 (default 60)");
+  app.add_option("--sun", t.sun, "sun AZIMUTH,ELEVATION in degrees (azimuth clockwise from -z; default behind the viewer)");
   app.add_option("--set", o.sets, "render.KEY=VALUE, atmosphere.KEY=VALUE or motion.KEY=VALUE (see --help-params)")->take_all();
-  app.add_option("--dump-lut", dump_lut, "write an atmosphere LUT read through the shaders' lookup to --out as CSV (no INPUT needed)")
+  app.add_option("--dump-lut", t.dump_lut, "write an atmosphere LUT read through the shaders' lookup to --out as CSV (no INPUT needed)")
       ->check(CLI::IsMember({"transmittance"}));
   app.add_flag("--stats", o.stats,
                "headless: also print every pass's GPU time and each atmosphere LUT's precompute time (GPU "
                "pass and CPU reference)");
-  app.add_option("--lighting-json", lighting_json,
+  app.add_option("--lighting-json", t.lighting_json,
                  "write the default view's lighting of INPUT as JSON (sun direction and colour at the volume's "
                  "centre, ambient from above and below; what `cloudgen blender` matches) and exit");
   app.add_option("--out", o.out, "headless output image (.png tone-mapped sRGB, .exr linear HDR); with --frames, a "
                  "printf pattern such as frame_%04d.png writes every frame, a plain name only the last");
-  app.add_option("--time", time_text, "the clouds' time in seconds: wind and flow map move them (motion.*, see "
+  app.add_option("--time", t.time, "the clouds' time in seconds: wind and flow map move them (motion.*, see "
                  "--help-params); 0 = the static volume");
   app.add_option("--frames", o.frames, "headless: render N frames, the time advancing 1/FPS per frame from --time "
                  "and the jitter pattern per frame")->check(CLI::Range(1, 1000000));
@@ -254,71 +255,57 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   app.add_option("--csv", o.csv, "benchmark per-frame results as CSV");
   app.add_option("--bench-reference", o.bench_reference, "also render each track frame with the CPU reference at this step count and report RMSE");
   app.add_option("--bench-repeat", o.bench_repeat, "timing rounds over all configurations and frames (best of N per frame)")->check(CLI::Range(1, 100));
-  app.add_flag("--help-params", help_params, "list every render.KEY with type, range, default and meaning");
-  app.add_flag("--params-markdown", params_md, "the render.KEY table as Markdown (docs/reference/viewer-params.md)");
-  app.add_flag("--atmosphere-markdown", atmo_md, "the atmosphere.KEY table as Markdown (docs/reference/viewer-params.md)");
-  app.add_flag("--motion-markdown", motion_md, "the motion.KEY table as Markdown (docs/reference/viewer-params.md)");
-  app.add_flag("--keys-markdown", keys_md, "the window's parameter key bindings as Markdown (docs/reference/viewer-params.md)");
-  std::vector<std::string> argv_rest(args.begin() + (args.empty() ? 0 : 1), args.end());
-  std::reverse(argv_rest.begin(), argv_rest.end());
-  try {
-    cloudgen::wrap_cli_help(app);
-    app.parse(argv_rest);
-  } catch (const CLI::ParseError& e) {
-    int code = app.exit(e, out, err);
-    return code == 0 ? 0 : 1;
-  }
-  if (help_params) {
-    out << params_help();
-    return 0;
-  }
-  if (atmo_md) {
-    out << atmosphere_params_markdown();
-    return 0;
-  }
-  if (motion_md) {
-    out << cloudgen::motion_markdown();
-    return 0;
-  }
-  if (params_md || keys_md) {
-    out << (params_md ? params_markdown() : key_help_markdown());
-    return 0;
-  }
-  for (const std::string& s : o.sets) apply_setting(o.settings, s);
-  validate_atmosphere(o.settings.atmosphere);
-  if (!dump_lut.empty()) return dump_atmosphere_lut(o, out);
-  if (o.input.empty()) throw InputError("no INPUT given (try --help)");
-  if (!fov_text.empty()) o.fov = parse_numbers("--fov", fov_text, 1, 1, 170)[0];
+  app.add_flag("--help-params", t.help_params, "list every render.KEY with type, range, default and meaning");
+  app.add_flag("--params-markdown", t.params_md, "the render.KEY table as Markdown (docs/reference/viewer-params.md)");
+  app.add_flag("--atmosphere-markdown", t.atmo_md, "the atmosphere.KEY table as Markdown (docs/reference/viewer-params.md)");
+  app.add_flag("--motion-markdown", t.motion_md, "the motion.KEY table as Markdown (docs/reference/viewer-params.md)");
+  app.add_flag("--keys-markdown", t.keys_md, "the window's parameter key bindings as Markdown (docs/reference/viewer-params.md)");
+}
+
+// --help-params and the Markdown tables: printed, and true, when one was asked for.
+bool print_reference(const CliText& t, std::ostream& out) {
+  if (t.help_params) out << params_help();
+  else if (t.atmo_md) out << atmosphere_params_markdown();
+  else if (t.motion_md) out << cloudgen::motion_markdown();
+  else if (t.params_md || t.keys_md) out << (t.params_md ? params_markdown() : key_help_markdown());
+  else return false;
+  return true;
+}
+
+// The view, size and time from the command line's texts (after --set), over the input's own view.
+void resolve_view_options(Options& o, const CliText& t, bool fov_given) {
+  if (!t.fov.empty()) o.fov = parse_numbers("--fov", t.fov, 1, 1, 170)[0];
   if (!o.mie_table.empty()) o.settings.mie_table = read_mie_table(o.mie_table);
-  if (!size_text.empty()) parse_size(size_text, o.width, o.height);
+  if (!t.size.empty()) parse_size(t.size, o.width, o.height);
   else if (o.headless) o.width = 320, o.height = 180;
   else o.width = 1280, o.height = 720;
-  if (!camera_text.empty()) o.camera = parse_camera(camera_text, o.fov);
-  if (!sun_text.empty()) {
-    auto v = parse_numbers("--sun", sun_text, 2, -360, 360);
-    if (v[1] < -90 || v[1] > 90) throw InputError("--sun " + sun_text + ": elevation must be in [-90, 90]");
+  if (!t.camera.empty()) o.camera = parse_camera(t.camera, o.fov);
+  if (!t.sun.empty()) {
+    auto v = parse_numbers("--sun", t.sun, 2, -360, 360);
+    if (v[1] < -90 || v[1] > 90) throw InputError("--sun " + t.sun + ": elevation must be in [-90, 90]");
     o.sun = Sun{v[0], v[1]};
   }
-  if (o.bench.empty()) apply_input_view(o, app.count("--fov") > 0);  // the input's preset/metadata view
-  if (!time_text.empty()) o.settings.time = parse_numbers("--time", time_text, 1, -1e7, 1e7)[0];
-  if (!lighting_json.empty()) return write_lighting_json(o, lighting_json, out);
-  if (!o.headless) return run_window(o, out, err);
+  if (o.bench.empty()) apply_input_view(o, fov_given);  // the input's preset/metadata view
+  if (!t.time.empty()) o.settings.time = parse_numbers("--time", t.time, 1, -1e7, 1e7)[0];
+}
+
+// Headless output: fail on a bad extension or pattern before rendering.
+void check_headless_out(const Options& o) {
   if (o.out.empty() && o.bench.empty()) throw InputError("--headless needs --out FILE or --bench TRACK.json");
-  if (!o.out.empty()) {  // fail on a bad extension or pattern before rendering
-    frame_file_name(o.out, 0);
-    std::string lower = o.out;
-    for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
-    if (!(lower.size() > 4 && (lower.substr(lower.size() - 4) == ".png" || lower.substr(lower.size() - 4) == ".exr")))
-      throw InputError("--out " + o.out + ": unknown image type (allowed: .png, .exr)");
-  }
-  auto t0 = std::chrono::steady_clock::now();
-  PreparedVolume vol = open_input(o.input, o.settings);
-  auto t1 = std::chrono::steady_clock::now();
+  if (o.out.empty()) return;
+  frame_file_name(o.out, 0);
+  std::string lower = o.out;
+  for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (!(lower.size() > 4 && (lower.substr(lower.size() - 4) == ".png" || lower.substr(lower.size() - 4) == ".exr")))
+    throw InputError("--out " + o.out + ": unknown image type (allowed: .png, .exr)");
+}
+
+void report_volume(const Options& o, const PreparedVolume& vol, double load_s, std::ostream& out) {
   out << "volume " << vol.dims[0] << "x" << vol.dims[1] << "x" << vol.dims[2] << " voxels of "
       << vol.voxel_size << " m" << (vol.tiles ? " (tiles in x,z)" : "") << ", occupancy "
       << vol.occ_dims[0] << "x" << vol.occ_dims[1] << "x" << vol.occ_dims[2] << " cells, "
       << std::lround(vol.occupied_fraction * 100) << "% occupied, loaded in "
-      << std::chrono::duration<double>(t1 - t0).count() << " s; " << (vol.nano ? "nanovdb" : "dense") << " volume, ";
+      << load_s << " s; " << (vol.nano ? "nanovdb" : "dense") << " volume, ";
   auto mib = [](uint64_t b) {  // one decimal; "<0.1" rather than 0 for a few KiB
     const double m = std::round(double(b) / (1 << 20) * 10) / 10.0;
     return b > 0 && m == 0 ? std::string("<0.1") : (std::ostringstream() << m).str();
@@ -329,88 +316,123 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
         << " MiB on the GPU and the brick atlas (its size follows when it is built)\n";
   else
     out << mib(volume_gpu_bytes(vol, o.settings.nanovdb_lookup)) << " MiB on the GPU\n";
-  if (!o.bench.empty()) return run_bench(o, vol, out, err);
+}
 
-  Camera cam = resolve_camera(o, vol, o.width, o.height);
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+FrameImages render_pathtrace_frame(const Options& o, const Session& session, const FrameSetup& frame, int frame_index,
+                                   Image& standard_error, const std::string& label, std::ostream& out,
+                                   std::ostream& err) {
+  auto r0 = std::chrono::steady_clock::now();
+  PathTraceOptions po;
+  po.spp = o.spp;
+  po.seed = uint32_t(frame_index + 1);
+  po.standard_error = &standard_error;
+  ProgressBar bar(err, "path tracing " + std::to_string(o.width) + "x" + std::to_string(o.height) + " at " +
+                           std::to_string(o.spp) + " spp");
+  po.progress = [&bar](int done, int rows) { bar.update(done, rows); };
+  FrameImages img = render_pathtrace(session.volume(), frame, po);
+  bar.finish();
+  out << label << "path tracer: " << o.width << "x" << o.height << " at " << o.spp << " spp in " << seconds_since(r0)
+      << " s\n";
+  return img;
+}
+
+// What the GL frame did (the renderer's counters before it: a rebuild shows as a new count).
+void report_gl_frame(const Options& o, const Session& session, const FrameSetup& frame, const GpuTimings& t,
+                     const RendererStats& before, const std::string& label, std::ostream& out) {
+  const GlRenderer& renderer = *session.renderer();
+  out << label << "gpu: " << o.width << "x" << o.height << " total " << t.total_ms << " ms (atmosphere LUTs "
+      << t.atmosphere_ms << ", ground " << t.ground_ms << ", clouds " << t.cloud_ms << ", post " << t.post_ms << ")\n";
+  if (renderer.stats().shadow_map_builds > before.shadow_map_builds)  // (the pass's timer reads a few ns even when it is skipped)
+    out << label << "gpu: ground shadow map " << frame.params.shadow_map_nx << "x" << frame.params.shadow_map_nz
+        << " texels of " << frame.params.shadow_map_texel_m << " m built in " << t.shadow_map_ms << " ms\n";
+  if (t.programs_linked > 0)  // the driver's compile is seconds on some GPUs: say where a first frame's time went
+    out << label << "gpu: compiled " << t.programs_linked << " GL programs in " << t.compile_ms
+        << " ms (wall clock, not in the frame's time; each new set of render.compiled_modes compiles once)\n";
+  if (t.atmosphere_ms > 0) {  // the LUTs were recomputed this frame: each one's time
+    out << label << "gpu: atmosphere LUTs:";
+    for (const auto& p : t.passes)
+      // (the orders loop's passes are timed inside atmosphere_orders)
+      if (p.first.rfind("atmosphere_", 0) == 0 && p.first.rfind("atmosphere_orders_", 0) != 0)
+        out << " " << p.first.substr(11) << " " << p.second << " ms";
+    out << "\n";
+  }
+  if (o.stats) {
+    out << label << "gpu passes:";
+    for (const auto& p : t.passes) out << " " << p.first << " " << p.second << " ms;";
+    out << "\n";
+  }
+  if (o.stats && frame.params.ms_volume_on > 0.5 && renderer.stats().ms_volume_builds > before.ms_volume_builds) {
+    const MsDiffusionResult ms = renderer.last_ms_solve();
+    out << label << "ms volume: " << frame.params.ms_volume_dims.x << "x" << frame.params.ms_volume_dims.y << "x"
+        << frame.params.ms_volume_dims.z << " cells, " << ms.iterations << " iterations (+" << ms.coarse_iterations
+        << " on coarser grids), " << (ms.converged ? "converged" : "NOT converged") << ", solved in "
+        << ms.seconds * 1e3 << " ms on the CPU (inside the ms_volume pass's time)\n";
+  }
+}
+
+// What the headless frames carry from one to the next.
+struct HeadlessState {
+  Image standard_error;  // --backend pathtrace: written beside each image
+  RendererStats stats;  // the diffusion volume's solves and the ground shadow map's builds so far (a new one is reported)
+};
+
+// One frame with --backend: the image, and its report on `out`. `frame_index`: render.frame.
+FrameImages render_frame(const Options& o, Session& session, const FrameSetup& frame, int frame_index,
+                         HeadlessState& state, const std::string& label, std::ostream& out, std::ostream& err) {
+  if (o.backend == "pathtrace")
+    return render_pathtrace_frame(o, session, frame, frame_index, state.standard_error, label, out, err);
+  GlRenderer* renderer = session.renderer();
+  if (!renderer) {
+    auto r0 = std::chrono::steady_clock::now();
+    FrameImages img = render_cpu(session.volume(), frame);
+    out << label << "cpu reference: " << o.width << "x" << o.height << " in " << seconds_since(r0) << " s\n";
+    return img;
+  }
+  GpuTimings t;
+  renderer->render(frame, &t);
+  FrameImages img = renderer->read_back();
+  report_gl_frame(o, session, frame, t, state.stats, label, out);
+  state.stats = renderer->stats();
+  return img;
+}
+
+void write_frame(const Options& o, int i, const FrameImages& img, const Image& standard_error, std::ostream& out,
+                 std::ostream& err) {
+  ImageStats st = image_stats(img.linear);
+  if (st.nonfinite) err << "warning: " << st.nonfinite << " non-finite values in the image\n";
+  std::string path = frame_file_name(o.out, i);
+  if (o.backend == "pathtrace") {  // beside it, both or neither: the per-pixel standard error, linear
+    const std::string se_path = path.substr(0, path.size() - 4) + ".stderr.exr";
+    write_images({{path, &img.display, &img.linear}, {se_path, &standard_error, &standard_error}});
+    out << "wrote " << path << "\nwrote " << se_path << " (per-pixel standard error of the linear radiance before bloom)\n";
+  } else {
+    write_image(path, img.display, img.linear);
+    out << "wrote " << path << "\n";
+  }
+}
+
+// --headless --out: --frames frames, each written (a pattern) or only the last (a plain name).
+int render_headless(const Options& o, Session& session, std::ostream& out, std::ostream& err) {
+  Camera cam = resolve_camera(o, session.volume(), o.width, o.height);
   Sun sun = resolve_sun(o, cam);
   const bool pattern = o.out.find('%') != std::string::npos;
-  std::unique_ptr<HeadlessContext> ctx;
-  std::unique_ptr<GlRenderer> renderer;
-  if (o.backend == "gl") {
-    ctx = std::make_unique<HeadlessContext>();
-    renderer = std::make_unique<GlRenderer>(ShaderSource(o.shader_dir));
-    renderer->set_volume(vol);
-    out << ctx->description() << "\n";
-  }
+  if (o.backend == "gl") out << session.start_headless(o.shader_dir) << "\n";
   RenderSettings s = o.settings;
-  Image standard_error;  // --backend pathtrace: written beside each image
-  int ms_builds = 0;  // the diffusion volume's solves so far (--stats reports a new one)
-  int shadow_builds = 0;  // the ground shadow map's builds so far (a new one is reported)
+  HeadlessState state;
   for (int i = 0; i < o.frames; ++i) {
     // Frame i: the clouds' time advances 1/fps per frame, the jitter (and temporal) pattern by one.
     s.time = o.settings.time + (o.fps > 0 ? double(i) / o.fps : 0.0);
     s.frame = o.settings.frame + i;
     // The eroded distance field follows the frame's erosion and motion (a sequence that starts
     // still and then moves needs the up flow's slack).
-    if (fit_distance_field(vol, s) && renderer) renderer->set_distance_field(vol);
-    FrameSetup frame = make_frame(vol, s, cam, sun, o.width, o.height);
-    FrameImages img;
-    auto r0 = std::chrono::steady_clock::now();
+    session.fit(s);
+    FrameSetup frame = session.frame(s, cam, sun, o.width, o.height);
     std::string label = o.frames > 1 ? "frame " + std::to_string(i) + " (t = " + format_number(s.time) + " s): " : "";
-    if (o.backend == "pathtrace") {
-      PathTraceOptions po;
-      po.spp = o.spp;
-      po.seed = uint32_t(s.frame + 1);
-      po.standard_error = &standard_error;
-      ProgressBar bar(err, "path tracing " + std::to_string(o.width) + "x" + std::to_string(o.height) + " at " +
-                               std::to_string(o.spp) + " spp");
-      po.progress = [&bar](int done, int rows) { bar.update(done, rows); };
-      img = render_pathtrace(vol, frame, po);
-      bar.finish();
-      auto r1 = std::chrono::steady_clock::now();
-      out << label << "path tracer: " << o.width << "x" << o.height << " at " << o.spp << " spp in "
-          << std::chrono::duration<double>(r1 - r0).count() << " s\n";
-    } else if (!renderer) {
-      img = render_cpu(vol, frame);
-      auto r1 = std::chrono::steady_clock::now();
-      out << label << "cpu reference: " << o.width << "x" << o.height << " in "
-          << std::chrono::duration<double>(r1 - r0).count() << " s\n";
-    } else {
-      GpuTimings t;
-      renderer->render(frame, &t);
-      img = renderer->read_back();
-      out << label << "gpu: " << o.width << "x" << o.height << " total " << t.total_ms << " ms (atmosphere LUTs "
-          << t.atmosphere_ms << ", ground " << t.ground_ms << ", clouds " << t.cloud_ms << ", post " << t.post_ms
-          << ")\n";
-      if (renderer->stats().shadow_map_builds > shadow_builds)  // (the pass's timer reads a few ns even when it is skipped)
-        out << label << "gpu: ground shadow map " << frame.params.shadow_map_nx << "x" << frame.params.shadow_map_nz
-            << " texels of " << frame.params.shadow_map_texel_m << " m built in " << t.shadow_map_ms << " ms\n";
-      if (t.programs_linked > 0)  // the driver's compile is seconds on some GPUs: say where a first frame's time went
-        out << label << "gpu: compiled " << t.programs_linked << " GL programs in " << t.compile_ms
-            << " ms (wall clock, not in the frame's time; each new set of render.compiled_modes compiles once)\n";
-      if (t.atmosphere_ms > 0) {  // the LUTs were recomputed this frame: each one's time
-        out << label << "gpu: atmosphere LUTs:";
-        for (const auto& p : t.passes)
-          // (the orders loop's passes are timed inside atmosphere_orders)
-          if (p.first.rfind("atmosphere_", 0) == 0 && p.first.rfind("atmosphere_orders_", 0) != 0)
-            out << " " << p.first.substr(11) << " " << p.second << " ms";
-        out << "\n";
-      }
-      if (o.stats) {
-        out << label << "gpu passes:";
-        for (const auto& p : t.passes) out << " " << p.first << " " << p.second << " ms;";
-        out << "\n";
-      }
-      if (o.stats && frame.params.ms_volume_on > 0.5 && renderer->stats().ms_volume_builds > ms_builds) {
-        const MsDiffusionResult ms = renderer->last_ms_solve();
-        out << label << "ms volume: " << frame.params.ms_volume_dims.x << "x" << frame.params.ms_volume_dims.y << "x"
-            << frame.params.ms_volume_dims.z << " cells, " << ms.iterations << " iterations (+" << ms.coarse_iterations
-            << " on coarser grids), " << (ms.converged ? "converged" : "NOT converged") << ", solved in "
-            << ms.seconds * 1e3 << " ms on the CPU (inside the ms_volume pass's time)\n";
-      }
-      ms_builds = renderer->stats().ms_volume_builds;
-      shadow_builds = renderer->stats().shadow_map_builds;
-    }
+    FrameImages img = render_frame(o, session, frame, s.frame, state, label, out, err);
     if (o.stats && i == 0 && s.sky == SkyMode::Precomputed) {
       const std::shared_ptr<const AtmosphereLuts> luts = shared_atmosphere_luts(s.atmosphere);
       out << "cpu: atmosphere LUTs: transmittance " << luts->seconds[0] * 1e3 << " ms, multiple_scattering "
@@ -418,20 +440,39 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
           << " ms (double; once per atmosphere, for the ambient light and the CPU reference)\n";
     }
     if (!pattern && i + 1 < o.frames) continue;  // a plain --out keeps only the last frame
-    ImageStats st = image_stats(img.linear);
-    if (st.nonfinite) err << "warning: " << st.nonfinite << " non-finite values in the image\n";
-    std::string path = frame_file_name(o.out, i);
-    if (o.backend == "pathtrace") {  // beside it, both or neither: the per-pixel standard error, linear
-      const std::string se_path = path.substr(0, path.size() - 4) + ".stderr.exr";
-      write_images({{path, &img.display, &img.linear}, {se_path, &standard_error, &standard_error}});
-      out << "wrote " << path << "\nwrote " << se_path
-          << " (per-pixel standard error of the linear radiance before bloom)\n";
-    } else {
-      write_image(path, img.display, img.linear);
-      out << "wrote " << path << "\n";
-    }
+    write_frame(o, i, img, state.standard_error, out, err);
   }
   return 0;
+}
+
+int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  Options o;
+  CliText text;
+  CLI::App app{"cloudviewer: real-time volumetric cloud ray marcher (OpenGL 4.5) with a CPU reference"};
+  add_options(app, o, text);
+  std::vector<std::string> argv_rest(args.begin() + (args.empty() ? 0 : 1), args.end());
+  std::reverse(argv_rest.begin(), argv_rest.end());
+  try {
+    cloudgen::wrap_cli_help(app);
+    app.parse(argv_rest);
+  } catch (const CLI::ParseError& e) {
+    int code = app.exit(e, out, err);
+    return code == 0 ? 0 : 1;
+  }
+  if (print_reference(text, out)) return 0;
+  for (const std::string& s : o.sets) apply_setting(o.settings, s);
+  validate_atmosphere(o.settings.atmosphere);
+  if (!text.dump_lut.empty()) return dump_atmosphere_lut(o, out);
+  if (o.input.empty()) throw InputError("no INPUT given (try --help)");
+  resolve_view_options(o, text, app.count("--fov") > 0);
+  if (!text.lighting_json.empty()) return write_lighting_json(o, text.lighting_json, out);
+  if (!o.headless) return run_window(o, out, err);
+  check_headless_out(o);
+  auto t0 = std::chrono::steady_clock::now();
+  Session session(o.input, o.settings);
+  report_volume(o, session.volume(), seconds_since(t0), out);
+  if (!o.bench.empty()) return run_bench(o, session, out, err);
+  return render_headless(o, session, out, err);
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 #include "cloudgen/json_checked.h"
 #include "cloudgen/schema.h"
 #include "cloudviewer/errors.h"
+#include "app/session.h"
 #include "internal.h"
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
 #include "cloudgen/output.h"
@@ -179,185 +180,197 @@ BenchPlan parse_track(const std::string& text, const std::string& where, const O
   return plan;
 }
 
-int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, std::ostream& err) {
-  std::string text;
-  {
-    std::ifstream in(o.bench, std::ios::binary);
-    if (!in) throw InputError("--bench " + o.bench + ": no such file");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    text = ss.str();
+namespace {
+
+std::string read_track_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError("--bench " + path + ": no such file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+Sun sun_of(const BenchPlan& plan, const TrackFrame& f) { return plan.has_sun ? plan.fixed_sun : default_sun(f.camera); }
+
+// CPU reference per frame (baseline settings at the reference step count); empty images without
+// --bench-reference.
+std::vector<Image> reference_images(const Options& o, const BenchPlan& plan, const PreparedVolume& vol,
+                                    std::ostream& out) {
+  std::vector<Image> reference(plan.frames.size());
+  if (o.bench_reference <= 0) return reference;
+  auto t0 = std::chrono::steady_clock::now();
+  for (size_t i = 0; i < plan.frames.size(); ++i) {
+    RenderSettings s = o.settings;
+    for (const std::string& a : plan.frames[i].sets) apply_setting(s, a);
+    s.steps = o.bench_reference;
+    s.light_volume = false;  // the reference marches toward the sun per sample, at full-length steps
+    s.density_step = 1;
+    const Camera& cam = plan.frames[i].camera;
+    reference[i] = render_cpu(vol, make_frame(vol, s, cam, sun_of(plan, plan.frames[i]), o.width, o.height)).display;
   }
-  BenchPlan plan = parse_track(text, o.bench, o, vol);
-  const std::vector<TrackFrame>& frames = plan.frames;
-  const std::vector<Config>& configs = plan.configs;
-  const std::vector<RenderSettings>& settings = plan.settings;
-  const Sun fixed_sun = plan.fixed_sun;
-  const bool has_sun = plan.has_sun;
+  out << "cpu reference (" << o.bench_reference << " steps) in "
+      << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s\n";
+  return reference;
+}
 
-  HeadlessContext ctx;
-  GlRenderer renderer{ShaderSource(o.shader_dir)};
-  renderer.set_volume(vol);
-  out << ctx.description() << "\n"
-      << "bench: " << frames.size() << " frames x " << configs.size() << " configurations at " << o.width << "x"
-      << o.height << ", best of " << o.bench_repeat << " interleaved rounds\n";
-
-  // CPU reference per frame (baseline settings at the reference step count).
-  std::vector<Image> reference(frames.size());
-  if (o.bench_reference > 0) {
-    auto t0 = std::chrono::steady_clock::now();
-    for (size_t i = 0; i < frames.size(); ++i) {
-      RenderSettings s = o.settings;
-      for (const std::string& a : frames[i].sets) apply_setting(s, a);
-      s.steps = o.bench_reference;
-      s.light_volume = false;  // the reference marches toward the sun per sample, at full-length steps
-      s.density_step = 1;
-      Sun sun = has_sun ? fixed_sun : default_sun(frames[i].camera);
-      reference[i] = render_cpu(vol, make_frame(vol, s, frames[i].camera, sun, o.width, o.height)).display;
+// Configurations may change the occupancy grid (cell, padding) and the distance field's rule
+// (erosion, motion: field_rule): one volume per grid and rule, the session's own where they match.
+class GridCache {
+ public:
+  GridCache(const PreparedVolume& vol, std::ostream& out) : vol_(vol), out_(out) {}
+  const PreparedVolume& operator()(const RenderSettings& s) {
+    const int cell = occupancy_cell_for(s.occupancy_cell, uint64_t(vol_.dims[0]), uint64_t(vol_.dims[1]), uint64_t(vol_.dims[2]));
+    const auto key = std::make_tuple(cell, s.occupancy_padding, field_rule(vol_, s));
+    if (key == std::make_tuple(vol_.occ_cell, vol_.occ_padding, vol_.dist_rule)) return vol_;
+    auto it = grids_.find(key);
+    if (it != grids_.end()) return it->second;
+    PreparedVolume copy = vol_;
+    copy.dist_rule = std::get<2>(key);  // the field build_occupancy builds with its grid
+    if (cell == vol_.occ_cell && s.occupancy_padding == vol_.occ_padding) {
+      build_distance_field(copy, copy.dist_rule);
+    } else {
+      build_occupancy(copy, cell, s.occupancy_padding);
+      out_ << "occupancy grid of " << cell << "-voxel cells, padding " << s.occupancy_padding << ": "
+           << std::lround(copy.occupied_fraction * 100) << "% occupied (base grid "
+           << std::lround(vol_.occupied_fraction * 100) << "%)\n";
     }
-    out << "cpu reference (" << o.bench_reference << " steps) in "
-        << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s\n";
+    return grids_.emplace(key, std::move(copy)).first->second;
   }
 
-  // The CSV is collected and written at the end through the toolkit's safe writer: an existing
-  // file is replaced only by a complete one, and a write error is reported (exit 2).
-  std::ostringstream csv;
-  const bool want_csv = !o.csv.empty();
-  if (want_csv) {
-    csv << "config,frame,view,gpu_total_ms,gpu_ground_ms,gpu_cloud_ms,gpu_post_ms,wall_ms,loop_trips_per_pixel,"
-           "rmse_vs_baseline,max_diff_vs_baseline,rmse_vs_reference,light_volume_ms,atmosphere_ms,compile_ms,shadow_map_ms\n";
-  }
-  struct Summary {
-    double total = 0, cloud = 0, wall = 0, rmse_base = 0, max_diff = 0, rmse_ref = 0, trips = 0;
-    std::map<std::string, std::pair<double, int>> by_view;
-  };
-  std::vector<Summary> sums(configs.size());
-  std::vector<std::string> views;
-  for (const TrackFrame& f : frames)
-    if (std::find(views.begin(), views.end(), f.view) == views.end()) views.push_back(f.view);
+ private:
+  const PreparedVolume& vol_;
+  std::ostream& out_;
+  std::map<std::tuple<int, int, FieldRule>, PreparedVolume> grids_;
+};
 
-  // Timing on a shared machine: every (configuration, frame) is rendered once per round, the rounds
-  // interleave all configurations in a rotating order, and the fastest round counts (best of N),
-  // so a burst of other work slows one sample of each, not one whole configuration.
-  const size_t nc = configs.size(), nfr = frames.size();
-  // Configurations may change the occupancy grid (cell, padding) and the distance field's rule
-  // (erosion, motion: field_rule): one volume per grid and rule.
-  std::map<std::tuple<int, int, FieldRule>, PreparedVolume> grids;
-  auto grid_for = [&](const RenderSettings& s) -> const PreparedVolume& {
-    const int cell = occupancy_cell_for(s.occupancy_cell, uint64_t(vol.dims[0]), uint64_t(vol.dims[1]), uint64_t(vol.dims[2]));
-    const auto key = std::make_tuple(cell, s.occupancy_padding, field_rule(vol, s));
-    if (key == std::make_tuple(vol.occ_cell, vol.occ_padding, vol.dist_rule)) return vol;
-    auto it = grids.find(key);
-    if (it == grids.end()) {
-      PreparedVolume copy = vol;
-      copy.dist_rule = std::get<2>(key);  // the field build_occupancy builds with its grid
-      if (cell == vol.occ_cell && s.occupancy_padding == vol.occ_padding) {
-        build_distance_field(copy, copy.dist_rule);
-      } else {
-        build_occupancy(copy, cell, s.occupancy_padding);
-        out << "occupancy grid of " << cell << "-voxel cells, padding " << s.occupancy_padding << ": "
-            << std::lround(copy.occupied_fraction * 100) << "% occupied (base grid "
-            << std::lround(vol.occupied_fraction * 100) << "%)\n";
-      }
-      it = grids.emplace(key, std::move(copy)).first;
-    }
-    return it->second;
-  };
-  const PreparedVolume* uploaded = &vol;
-  auto use_grid = [&](const RenderSettings& s) {
-    const PreparedVolume* g = &grid_for(s);
-    if (g != uploaded) renderer.set_volume(*g), uploaded = g;
-  };
-  std::vector<FrameSetup> setups(nc * nfr);
-  for (size_t c = 0; c < nc; ++c)
-    for (size_t i = 0; i < nfr; ++i) {
-      Sun sun = has_sun ? fixed_sun : default_sun(frames[i].camera);
-      RenderSettings s = settings[c];
-      for (const std::string& a : frames[i].sets) apply_setting(s, a);
-      setups[c * nfr + i] = make_frame(grid_for(s), s, frames[i].camera, sun, o.width, o.height);
-    }
-  std::vector<GpuTimings> best(nc * nfr);
-  std::vector<double> best_wall(nc * nfr, 1e300);
-  for (GpuTimings& t : best) t.total_ms = 1e300;
-  std::vector<Image> images(nc * nfr);
-  std::vector<double> trips(nc * nfr, 0.0);
-  std::vector<double> rebuild_ms(nc, 0.0), tables_ms(nc, 0.0), shadow_ms(nc, 0.0);
+// Per (configuration c, frame i), at c * frames + i: the best of the rounds and what the first
+// round saw; per configuration, the rebuilds timed apart and the GL programs it compiled.
+struct BenchResults {
+  BenchResults(size_t configs, size_t frames)
+      : nfr(frames), best(configs * frames), best_wall(configs * frames, 1e300), images(configs * frames),
+        trips(configs * frames, 0.0), rebuild_ms(configs, 0.0), tables_ms(configs, 0.0), shadow_ms(configs, 0.0),
+        compile_ms(configs, 0.0) {
+    for (GpuTimings& t : best) t.total_ms = 1e300;
+  }
   // GL programs compiled per configuration (its set of render.compiled_modes, and the trip
   // count's): wall clock, outside every frame time; seconds each on some GPUs' drivers.
-  std::vector<double> compile_ms(nc, 0.0);
+  void count_compile(size_t c, const GpuTimings& t) { compile_ms[c] += t.compile_ms, linked += t.programs_linked; }
+
+  size_t nfr;
+  std::vector<GpuTimings> best;
+  std::vector<double> best_wall;
+  std::vector<Image> images;
+  std::vector<double> trips;
+  std::vector<double> rebuild_ms, tables_ms, shadow_ms, compile_ms;
   int linked = 0;
-  auto count_compile = [&](size_t c, const GpuTimings& t) { compile_ms[c] += t.compile_ms, linked += t.programs_linked; };
+};
+
+// Work count, independent of machine load: primary-loop trips per pixel (output=iterations).
+double trips_per_pixel(const Options& o, GlRenderer& renderer, GridCache& grids, const FrameSetup& setup,
+                       size_t c, BenchResults& r) {
+  RenderSettings si = setup.settings;
+  si.output = OutputMode::Iterations;
+  GpuTimings ti;
+  renderer.render(make_frame(grids(si), si, setup.camera, setup.sun, o.width, o.height), &ti);
+  r.count_compile(c, ti);
+  const Image lin = renderer.read_back().linear;
+  double sum = 0;
+  for (size_t k = 0; k < lin.rgba.size(); k += 4) sum += lin.rgba[k];
+  return sum / double(o.width) / double(o.height);
+}
+
+// Frame k = (c, i) once in round `round`.
+void time_frame(const Options& o, GlRenderer& renderer, GridCache& grids, const FrameSetup& setup, size_t c,
+                size_t k, int round, BenchResults& r) {
+  GpuTimings t;
+  auto w0 = std::chrono::steady_clock::now();
+  renderer.render(setup, &t);
+  double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - w0).count();
+  r.count_compile(c, t);
+  // A light volume rebuilt because the previous configuration differed is not this frame's
+  // cost with a still sun: timed apart (the light_volume_ms column). So are the atmosphere's
+  // tables (its LUTs, and the air LUT, which the track's frames at other camera altitudes
+  // rebuild in turn): the atmosphere_ms column.
+  r.rebuild_ms[c] = std::max(r.rebuild_ms[c], t.light_volume_ms);
+  r.tables_ms[c] = std::max(r.tables_ms[c], t.atmosphere_ms);
+  r.shadow_ms[c] = std::max(r.shadow_ms[c], t.shadow_map_ms);
+  t.total_ms -= t.light_volume_ms + t.atmosphere_ms + t.shadow_map_ms;
+  if (t.total_ms < r.best[k].total_ms) r.best[k] = t;
+  r.best_wall[k] = std::min(r.best_wall[k], wall);
+  if (round == 0) {
+    r.images[k] = renderer.read_back().display;
+    r.trips[k] = trips_per_pixel(o, renderer, grids, setup, c, r);
+  }
+}
+
+// Timing on a shared machine: every (configuration, frame) is rendered once per round, the rounds
+// interleave all configurations in a rotating order, and the fastest round counts (best of N),
+// so a burst of other work slows one sample of each, not one whole configuration.
+void run_rounds(const Options& o, const BenchPlan& plan, const std::vector<FrameSetup>& setups, Session& session,
+                GridCache& grids, BenchResults& r, std::ostream& err) {
+  const size_t nc = plan.configs.size(), nfr = plan.frames.size();
+  GlRenderer& renderer = *session.renderer();
   for (size_t c = 0; c < nc; ++c) {  // warm-up: compile, first touch
-    use_grid(settings[c]);
+    session.show(grids(plan.settings[c]));
     GpuTimings t;
     renderer.render(setups[c * nfr], &t);
-    count_compile(c, t);
+    r.count_compile(c, t);
   }
-  for (int r = 0; r < o.bench_repeat; ++r) {
+  for (int round = 0; round < o.bench_repeat; ++round) {
     for (size_t cc = 0; cc < nc; ++cc) {
       // Rotate the order every round: the first configuration of a round measured ~10% slower
       // (same settings at two positions), so no configuration may always hold that place.
-      size_t c = (cc + size_t(r)) % nc;
-      use_grid(settings[c]);
-      for (size_t i = 0; i < nfr; ++i) {
-        GpuTimings t;
-        auto w0 = std::chrono::steady_clock::now();
-        renderer.render(setups[c * nfr + i], &t);
-        double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - w0).count();
-        count_compile(c, t);
-        // A light volume rebuilt because the previous configuration differed is not this frame's
-        // cost with a still sun: timed apart (the light_volume_ms column). So are the atmosphere's
-        // tables (its LUTs, and the air LUT, which the track's frames at other camera altitudes
-        // rebuild in turn): the atmosphere_ms column.
-        rebuild_ms[c] = std::max(rebuild_ms[c], t.light_volume_ms);
-        tables_ms[c] = std::max(tables_ms[c], t.atmosphere_ms);
-        shadow_ms[c] = std::max(shadow_ms[c], t.shadow_map_ms);
-        t.total_ms -= t.light_volume_ms + t.atmosphere_ms + t.shadow_map_ms;
-        if (t.total_ms < best[c * nfr + i].total_ms) best[c * nfr + i] = t;
-        best_wall[c * nfr + i] = std::min(best_wall[c * nfr + i], wall);
-        if (r == 0) {
-          images[c * nfr + i] = renderer.read_back().display;
-          // Work count, independent of machine load: primary-loop trips per pixel (output=iterations).
-          RenderSettings si = setups[c * nfr + i].settings;
-          si.output = OutputMode::Iterations;
-          GpuTimings ti;
-          renderer.render(make_frame(grid_for(si), si, setups[c * nfr + i].camera, setups[c * nfr + i].sun, o.width, o.height),
-                          &ti);
-          count_compile(c, ti);
-          const Image lin = renderer.read_back().linear;
-          double sum = 0;
-          for (size_t k = 0; k < lin.rgba.size(); k += 4) sum += lin.rgba[k];
-          trips[c * nfr + i] = sum / double(o.width) / double(o.height);
-        }
-      }
+      size_t c = (cc + size_t(round)) % nc;
+      session.show(grids(plan.settings[c]));
+      for (size_t i = 0; i < nfr; ++i) time_frame(o, renderer, grids, setups[c * nfr + i], c, c * nfr + i, round, r);
     }
-    err << "  round " << r + 1 << "/" << o.bench_repeat << " done\n";
+    err << "  round " << round + 1 << "/" << o.bench_repeat << " done\n";
   }
-  for (size_t c = 0; c < nc; ++c) {
+}
+
+struct Summary {
+  double total = 0, cloud = 0, wall = 0, rmse_base = 0, max_diff = 0, rmse_ref = 0, trips = 0;
+  std::map<std::string, std::pair<double, int>> by_view;
+};
+
+// The per-configuration sums over the track, and the CSV's rows (when `csv`).
+std::vector<Summary> summarize(const Options& o, const BenchPlan& plan, const BenchResults& r,
+                               const std::vector<Image>& reference, std::ostream* csv) {
+  const std::vector<TrackFrame>& frames = plan.frames;
+  const size_t nfr = frames.size();
+  std::vector<Summary> sums(plan.configs.size());
+  for (size_t c = 0; c < plan.configs.size(); ++c) {
     for (size_t i = 0; i < nfr; ++i) {
-      const GpuTimings& mean = best[c * nfr + i];
-      double wall = best_wall[c * nfr + i];
-      const Image& img = images[c * nfr + i];
-      const Image& base = images[i];
+      const GpuTimings& mean = r.best[c * nfr + i];
+      double wall = r.best_wall[c * nfr + i];
+      const Image& img = r.images[c * nfr + i];
+      const Image& base = r.images[i];
       double rb = rmse(img, base), md = max_abs_diff(img, base);
       double rr = o.bench_reference > 0 ? rmse(img, reference[i]) : std::nan("");
       Summary& s = sums[c];
       s.total += mean.total_ms, s.cloud += mean.cloud_ms, s.wall += wall, s.rmse_base += rb;
-      s.trips += trips[c * nfr + i];
+      s.trips += r.trips[c * nfr + i];
       s.max_diff = std::max(s.max_diff, md), s.rmse_ref += o.bench_reference > 0 ? rr : 0;
       s.by_view[frames[i].view].first += mean.total_ms;
       s.by_view[frames[i].view].second += 1;
-      if (want_csv) {
-        csv << '"' << configs[c].name << "\",\"" << frames[i].name << "\"," << frames[i].view << "," << mean.total_ms
-            << "," << mean.ground_ms << "," << mean.cloud_ms << "," << mean.post_ms << "," << wall << ","
-            << trips[c * nfr + i] << "," << rb << "," << md << ",";
-        if (o.bench_reference > 0) csv << rr;
-        csv << "," << rebuild_ms[c] << "," << tables_ms[c] << "," << compile_ms[c] << "," << shadow_ms[c] << "\n";
+      if (csv) {
+        *csv << '"' << plan.configs[c].name << "\",\"" << frames[i].name << "\"," << frames[i].view << ","
+             << mean.total_ms << "," << mean.ground_ms << "," << mean.cloud_ms << "," << mean.post_ms << "," << wall
+             << "," << r.trips[c * nfr + i] << "," << rb << "," << md << ",";
+        if (o.bench_reference > 0) *csv << rr;
+        *csv << "," << r.rebuild_ms[c] << "," << r.tables_ms[c] << "," << r.compile_ms[c] << "," << r.shadow_ms[c]
+             << "\n";
       }
     }
   }
+  return sums;
+}
 
-  double nf = double(frames.size());
+void print_table(const Options& o, const BenchPlan& plan, const std::vector<Summary>& sums, std::ostream& out) {
+  std::vector<std::string> views;
+  for (const TrackFrame& f : plan.frames)
+    if (std::find(views.begin(), views.end(), f.view) == views.end()) views.push_back(f.view);
+  double nf = double(plan.frames.size());
   out << "\n" << std::left << std::setw(18) << "configuration" << std::right << std::setw(11) << "frame ms"
       << std::setw(11) << "clouds ms";
   for (const std::string& v : views) out << std::setw(12) << (v.substr(0, 8) + " ms");
@@ -366,9 +379,9 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
   if (o.bench_reference > 0) out << std::setw(12) << "RMSE ref";
   out << "\n";
   out << std::fixed;
-  for (size_t c = 0; c < configs.size(); ++c) {
+  for (size_t c = 0; c < plan.configs.size(); ++c) {
     const Summary& s = sums[c];
-    out << std::left << std::setw(18) << configs[c].name << std::right << std::setprecision(2) << std::setw(11)
+    out << std::left << std::setw(18) << plan.configs[c].name << std::right << std::setprecision(2) << std::setw(11)
         << s.total / nf << std::setw(11) << s.cloud / nf;
     for (const std::string& v : views) {
       auto it = s.by_view.find(v);
@@ -388,21 +401,56 @@ int run_bench(const Options& o, const PreparedVolume& vol, std::ostream& out, st
          " max|diff| and RMSE base: display image against the baseline configuration, 0..1 scale";
   if (o.bench_reference > 0) out << ";\n RMSE ref: against the CPU reference at " << o.bench_reference << " steps";
   out << ")\n";
-  double compile_total = 0;
-  for (double ms : compile_ms) compile_total += ms;
-  out << "GL programs compiled: " << linked << " in " << std::fixed << std::setprecision(2) << compile_total / 1000
-      << " s of wall clock, not in the frame times (CSV: compile_ms per configuration)\n" << std::defaultfloat;
-  if (want_csv) {
-    const std::string csv_text = csv.str();
+}
+
+// The CSV is collected and written at the end through the toolkit's safe writer: an existing
+// file is replaced only by a complete one, and a write error is reported (exit 2).
+void write_csv(const std::string& path, const std::string& csv_text, std::ostream& out) {
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
-    cloudgen::atomic_write(o.csv, [&](const std::string& tmp) { cloudgen::write_file_bytes(tmp, csv_text.data(), csv_text.size()); });
+  cloudgen::atomic_write(path, [&](const std::string& tmp) { cloudgen::write_file_bytes(tmp, csv_text.data(), csv_text.size()); });
 #else
-    std::ofstream f(o.csv, std::ios::binary);
-    f << csv_text;
-    if (!f.flush()) throw IoError("--csv " + o.csv + ": write failed");
+  std::ofstream f(path, std::ios::binary);
+  f << csv_text;
+  if (!f.flush()) throw IoError("--csv " + path + ": write failed");
 #endif
-    out << "wrote " << o.csv << "\n";
+  out << "wrote " << path << "\n";
+}
+
+}  // namespace
+
+int run_bench(const Options& o, Session& session, std::ostream& out, std::ostream& err) {
+  const PreparedVolume& vol = session.volume();
+  const BenchPlan plan = parse_track(read_track_file(o.bench), o.bench, o, vol);
+  out << session.start_headless(o.shader_dir) << "\n"
+      << "bench: " << plan.frames.size() << " frames x " << plan.configs.size() << " configurations at " << o.width
+      << "x" << o.height << ", best of " << o.bench_repeat << " interleaved rounds\n";
+  const std::vector<Image> reference = reference_images(o, plan, vol, out);
+
+  std::ostringstream csv;
+  const bool want_csv = !o.csv.empty();
+  if (want_csv) {
+    csv << "config,frame,view,gpu_total_ms,gpu_ground_ms,gpu_cloud_ms,gpu_post_ms,wall_ms,loop_trips_per_pixel,"
+           "rmse_vs_baseline,max_diff_vs_baseline,rmse_vs_reference,light_volume_ms,atmosphere_ms,compile_ms,shadow_map_ms\n";
   }
+  const size_t nc = plan.configs.size(), nfr = plan.frames.size();
+  GridCache grids(vol, out);
+  std::vector<FrameSetup> setups(nc * nfr);
+  for (size_t c = 0; c < nc; ++c)
+    for (size_t i = 0; i < nfr; ++i) {
+      RenderSettings s = plan.settings[c];
+      for (const std::string& a : plan.frames[i].sets) apply_setting(s, a);
+      setups[c * nfr + i] = make_frame(grids(s), s, plan.frames[i].camera, sun_of(plan, plan.frames[i]), o.width, o.height);
+    }
+  BenchResults results(nc, nfr);
+  run_rounds(o, plan, setups, session, grids, results, err);
+  const std::vector<Summary> sums = summarize(o, plan, results, reference, want_csv ? &csv : nullptr);
+  print_table(o, plan, sums, out);
+  double compile_total = 0;
+  for (double ms : results.compile_ms) compile_total += ms;
+  out << "GL programs compiled: " << results.linked << " in " << std::fixed << std::setprecision(2)
+      << compile_total / 1000 << " s of wall clock, not in the frame times (CSV: compile_ms per configuration)\n"
+      << std::defaultfloat;
+  if (want_csv) write_csv(o.csv, csv.str(), out);
   return 0;
 }
 

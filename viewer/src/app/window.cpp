@@ -17,6 +17,7 @@
 #include "cloudviewer/errors.h"
 #include "internal.h"
 #include "app/panel.h"
+#include "app/session.h"
 
 namespace cloudviewer {
 namespace {
@@ -165,44 +166,40 @@ void on_scroll(GLFWwindow* w, double, double dy) {
   else v->distance *= std::pow(0.9, dy);
 }
 
-}  // namespace
-
-int run_window(const Options& o, std::ostream& out, std::ostream& err) {
-  // Load first, so a bad input fails before a window opens.
-  RenderSettings settings = o.settings;
-  RenderSettings good_settings = settings;  // the last settings a frame took (make_frame_or_keep)
-  PreparedVolume vol = open_input(o.input, settings);
-  if (!glfwInit()) throw GlError("GLFW could not initialise (no display? use --headless, or run under xvfb-run)");
-  struct Terminate {
-    ~Terminate() { glfwTerminate(); }
-  } terminate;
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
-  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
-  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
-  // EGL first: libepoxy then finds the context through EGL, and the same driver stack serves the
-  // headless path; GLX as the fallback.
-  glfwWindowHint(GLFW_CONTEXT_CREATION_API, GLFW_EGL_CONTEXT_API);
-  GLFWwindow* window = glfwCreateWindow(o.width, o.height, "cloudviewer", nullptr, nullptr);
-  if (!window) {
-    glfwWindowHint(GLFW_CONTEXT_CREATION_API, GLFW_NATIVE_CONTEXT_API);
-    window = glfwCreateWindow(o.width, o.height, "cloudviewer", nullptr, nullptr);
+// GLFW for the window's lifetime.
+struct Glfw {
+  Glfw() {
+    if (!glfwInit()) throw GlError("GLFW could not initialise (no display? use --headless, or run under xvfb-run)");
   }
-  if (!window) throw GlError("could not open an OpenGL 4.5 core window");
-  struct DestroyWindow {  // declared before the renderer, so it outlives it (GL objects need the context)
-    GLFWwindow* w;
-    ~DestroyWindow() { glfwDestroyWindow(w); }
-  } destroy_window{window};
-  glfwMakeContextCurrent(window);
-  glfwSwapInterval(0);
+  ~Glfw() { glfwTerminate(); }
+};
 
-  Camera start = resolve_camera(o, vol, o.width, o.height);
-  Sun sun = resolve_sun(o, start);
-  ViewState view;
-  view.settings = &settings;
-  view.sun = &sun;
-  view.start_time = settings.time;
-  view.out = &out;
+// An OpenGL 4.5 core window, EGL first: libepoxy then finds the context through EGL, and the same
+// driver stack serves the headless path; GLX as the fallback. Its context is made current.
+struct Window {
+  Window(int width, int height) {
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
+    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+    glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+    glfwWindowHint(GLFW_CONTEXT_CREATION_API, GLFW_EGL_CONTEXT_API);
+    w = glfwCreateWindow(width, height, "cloudviewer", nullptr, nullptr);
+    if (!w) {
+      glfwWindowHint(GLFW_CONTEXT_CREATION_API, GLFW_NATIVE_CONTEXT_API);
+      w = glfwCreateWindow(width, height, "cloudviewer", nullptr, nullptr);
+    }
+    if (!w) throw GlError("could not open an OpenGL 4.5 core window");
+    glfwMakeContextCurrent(w);
+    glfwSwapInterval(0);
+  }
+  ~Window() { glfwDestroyWindow(w); }
+  Window(const Window&) = delete;
+  Window& operator=(const Window&) = delete;
+  GLFWwindow* w = nullptr;
+};
+
+// The orbit camera around the start view's target, the fly camera at its eye.
+void start_view(ViewState& view, const Camera& start, const PreparedVolume& vol) {
   view.pivot = start.target;
   glm::dvec3 d = start.target - start.eye;
   view.distance = glm::length(d);
@@ -212,22 +209,132 @@ int run_window(const Options& o, std::ostream& out, std::ostream& err) {
   view.fly_yaw = view.yaw;
   view.fly_pitch = -view.pitch;
   view.move_speed = std::max(10.0, glm::length(vol.size()) * 0.1);
+}
+
+// Fly mode: W A S D, Q E move the eye (Shift: five times as fast).
+void fly(GLFWwindow* window, ViewState& view, double dt) {
+  glm::dvec3 f = forward_of(view.fly_yaw, view.fly_pitch);
+  glm::dvec3 r = glm::normalize(glm::cross(f, glm::dvec3(0, 1, 0)));
+  double sp = view.move_speed * dt * (glfwGetKey(window, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ? 5.0 : 1.0);
+  auto down = [&](int key) { return glfwGetKey(window, key) == GLFW_PRESS; };
+  if (down(GLFW_KEY_W)) view.fly_eye += f * sp;
+  if (down(GLFW_KEY_S)) view.fly_eye -= f * sp;
+  if (down(GLFW_KEY_D)) view.fly_eye += r * sp;
+  if (down(GLFW_KEY_A)) view.fly_eye -= r * sp;
+  if (down(GLFW_KEY_E)) view.fly_eye.y += sp;
+  if (down(GLFW_KEY_Q)) view.fly_eye.y -= sp;
+}
+
+// The shader directory and the input file, watched: a change (or R) reloads them; a failed reload
+// keeps what the window shows.
+class Watcher {
+ public:
+  explicit Watcher(const Options& o)
+      : o_(o), watch_input_(o.input.rfind("synthetic:", 0) != 0),
+        input_time_(watch_input_ ? mtime_of(o.input) : fs::file_time_type{}), shader_times_(dir_times(o.shader_dir)) {}
+  void poll(Session& session, const RenderSettings& settings, bool requested, std::ostream& out, std::ostream& err) {
+    auto st = dir_times(o_.shader_dir);
+    if (st != shader_times_ || (requested && !o_.shader_dir.empty())) {
+      shader_times_ = st;
+      try {
+        session.renderer()->reload_shaders();
+        out << "shaders reloaded from " << o_.shader_dir << "\n";
+      } catch (const ShaderError& e) {
+        err << e.what() << "(keeping the previous shaders)\n";
+      }
+    }
+    if (watch_input_ && (mtime_of(o_.input) != input_time_ || requested)) {
+      input_time_ = mtime_of(o_.input);
+      try {
+        session.reopen(o_.input, settings);
+        out << "reloaded " << o_.input << "\n";
+      } catch (const Error& e) {
+        err << "reload failed: " << e.what() << " (keeping the previous volume)\n";
+      }
+    }
+  }
+
+ private:
+  const Options& o_;
+  bool watch_input_;
+  fs::file_time_type input_time_;
+  std::map<std::string, fs::file_time_type> shader_times_;
+};
+
+std::string panel_hint(const ViewState& view, const RenderSettings& settings, const Sun& sun) {
+  std::ostringstream hint;
+  hint.precision(3);
+  hint << "sun " << sun.azimuth_deg << ", " << sun.elevation_deg << (view.fly ? " | fly" : " | orbit") << " | t "
+       << settings.time << " s" << (view.playing ? " x" + format_scale(view.time_scale) : " paused")
+       << " | H keys, F1 hide";
+  return hint.str();
+}
+
+std::string window_title(const ViewState& view, const RenderSettings& settings, const Sun& sun, double gpu_ms,
+                         double cloud_ms) {
+  std::ostringstream title;
+  title.precision(3);
+  title << "cloudviewer | GPU " << gpu_ms << " ms (clouds " << cloud_ms << ") | steps " << settings.steps
+        << " occ:" << (settings.occupancy ? "on" : "off") << " adapt:" << (settings.adaptive ? "on" : "off")
+        << " light:" << (settings.light_march ? "on" : "off") << " phase:" << value_of(settings, "phase")
+        << " g:" << settings.g << " tone:" << value_of(settings, "tonemap") << " bloom:" << settings.bloom
+        << " density:" << settings.density << " exp:" << settings.exposure << " | sun " << sun.azimuth_deg << ","
+        << sun.elevation_deg << (view.fly ? " | fly" : " | orbit") << " | t " << settings.time << " s"
+        << (view.playing ? "" : " paused");
+  return title.str();
+}
+
+// F12 (cloudviewer_N.png and .exr), or with --out the last automatic frame (then the window closes).
+void save_frame(const Options& o, GLFWwindow* window, GlRenderer& renderer, bool auto_save, int frame, int& saved,
+                const GpuTimings& t, std::ostream& out) {
+  FrameImages img = renderer.read_back();
+  std::string base = auto_save ? o.out : "cloudviewer_" + std::to_string(saved++);
+  if (auto_save) {
+    write_image(o.out, img.display, img.linear);
+    out << "wrote " << o.out << " (frame " << frame << ", GPU " << t.total_ms << " ms)\n";
+    glfwSetWindowShouldClose(window, 1);
+  } else {
+    write_png(base + ".png", img.display);
+    write_exr(base + ".exr", img.linear);
+    out << "saved " << base << ".png and " << base << ".exr\n";
+  }
+}
+
+}  // namespace
+
+int run_window(const Options& o, std::ostream& out, std::ostream& err) {
+  RenderSettings settings = o.settings;
+  RenderSettings good_settings = settings;  // the last settings a frame took (make_frame_or_keep)
+  Session session(o.input, settings);  // load first, so a bad input fails before a window opens
+  Glfw glfw;
+  Window win(o.width, o.height);
+  GLFWwindow* window = win.w;
+  struct StopRenderer {  // the renderer goes before the window (GL objects need the context)
+    Session& s;
+    ~StopRenderer() { s.stop_renderer(); }
+  } stop_renderer{session};
+
+  Camera start = resolve_camera(o, session.volume(), o.width, o.height);
+  Sun sun = resolve_sun(o, start);
+  ViewState view;
+  view.settings = &settings;
+  view.sun = &sun;
+  view.start_time = settings.time;
+  view.out = &out;
+  start_view(view, start, session.volume());
   glfwSetWindowUserPointer(window, &view);
   glfwSetKeyCallback(window, on_key);
   glfwSetMouseButtonCallback(window, on_button);
   glfwSetCursorPosCallback(window, on_cursor);
   glfwSetScrollCallback(window, on_scroll);
 
-  GlRenderer renderer{ShaderSource(o.shader_dir)};
-  renderer.set_volume(vol);
+  GlRenderer& renderer = session.start_renderer(o.shader_dir);
   // After our callbacks: ImGui chains to them.
   Panel panel(window);
   view.panel = &panel;
   out << "window: " << renderer.renderer_string() << " (press H for keys, F1 for the panel)\n";
 
-  bool watch_input = o.input.rfind("synthetic:", 0) != 0;
-  auto input_time = watch_input ? mtime_of(o.input) : fs::file_time_type{};
-  auto shader_times = dir_times(o.shader_dir);
+  Watcher watcher(o);
   auto last_poll = std::chrono::steady_clock::now();
   auto last_frame = last_poll;
   int frame = 0, saved = 0;
@@ -239,40 +346,11 @@ int run_window(const Options& o, std::ostream& out, std::ostream& err) {
     double dt = std::chrono::duration<double>(now - last_frame).count();
     last_frame = now;
     if (view.playing && auto_frames == 0) settings.time += dt * view.time_scale;
-    if (view.fly) {
-      glm::dvec3 f = forward_of(view.fly_yaw, view.fly_pitch);
-      glm::dvec3 r = glm::normalize(glm::cross(f, glm::dvec3(0, 1, 0)));
-      double sp = view.move_speed * dt * (glfwGetKey(window, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ? 5.0 : 1.0);
-      if (glfwGetKey(window, GLFW_KEY_W) == GLFW_PRESS) view.fly_eye += f * sp;
-      if (glfwGetKey(window, GLFW_KEY_S) == GLFW_PRESS) view.fly_eye -= f * sp;
-      if (glfwGetKey(window, GLFW_KEY_D) == GLFW_PRESS) view.fly_eye += r * sp;
-      if (glfwGetKey(window, GLFW_KEY_A) == GLFW_PRESS) view.fly_eye -= r * sp;
-      if (glfwGetKey(window, GLFW_KEY_E) == GLFW_PRESS) view.fly_eye.y += sp;
-      if (glfwGetKey(window, GLFW_KEY_Q) == GLFW_PRESS) view.fly_eye.y -= sp;
-    }
+    if (view.fly) fly(window, view, dt);
     // Poll the preset and the shader directory twice a second.
     if (now - last_poll > std::chrono::milliseconds(500) || view.reload_requested) {
       last_poll = now;
-      auto st = dir_times(o.shader_dir);
-      if (st != shader_times || (view.reload_requested && !o.shader_dir.empty())) {
-        shader_times = st;
-        try {
-          renderer.reload_shaders();
-          out << "shaders reloaded from " << o.shader_dir << "\n";
-        } catch (const ShaderError& e) {
-          err << e.what() << "(keeping the previous shaders)\n";
-        }
-      }
-      if (watch_input && (mtime_of(o.input) != input_time || view.reload_requested)) {
-        input_time = mtime_of(o.input);
-        try {
-          vol = open_input(o.input, settings);
-          renderer.set_volume(vol);
-          out << "reloaded " << o.input << "\n";
-        } catch (const Error& e) {
-          err << "reload failed: " << e.what() << " (keeping the previous volume)\n";
-        }
-      }
+      watcher.poll(session, settings, view.reload_requested, out, err);
       view.reload_requested = false;
     }
     int fw = 0, fh = 0;
@@ -282,24 +360,16 @@ int run_window(const Options& o, std::ostream& out, std::ostream& err) {
     Camera cam = camera_of(view, o.fov);
     // The panel and the keys change the erosion and the motion: the field follows (a few ms on the
     // thesis volume; exact meanwhile, since make_frame never trusts a field that does not cover).
-    if (fit_distance_field(vol, settings)) renderer.set_distance_field(vol);
+    session.fit(settings);
     // A panel choice this volume refuses goes back, with the reason, instead of ending the window.
     std::string refused;
-    FrameSetup fs = make_frame_or_keep(vol, settings, good_settings, cam, sun, fw, fh, refused);
+    FrameSetup fs = session.frame_or_keep(settings, good_settings, cam, sun, fw, fh, refused);
     if (!refused.empty()) err << refused << " (the panel's choice is undone)\n";
     GpuTimings t;
     renderer.render(fs, &t);
     renderer.present(fw, fh);
-    {
-      std::ostringstream hint;
-      hint.precision(3);
-      hint << "sun " << sun.azimuth_deg << ", " << sun.elevation_deg << (view.fly ? " | fly" : " | orbit")
-           << " | t " << settings.time << " s" << (view.playing ? " x" + format_scale(view.time_scale) : " paused")
-           << " | H keys, F1 hide";
-      panel.draw(settings, t, hint.str());
-    }
-    bool auto_save = auto_frames > 0 && frame + 1 == auto_frames;
-    if (auto_save) {  // what the window shows, read from its back buffer before the swap
+    panel.draw(settings, t, panel_hint(view, settings, sun));
+    if (auto_frames > 0 && frame + 1 == auto_frames) {  // what the window shows, read from its back buffer before the swap
       std::string shot = fs::path(o.out).replace_extension("").string() + ".window.png";
       write_png(shot, renderer.read_window(fw, fh));
       out << "wrote " << shot << " (window back buffer " << fw << "x" << fh << ")\n";
@@ -308,32 +378,11 @@ int run_window(const Options& o, std::ostream& out, std::ostream& err) {
     gpu_ms_avg = frame == 0 ? t.total_ms : gpu_ms_avg * 0.9 + t.total_ms * 0.1;
     cloud_ms_avg = frame == 0 ? t.cloud_ms : cloud_ms_avg * 0.9 + t.cloud_ms * 0.1;
     ++frame;
-    if (frame % 4 == 1) {
-      std::ostringstream title;
-      title.precision(3);
-      title << "cloudviewer | GPU " << gpu_ms_avg << " ms (clouds " << cloud_ms_avg << ") | steps " << settings.steps
-            << " occ:" << (settings.occupancy ? "on" : "off") << " adapt:" << (settings.adaptive ? "on" : "off")
-            << " light:" << (settings.light_march ? "on" : "off") << " phase:" << value_of(settings, "phase")
-            << " g:" << settings.g << " tone:" << value_of(settings, "tonemap") << " bloom:" << settings.bloom
-            << " density:" << settings.density << " exp:" << settings.exposure << " | sun " << sun.azimuth_deg
-            << "," << sun.elevation_deg << (view.fly ? " | fly" : " | orbit") << " | t " << settings.time << " s"
-            << (view.playing ? "" : " paused");
-      glfwSetWindowTitle(window, title.str().c_str());
-    }
-    auto_save = auto_frames > 0 && frame == auto_frames;
+    if (frame % 4 == 1) glfwSetWindowTitle(window, window_title(view, settings, sun, gpu_ms_avg, cloud_ms_avg).c_str());
+    const bool auto_save = auto_frames > 0 && frame == auto_frames;
     if (view.save_requested || auto_save) {
       view.save_requested = false;
-      FrameImages img = renderer.read_back();
-      std::string base = auto_save ? o.out : "cloudviewer_" + std::to_string(saved++);
-      if (auto_save) {
-        write_image(o.out, img.display, img.linear);
-        out << "wrote " << o.out << " (frame " << frame << ", GPU " << t.total_ms << " ms)\n";
-        glfwSetWindowShouldClose(window, 1);
-      } else {
-        write_png(base + ".png", img.display);
-        write_exr(base + ".exr", img.linear);
-        out << "saved " << base << ".png and " << base << ".exr\n";
-      }
+      save_frame(o, window, renderer, auto_save, frame, saved, t, out);
     }
   }
   return 0;

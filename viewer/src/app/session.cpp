@@ -1,0 +1,55 @@
+#include "app/session.h"
+
+#include <utility>
+
+#include "cloudviewer/distance_field.h"
+#include "cloudviewer/input.h"
+
+namespace cloudviewer {
+
+Session::Session(const std::string& input, const RenderSettings& s) : vol_(open_input(input, s)) {}
+
+Session::~Session() { stop_renderer(); }
+
+const std::string& Session::start_headless(const std::string& shader_dir) {
+  context_ = std::make_unique<HeadlessContext>();
+  start_renderer(shader_dir);
+  return context_->description();
+}
+
+GlRenderer& Session::start_renderer(const std::string& shader_dir) {
+  renderer_ = std::make_unique<GlRenderer>(ShaderSource(shader_dir));
+  renderer_->set_volume(vol_);
+  uploaded_ = &vol_;
+  return *renderer_;
+}
+
+void Session::stop_renderer() {
+  renderer_.reset();
+  context_.reset();
+  uploaded_ = nullptr;
+}
+
+void Session::reopen(const std::string& input, const RenderSettings& s) {
+  vol_ = open_input(input, s);
+  if (renderer_) renderer_->set_volume(vol_), uploaded_ = &vol_;
+}
+
+void Session::show(const PreparedVolume& v) {
+  if (renderer_ && &v != uploaded_) renderer_->set_volume(v), uploaded_ = &v;
+}
+
+void Session::fit(const RenderSettings& s) {
+  if (fit_distance_field(vol_, s) && renderer_) renderer_->set_distance_field(vol_);
+}
+
+FrameSetup Session::frame(const RenderSettings& s, const Camera& cam, const Sun& sun, int width, int height) const {
+  return make_frame(vol_, s, cam, sun, width, height);
+}
+
+FrameSetup Session::frame_or_keep(RenderSettings& s, RenderSettings& good, const Camera& cam, const Sun& sun,
+                                  int width, int height, std::string& refused) const {
+  return make_frame_or_keep(vol_, s, good, cam, sun, width, height, refused);
+}
+
+}  // namespace cloudviewer

@@ -1,0 +1,55 @@
+// One viewing session, the steps the command line, the window and the bench share: open the input,
+// fit the distance field to a frame's settings, upload to the GL renderer, make the frame.
+#pragma once
+#include <memory>
+#include <string>
+
+#include "cloudviewer/frame.h"
+#include "cloudviewer/gl_renderer.h"
+#include "cloudviewer/headless_context.h"
+#include "cloudviewer/prepared_volume.h"
+#include "cloudviewer/settings.h"
+
+namespace cloudviewer {
+
+class Session {
+ public:
+  /// Opens `input` (open_input): a bad input fails here, before any OpenGL.
+  Session(const std::string& input, const RenderSettings& s);
+  ~Session();
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+
+  const PreparedVolume& volume() const { return vol_; }
+
+  /// Headless: an EGL context of its own, then start_renderer. Returns the context's description.
+  const std::string& start_headless(const std::string& shader_dir);
+  /// The GL renderer in the current context (headless, or a window's), with the volume uploaded.
+  GlRenderer& start_renderer(const std::string& shader_dir);
+  /// Drops the renderer (and the headless context): a window ends it before its context goes.
+  void stop_renderer();
+  /// The renderer, or null before start_renderer (the CPU backends).
+  GlRenderer* renderer() const { return renderer_.get(); }
+
+  /// Opens the input again and uploads it (the window's reload); the old volume stays on failure.
+  void reopen(const std::string& input, const RenderSettings& s);
+  /// Uploads `v` (the volume, or a copy of it at other occupancy and field settings) unless it is
+  /// the one the renderer holds.
+  void show(const PreparedVolume& v);
+  /// Fits the volume's distance field to the frame's erosion and motion (fit_distance_field); the
+  /// renderer gets the new field.
+  void fit(const RenderSettings& s);
+  /// The frame's parameter block (make_frame) over the volume.
+  FrameSetup frame(const RenderSettings& s, const Camera& cam, const Sun& sun, int width, int height) const;
+  /// make_frame_or_keep over the volume: a choice the volume refuses goes back to `good`.
+  FrameSetup frame_or_keep(RenderSettings& s, RenderSettings& good, const Camera& cam, const Sun& sun, int width,
+                           int height, std::string& refused) const;
+
+ private:
+  PreparedVolume vol_;
+  std::unique_ptr<HeadlessContext> context_;  // declared first: it outlives the renderer
+  std::unique_ptr<GlRenderer> renderer_;
+  const PreparedVolume* uploaded_ = nullptr;  // what the renderer holds
+};
+
+}  // namespace cloudviewer
