@@ -92,45 +92,59 @@ std::string tail_of(const std::string& path, size_t lines) {
 /// y up (cloudgen, the viewer) -> Blender's z up: (x, y, z) -> (x, -z, y).
 nlohmann::json zup(const Vec3& v) { return {v[0], -v[2], v[1]}; }
 
-void run_blender(const BlenderArgs& a) {
+using nlohmann::json;
+
+/// --size WIDTHxHEIGHT, each 1..16384.
+std::array<int, 2> parse_size(const std::string& size) {
+  int width = 0, height = 0;
+  char x = 0;
+  std::istringstream ss(size);
+  if (!(ss >> width >> x >> height) || x != 'x' || !ss.eof() || width < 1 || height < 1 || width > 16384 ||
+      height > 16384)
+    throw InputError("--size " + size + ": expected WIDTHxHEIGHT, each 1..16384");
+  return {width, height};
+}
+
+/// Checks the options that need no file; returns the render size.
+std::array<int, 2> check_args(const BlenderArgs& a) {
   if (a.output.empty()) throw InputError("-o/--output: give the .blend file to write");
   if (fs::path(a.output).extension() != ".blend")
     throw InputError("-o " + a.output + ": the scene file must end in .blend");
-  int width = 0, height = 0;
-  {
-    char x = 0;
-    std::istringstream ss(a.size);
-    if (!(ss >> width >> x >> height) || x != 'x' || !ss.eof() || width < 1 || height < 1 || width > 16384 ||
-        height > 16384)
-      throw InputError("--size " + a.size + ": expected WIDTHxHEIGHT, each 1..16384");
-  }
+  const std::array<int, 2> size = parse_size(a.size);
   if (a.samples < 1 || a.samples > 65536) throw InputError("--samples " + std::to_string(a.samples) + ": allowed 1..65536");
   if (a.volume_bounces < 0 || a.volume_bounces > 1024)
     throw InputError("--volume-bounces " + std::to_string(a.volume_bounces) + ": allowed 0..1024");
   if (!a.render.empty() && fs::path(a.render).extension() != ".png")
     throw InputError("--render " + a.render + ": the image must end in .png");
-  const std::string blender = find_blender();
-  const std::string script = script_path();
-  if (!fs::exists(script)) throw IoError(script + ": the Blender scene script is missing (set CLOUDGEN_SCRIPT_DIR)");
+  return size;
+}
 
+/// The VDB the scene shows: the input's, the first frame of a sequence, or a preset's, generated.
+struct SceneInput {
+  std::string vdb;
+  bool sequence = false;
+  FrameRange seq;
+};
+
+SceneInput scene_input(const BlenderArgs& a) {
   // A VDB sequence (cloud_####.vdb --frames A:B, as `generate --frames` writes it): the scene is
   // framed on its first frame and Blender plays the files as a volume sequence.
-  std::string vdb = a.input;
-  FrameRange seq;
-  const bool sequence = has_frame_pattern(a.input);
-  if (sequence != !a.frames.empty())
-    throw InputError(sequence ? a.input + ": a VDB sequence (# in the name) needs --frames A:B, the frames to play"
-                              : "--frames: only for a VDB sequence input such as out/cloud_####.vdb");
-  if (a.render_frame >= 0 && !sequence) throw InputError("--render-frame: only for a VDB sequence input");
-  if (sequence) {
-    seq = parse_frames(a.frames);
-    if (a.render_frame >= 0 && (a.render_frame < seq.first || a.render_frame > seq.last))
+  SceneInput in{a.input, has_frame_pattern(a.input), {}};
+  if (in.sequence != !a.frames.empty())
+    throw InputError(in.sequence ? a.input + ": a VDB sequence (# in the name) needs --frames A:B, the frames to play"
+                                 : "--frames: only for a VDB sequence input such as out/cloud_####.vdb");
+  if (a.render_frame >= 0 && !in.sequence) throw InputError("--render-frame: only for a VDB sequence input");
+  if (in.sequence) {
+    in.seq = parse_frames(a.frames);
+    if (a.render_frame >= 0 && (a.render_frame < in.seq.first || a.render_frame > in.seq.last))
       throw InputError("--render-frame " + std::to_string(a.render_frame) + ": outside --frames " + a.frames);
-    for (int64_t f = seq.first; f <= seq.last; ++f)
+    for (int64_t f = in.seq.first; f <= in.seq.last; ++f)
       if (!fs::exists(frame_path(a.input, f)))
-        throw InputError(frame_path(a.input, f) + ": no such file (frame " + std::to_string(f) + " of --frames " + a.frames + ")");
-    vdb = frame_path(a.input, seq.first);
-    if (!a.sets.empty()) throw InputError("--set: only a preset input takes overrides; " + a.input + " is a VDB sequence");
+        throw InputError(frame_path(a.input, f) + ": no such file (frame " + std::to_string(f) + " of --frames " +
+                         a.frames + ")");
+    in.vdb = frame_path(a.input, in.seq.first);
+    if (!a.sets.empty())
+      throw InputError("--set: only a preset input takes overrides; " + a.input + " is a VDB sequence");
   } else if (fs::path(a.input).extension() != ".vdb") {
     const std::string path = resolve_preset_path(a.input);
     Preset p = load_preset(path, a.sets);
@@ -139,132 +153,170 @@ void run_blender(const BlenderArgs& a) {
     go.progress = progress_bar("generate", a.quiet);
     Volume v = generate(p, go);
     ExportOptions eo = p.export_options;
-    vdb = fs::path(a.output).replace_extension(".vdb").string();
-    write_vdb(v, vdb, eo);
-    if (!a.quiet) std::fprintf(stderr, "wrote %s (vdb)\n", vdb.c_str());
+    in.vdb = fs::path(a.output).replace_extension(".vdb").string();
+    write_vdb(v, in.vdb, eo);
+    if (!a.quiet) std::fprintf(stderr, "wrote %s (vdb)\n", in.vdb.c_str());
   } else if (!a.sets.empty()) {
     throw InputError("--set: only a preset input takes overrides; " + a.input + " is a VDB");
   }
+  return in;
+}
 
-  // The viewer's default view of this file (cloudviewer/src/default_view.cpp does the same).
-  const SceneInfo info = read_scene_info(vdb);
-  const View view = view_of_metadata(info.metadata, vdb);
-  const Look look = look_of_view(view, vdb);
+/// The viewer's default view of a VDB (cloudviewer/src/default_view.cpp does the same): its
+/// camera, sun and look, and the material's density scaling.
+struct DefaultView {
+  SceneInfo info;
+  View view;
+  Look look;
+  Framing cam;
+  double fov = 60, az = 0, el = 0;
+  bool physical = false;  ///< densities in extinction per metre
+  double extinction = 0, grid_scale = 1;
+};
+
+DefaultView default_view(const std::string& vdb, const BlenderArgs& a, std::array<int, 2> size_px) {
+  DefaultView d;
+  d.info = read_scene_info(vdb);
+  d.view = view_of_metadata(d.info.metadata, vdb);
+  d.look = look_of_view(d.view, vdb);
   // A tiling preset the viewer shows as an endless layer (stratus): Blender gets the one tile.
-  for (const auto& kv : view.render)
+  for (const auto& kv : d.view.render)
     if (kv.first == "mode" && kv.second == "layer" && !a.quiet)
       std::fprintf(stderr,
                    "note: cloudviewer shows %s as a cloud layer repeated over the Earth (view.render.mode=layer); "
                    "this scene holds the one tile, framed from above like a box\n",
                    a.input.c_str());
-  const Vec3 lo = info.origin, size = info.size();
+  const Vec3 lo = d.info.origin, size = d.info.size();
   const Vec3 centre{lo[0] + 0.5 * size[0], lo[1] + 0.5 * size[1], lo[2] + 0.5 * size[2]};
-  const double fov = view.fov.value_or(60.0);
-  Framing cam = view.eye ? Framing{*view.eye, view.target.value_or(centre)}
-                         : frame_box(lo, size, fov, double(width) / height);
-  const double az = view.sun_azimuth.value_or(sun_azimuth_behind(cam.eye, cam.target));
-  const double el = view.sun_elevation.value_or(kDefaultSunElevation);
-  bool physical = false;
-  double grid_scale = 1;
-  for (auto& [k, val] : info.metadata)
-    if (k == "density_units" && val == "extinction_per_metre") physical = true;
-  const double extinction = look.extinction(info.voxel_size);
-  if (physical) grid_scale = extinction;
+  d.fov = d.view.fov.value_or(60.0);
+  d.cam = d.view.eye ? Framing{*d.view.eye, d.view.target.value_or(centre)}
+                     : frame_box(lo, size, d.fov, double(size_px[0]) / size_px[1]);
+  d.az = d.view.sun_azimuth.value_or(sun_azimuth_behind(d.cam.eye, d.cam.target));
+  d.el = d.view.sun_elevation.value_or(kDefaultSunElevation);
+  for (auto& [k, val] : d.info.metadata)
+    if (k == "density_units" && val == "extinction_per_metre") d.physical = true;
+  d.extinction = d.look.extinction(d.info.voxel_size);
+  if (d.physical) d.grid_scale = d.extinction;
+  return d;
+}
 
-  char tmpl[] = "/tmp/cloudgen-blender-XXXXXX";
-  if (!::mkdtemp(tmpl)) throw IoError("cannot create a temporary folder in /tmp");
-  const fs::path work(tmpl);
-  struct Cleanup {
-    fs::path p;
-    ~Cleanup() {
-      std::error_code ec;
-      fs::remove_all(p, ec);
-    }
-  } cleanup{work};
-
-  using nlohmann::json;
-  // The viewer's lighting of its default view (its precomputed sky colours the sun and the ambient
-  // light), asked of the cloudviewer built beside this cloudgen; without one, the analytic sky's
-  // constants below (what the viewer shows with render.sky=analytic).
-  std::array<double, 3> sun_color{kSunColor[0], kSunColor[1], kSunColor[2]};
-  std::array<double, 3> ambient{kAmbientColor[0] * look.ambient, kAmbientColor[1] * look.ambient,
-                                kAmbientColor[2] * look.ambient};
-  std::string lighting = "the analytic sky's constants (no cloudviewer beside cloudgen)";
-  {
-    std::error_code ec;
-    const fs::path viewer = fs::read_symlink("/proc/self/exe", ec).parent_path() / "cloudviewer";
-    if (!ec && ::access(viewer.c_str(), X_OK) == 0) {
-      const std::string lj = (work / "lighting.json").string(), llog = (work / "lighting.log").string();
-      std::vector<std::string> args{viewer.string(), vdb, "--lighting-json", lj, "--size",
-                                    std::to_string(width) + "x" + std::to_string(height)};
-      if (run_logged(args, llog) != 0)
-        throw IoError(viewer.string() + " --lighting-json failed on " + vdb + "; its last lines:\n" + tail_of(llog, 8));
-      std::ifstream in(lj);
-      const json l = json::parse(in, nullptr, false);
-      if (l.is_discarded() || !l.contains("sun_color") || !l.contains("ambient_above"))
-        throw IoError(viewer.string() + " --lighting-json wrote no usable " + lj);
-      const double scale = l.value("ambient_scale", look.ambient);
-      for (int i = 0; i < 3; ++i) {
-        sun_color[size_t(i)] = l["sun_color"][size_t(i)].get<double>();
-        ambient[size_t(i)] = l["ambient_above"][size_t(i)].get<double>() * scale;
-      }
-      lighting = "cloudviewer's " + l.value("sky", std::string("?")) + " sky";
-    }
+/// A temporary folder in /tmp, removed with everything in it.
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    char tmpl[] = "/tmp/cloudgen-blender-XXXXXX";
+    if (!::mkdtemp(tmpl)) throw IoError("cannot create a temporary folder in /tmp");
+    path = tmpl;
   }
-  if (!a.quiet) std::fprintf(stderr, "lighting: %s\n", lighting.c_str());
-  json s;
-  const fs::path blend_abs = fs::absolute(a.output);
-  s["vdb"] = fs::absolute(vdb).string();
-  s["vdb_relative"] = "//" + fs::relative(fs::absolute(vdb), blend_abs.parent_path()).string();
-  s["up"] = std::string(1, info.up);
-  s["voxel_size"] = info.voxel_size;
-  s["material"] = {{"density", physical ? 1.0 : extinction},
-                   {"grid_scale", grid_scale},
-                   {"anisotropy", look.phase == "none" ? 0.0 : look.g},
-                   {"albedo", look.albedo},
-                   {"erosion", look.erosion},
-                   {"detail_grids", {"detail_g", "detail_b", "detail_a"}},
-                   {"box_bottom", lo[1]},
-                   {"box_height", size[1]}};
-  s["camera"] = {{"eye", zup(cam.eye)}, {"target", zup(cam.target)}, {"fov_y_deg", fov}};
-  s["sun"] = {{"direction", zup(sun_direction(az, el))},
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
+struct Lighting {
+  std::array<double, 3> sun_color, ambient;
+  std::string source;  ///< what it came from, for the report
+};
+
+/// The viewer's lighting of its default view (its precomputed sky colours the sun and the ambient
+/// light), asked of the cloudviewer built beside this cloudgen; without one, the analytic sky's
+/// constants (what the viewer shows with render.sky=analytic).
+Lighting viewer_lighting(const std::string& vdb, const Look& look, std::array<int, 2> size, const fs::path& work) {
+  Lighting lit{{kSunColor[0], kSunColor[1], kSunColor[2]},
+               {kAmbientColor[0] * look.ambient, kAmbientColor[1] * look.ambient, kAmbientColor[2] * look.ambient},
+               "the analytic sky's constants (no cloudviewer beside cloudgen)"};
+  std::error_code ec;
+  const fs::path viewer = fs::read_symlink("/proc/self/exe", ec).parent_path() / "cloudviewer";
+  if (ec || ::access(viewer.c_str(), X_OK) != 0) return lit;
+  const std::string lj = (work / "lighting.json").string(), llog = (work / "lighting.log").string();
+  std::vector<std::string> args{viewer.string(), vdb, "--lighting-json", lj, "--size",
+                                std::to_string(size[0]) + "x" + std::to_string(size[1])};
+  if (run_logged(args, llog) != 0)
+    throw IoError(viewer.string() + " --lighting-json failed on " + vdb + "; its last lines:\n" + tail_of(llog, 8));
+  std::ifstream in(lj);
+  const json l = json::parse(in, nullptr, false);
+  if (l.is_discarded() || !l.contains("sun_color") || !l.contains("ambient_above"))
+    throw IoError(viewer.string() + " --lighting-json wrote no usable " + lj);
+  const double scale = l.value("ambient_scale", look.ambient);
+  for (int i = 0; i < 3; ++i) {
+    lit.sun_color[size_t(i)] = l["sun_color"][size_t(i)].get<double>();
+    lit.ambient[size_t(i)] = l["ambient_above"][size_t(i)].get<double>() * scale;
+  }
+  lit.source = "cloudviewer's " + l.value("sky", std::string("?")) + " sky";
+  return lit;
+}
+
+/// The scene's sun, sky, ground and tone map.
+void add_lighting(json& s, const DefaultView& d, const Lighting& lit) {
+  const Look& look = d.look;
+  s["sun"] = {{"direction", zup(sun_direction(d.az, d.el))},
               {"strength", look.sun_intensity},
-              {"color", {sun_color[0], sun_color[1], sun_color[2]}}};
+              {"color", {lit.sun_color[0], lit.sun_color[1], lit.sun_color[2]}}};
   json horizon = json::array();
   for (int i = 0; i < 3; ++i) horizon.push_back(kSkyZenith[size_t(i)] + 0.55 * (1.0 - kSkyZenith[size_t(i)]));
-  s["world"] = {{"ambient", {ambient[0], ambient[1], ambient[2]}},
+  s["world"] = {{"ambient", {lit.ambient[0], lit.ambient[1], lit.ambient[2]}},
                 {"zenith", {kSkyZenith[0], kSkyZenith[1], kSkyZenith[2]}},
                 {"horizon", horizon}};
   s["ground"] = {{"enabled", look.ground},
-                 {"height", std::min(0.0, lo[1])},
+                 {"height", std::min(0.0, d.info.origin[1])},
                  {"color", {kGroundColor[0] * look.ground_albedo / 0.18, kGroundColor[1] * look.ground_albedo / 0.18,
                             kGroundColor[2] * look.ground_albedo / 0.18}},
                  {"half_extent", 5e4}};
   s["tonemap"] = {{"exposure", look.exposure}, {"operator", look.tonemap}};
-  if (sequence) {
+}
+
+/// The scene description scripts/blender_scene.py builds (all but the files it writes).
+json scene_description(const BlenderArgs& a, const SceneInput& in, const DefaultView& d, const Lighting& lit,
+                       std::array<int, 2> size) {
+  const Look& look = d.look;
+  json s;
+  const fs::path blend_abs = fs::absolute(a.output);
+  s["vdb"] = fs::absolute(in.vdb).string();
+  s["vdb_relative"] = "//" + fs::relative(fs::absolute(in.vdb), blend_abs.parent_path()).string();
+  s["up"] = std::string(1, d.info.up);
+  s["voxel_size"] = d.info.voxel_size;
+  s["material"] = {{"density", d.physical ? 1.0 : d.extinction},
+                   {"grid_scale", d.grid_scale},
+                   {"anisotropy", look.phase == "none" ? 0.0 : look.g},
+                   {"albedo", look.albedo},
+                   {"erosion", look.erosion},
+                   {"detail_grids", {"detail_g", "detail_b", "detail_a"}},
+                   {"box_bottom", d.info.origin[1]},
+                   {"box_height", d.info.size()[1]}};
+  s["camera"] = {{"eye", zup(d.cam.eye)}, {"target", zup(d.cam.target)}, {"fov_y_deg", d.fov}};
+  add_lighting(s, d, lit);
+  if (in.sequence) {
     double fps = 24;
     bool loop = false;
-    for (auto& [k, val] : info.metadata) {
+    for (auto& [k, val] : d.info.metadata) {
       if (k == "fps") fps = std::strtod(val.c_str(), nullptr);
       if (k == "motion.loop") loop = val == "true" || val == "1";
     }
     if (!(fps > 0)) fps = 24;
-    s["sequence"] = {{"first", seq.first},
-                     {"count", seq.count()},
+    s["sequence"] = {{"first", in.seq.first},
+                     {"count", in.seq.count()},
                      {"fps", fps},
                      {"loop", loop},
-                     {"render_frame", a.render_frame >= 0 ? a.render_frame : seq.first}};
+                     {"render_frame", a.render_frame >= 0 ? a.render_frame : in.seq.first}};
   }
-  s["render"] = {{"width", width},
-                 {"height", height},
+  s["render"] = {{"width", size[0]},
+                 {"height", size[1]},
                  {"samples", a.samples},
                  {"volume_bounces", a.volume_bounces},
                  {"max_bounces", std::max(8, a.volume_bounces + 4)},
                  {"volume_step_rate", 1.0},
                  {"volume_max_steps", 1024}};
+  return s;
+}
 
+/// Runs Blender on scene `s`, writing the .blend (and the .png with --render), both published
+/// together or neither.
+void write_scene(const BlenderArgs& a, json& s, const std::string& blender, const std::string& script,
+                 const fs::path& work) {
   const std::string scene_json = (work / "scene.json").string(), log = (work / "blender.log").string();
-
   auto run = [&](const std::string& tmp_blend, const std::string& tmp_png) {
     s["blend"] = fs::absolute(tmp_blend).string();
     s["render_png"] = tmp_png.empty() ? "" : fs::absolute(tmp_png).string();
@@ -291,9 +343,24 @@ void run_blender(const BlenderArgs& a) {
   });
   if (g_cancel) throw Cancelled();
   batch.commit();
+}
+
+void run_blender(const BlenderArgs& a) {
+  const std::array<int, 2> size = check_args(a);
+  const std::string blender = find_blender();
+  const std::string script = script_path();
+  if (!fs::exists(script)) throw IoError(script + ": the Blender scene script is missing (set CLOUDGEN_SCRIPT_DIR)");
+  const SceneInput in = scene_input(a);
+  const DefaultView d = default_view(in.vdb, a, size);
+  const TempDir work;
+  const Lighting lit = viewer_lighting(in.vdb, d.look, size, work.path);
+  if (!a.quiet) std::fprintf(stderr, "lighting: %s\n", lit.source.c_str());
+  json s = scene_description(a, in, d, lit, size);
+  write_scene(a, s, blender, script, work.path);
   if (!a.quiet) {
-    std::fprintf(stderr, "wrote %s (Blender scene of %s)\n", a.output.c_str(), vdb.c_str());
-    if (!a.render.empty()) std::fprintf(stderr, "wrote %s (Cycles, %dx%d, %d samples)\n", a.render.c_str(), width, height, a.samples);
+    std::fprintf(stderr, "wrote %s (Blender scene of %s)\n", a.output.c_str(), in.vdb.c_str());
+    if (!a.render.empty())
+      std::fprintf(stderr, "wrote %s (Cycles, %dx%d, %d samples)\n", a.render.c_str(), size[0], size[1], a.samples);
   }
 }
 

@@ -1,4 +1,4 @@
-// cloudgen subcommands, registered on the CLI11 app by main.cpp.
+// cloudgen subcommands, one file each (NAME_cmd.cpp), registered on the CLI11 app by main.cpp.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -14,22 +14,27 @@ namespace cloudgen::cli {
 
 /// Set by SIGINT/SIGTERM; long work checks it and stops, leaving no partial output.
 extern std::atomic<bool> g_cancel;
+/// Set when a command already said what an interrupt left behind (main then exits 130 quietly).
+extern bool g_cancel_reported;
 
 /// A progress bar on stderr, drawn only when stderr is a terminal and not --quiet.
 std::function<void(double)> progress_bar(const std::string& label, bool quiet);
 
+void add_generate_command(CLI::App& app, std::function<void()>& run);
+void add_validate_command(CLI::App& app, std::function<void()>& run);
+void add_info_command(CLI::App& app, std::function<void()>& run);
+void add_presets_command(CLI::App& app, std::function<void()>& run);
 void add_noise_command(CLI::App& app, std::function<void()>& run);
 void add_phase_command(CLI::App& app, std::function<void()>& run);
 void add_flowmap_command(CLI::App& app, std::function<void()>& run);
 void add_blender_command(CLI::App& app, std::function<void()>& run);
 
+/// The shipped presets' folder: $CLOUDGEN_PRESET_DIR, else the source tree's presets/.
+std::string preset_dir();
 /// "cumulus" -> the shipped presets/cumulus.json when no such file exists in the working folder.
-std::string resolve_preset_path(const std::string& p);
-
-/// "cumulus" -> presets/cumulus.json when no such file exists in the working folder.
 std::string resolve_preset_path(const std::string& preset);
 
-/// `cloudgen generate`'s options (main.cpp parses them).
+/// `cloudgen generate`'s options (generate_cmd.cpp parses them).
 struct GenerateArgs {
   std::string preset, format, region, max_memory = "16G", seed, up;
   std::vector<std::string> outputs, sets;
@@ -42,7 +47,7 @@ struct GenerateArgs {
 /// generate with --frames / --fps / --loop: the static volume of `p` (read from `preset_path`),
 /// baked into one VDB per frame, all staged in one OutputBatch (sequence_cmd.cpp).
 void run_generate_sequence(const Preset& p, const std::string& preset_path, const GenerateArgs& a);
-/// The CLOUDGEN_TEST_HOLD hook (main.cpp): pauses at `where` until SIGINT/SIGTERM when asked.
+/// The CLOUDGEN_TEST_HOLD hook (common.cpp): pauses at `where` until SIGINT/SIGTERM when asked.
 void test_hold(const char* where);
 
 // Scale-out (scale_cmd.cpp): `plan`, `merge`, and generate's MPI path.

@@ -339,168 +339,233 @@ Volume volume_header(const Preset& p, const BrickPlan& plan) {
   return v;
 }
 
-void execute_plan(const Preset& p, const BrickPlan& plan, const std::vector<size_t>* which,
-                  const GenerateOptions& opt, const BrickSink& sink, GenerateStats* stats) {
-  const auto t_start = std::chrono::steady_clock::now();
-  const std::array<uint32_t, 3> N = p.resolution;
-  if (plan.dims != N) throw Error("execute_plan: the plan was made for another resolution");
-  const size_t n = which ? which->size() : plan.bricks.size();
-  auto brick_at = [&](size_t i) { return which ? (*which)[i] : i; };
-  const noise3d::FractalParams rp = channel_params(p, 0);
-  const Channel& rc = p.channels[0];
-  const Shape shape(p, opt.threads);
+namespace {
+
+/// The noise grid of box `bx` in a volume of `N` voxels.
+noise3d::GridRegion grid_of(const std::array<uint32_t, 3>& N, const PlannedBrick& bx) {
+  noise3d::GridRegion g;
+  g.size = N;
+  g.origin = bx.lo;
+  for (int a = 0; a < 3; ++a) g.extent[a] = bx.hi[a] - bx.lo[a];
+  return g;
+}
+
+/// What execute_plan's workers count, together (they run in parallel).
+struct PlanCounters {
   std::atomic<size_t> done{0}, skipped{0}, detail_done{0}, active{0};
   std::array<std::atomic<size_t>, kBrickWorkKinds> work_n{};
   std::array<std::atomic<int64_t>, kBrickWorkKinds> work_ns{};
-  auto grid_of = [&](const PlannedBrick& bx) {
-    noise3d::GridRegion g;
-    g.size = N;
-    g.origin = bx.lo;
-    for (int a = 0; a < 3; ++a) g.extent[a] = bx.hi[a] - bx.lo[a];
-    return g;
-  };
 
-  const bool wrap = p.tiling;
-  // Detail blocks keep whole 16-voxel rows: the noise kernel costs 1.3-2x more per voxel on 8-wide
-  // rows than on 16-wide ones, which eats what smaller blocks would save.
-  constexpr uint32_t S[3] = {kBrick, kDetailBlock, kDetailBlock};
-  auto one = [&](size_t b, std::vector<float>& noise) {
+  void report(size_t bricks, std::chrono::steady_clock::time_point t_start, GenerateStats& stats) const {
+    stats.bricks = bricks;
+    stats.bricks_skipped = skipped;
+    stats.detail_bricks = detail_done;
+    stats.active_voxels = active;
+    for (int k = 0; k < kBrickWorkKinds; ++k) {
+      stats.work_bricks[k] = work_n[k];
+      stats.work_seconds[k] = work_ns[k] * 1e-9;
+    }
+    stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  }
+};
+
+// Detail blocks keep whole 16-voxel rows: the noise kernel costs 1.3-2x more per voxel on 8-wide
+// rows than on 16-wide ones, which eats what smaller blocks would save.
+constexpr uint32_t kBlock[3] = {kBrick, kDetailBlock, kDetailBlock};
+
+/// A brick's detail blocks (aligned like the bricks), n[a] per axis, and which keep their noise.
+struct DetailBlocks {
+  uint32_t n[3];
+  std::vector<uint8_t> keep;
+  size_t index(uint32_t kx, uint32_t ky, uint32_t kz) const { return (size_t(kz) * n[1] + ky) * n[0] + kx; }
+};
+
+/// One brick of execute_plan: density on the whole brick, then each detail channel on the blocks
+/// the detail rule keeps; the sink receives the part of the brick in the region.
+class BrickWorker {
+ public:
+  BrickWorker(const Preset& p, const BrickPlan& plan, const GenerateOptions& opt, const BrickSink& sink, size_t n,
+              PlanCounters& counters)
+      : p_(p), plan_(plan), opt_(opt), sink_(sink), n_(n), c_(counters), N_(p.resolution),
+        rp_(channel_params(p, 0)), shape_(p, opt.threads) {}
+
+  /// Generates brick `b` and hands it to the sink; `noise` is the calling thread's scratch.
+  void run(size_t b, std::vector<float>& noise) {
     const auto t0 = std::chrono::steady_clock::now();
-    const PlannedBrick& bx = plan.bricks[b];
+    const PlannedBrick& bx = plan_.bricks[b];
     // The whole brick (density is evaluated on all of it, so what the detail rule sees does not
     // depend on the region), and the part of it in the region, which is what the sink receives.
     PlannedBrick wb = bx;
-    for (int a = 0; a < 3; ++a) wb.lo[a] = bx.lo[a] / kBrick * kBrick, wb.hi[a] = std::min(N[a], wb.lo[a] + kBrick);
-    const uint32_t W[3] = {wb.hi[0] - wb.lo[0], wb.hi[1] - wb.lo[1], wb.hi[2] - wb.lo[2]};
-    auto widx = [&](uint32_t x, uint32_t y, uint32_t z) {
-      return (size_t(z - wb.lo[2]) * W[1] + (y - wb.lo[1])) * W[0] + (x - wb.lo[0]);
-    };
+    for (int a = 0; a < 3; ++a) wb.lo[a] = bx.lo[a] / kBrick * kBrick, wb.hi[a] = std::min(N_[a], wb.lo[a] + kBrick);
     BrickResult res;
-    const size_t cnt = bx.count();
-    res.density.assign(cnt, 0.0f);
+    res.density.assign(bx.count(), 0.0f);
     std::vector<float> dens;  // whole brick
-    if (bx.density || !opt.skip_empty) {
-      dens.resize(wb.count());
-      noise.resize(wb.count());
-      noise3d::evaluate_grid(rp, grid_of(wb), noise.data(), {1});
-      size_t q = 0;
-      for (uint32_t z = wb.lo[2]; z < wb.hi[2]; ++z)
-        for (uint32_t y = wb.lo[1]; y < wb.hi[1]; ++y)
-          for (uint32_t x = wb.lo[0]; x < wb.hi[0]; ++x, ++q)
-            dens[q] = shape.finish(channel_value(rc, noise[q]), shape(x, y, z));
-      size_t k = 0, act = 0;
-      for (uint32_t z = bx.lo[2]; z < bx.hi[2]; ++z)
-        for (uint32_t y = bx.lo[1]; y < bx.hi[1]; ++y)
-          for (uint32_t x = bx.lo[0]; x < bx.hi[0]; ++x, ++k) act += (res.density[k] = dens[widx(x, y, z)]) > 0;
-      res.any_density = act > 0;
-      active += act;
-    }
-    if (!bx.density && opt.skip_empty) ++skipped;
-    if (plan.detail && (bx.detail || !opt.skip_empty)) {
-      // Detail blocks (16x8x8, aligned like the bricks) that keep their noise: those within one voxel
-      // of this brick's density > 0 or, beyond the brick's faces, of the bound > 0.
-      const uint32_t nbk[3] = {(W[0] + S[0] - 1) / S[0], (W[1] + S[1] - 1) / S[1], (W[2] + S[2] - 1) / S[2]};
-      std::vector<uint8_t> keep(static_cast<size_t>(nbk[0]) * nbk[1] * nbk[2], 0);
-      if (bx.detail) {
-        const int64_t M[3] = {W[0] + 2, W[1] + 2, W[2] + 2};  // the brick and its one-voxel shell
-        std::vector<uint8_t> maybe(size_t(M[0] * M[1] * M[2]), 0);
-        for (int64_t z = -1; z <= W[2]; ++z)
-          for (int64_t y = -1; y <= W[1]; ++y)
-            for (int64_t x = -1; x <= W[0]; ++x) {
-              const bool inside = x >= 0 && y >= 0 && z >= 0 && x < W[0] && y < W[1] && z < W[2];
-              uint8_t m;
-              if (inside) m = !dens.empty() && dens[(size_t(z) * W[1] + y) * W[0] + x] > 0;
-              else if (opt.detail_only_in_cloud) m = 0;  // read only where density > 0: no shell
-              else m = shape.bound_at(int64_t(wb.lo[0]) + x, int64_t(wb.lo[1]) + y, int64_t(wb.lo[2]) + z, wrap);
-              maybe[size_t(((z + 1) * M[1] + (y + 1)) * M[0] + (x + 1))] = m;
-            }
-        for (uint32_t kz = 0; kz < nbk[2]; ++kz)
-          for (uint32_t ky = 0; ky < nbk[1]; ++ky)
-            for (uint32_t kx = 0; kx < nbk[0]; ++kx) {
-              bool any = false;  // the block dilated by one voxel (or not), in maybe's coordinates
-              const uint32_t d0 = opt.detail_only_in_cloud ? 1 : 0, d1 = opt.detail_only_in_cloud ? 0 : 1;
-              for (uint32_t z = kz * S[2] + d0; z <= std::min(W[2], (kz + 1) * S[2]) + d1 && !any; ++z)
-                for (uint32_t y = ky * S[1] + d0; y <= std::min(W[1], (ky + 1) * S[1]) + d1 && !any; ++y)
-                  for (uint32_t x = kx * S[0] + d0; x <= std::min(W[0], (kx + 1) * S[0]) + d1 && !any; ++x)
-                    any = maybe[size_t((z * M[1] + y) * M[0] + x)];
-              keep[(size_t(kz) * nbk[1] + ky) * nbk[0] + kx] = any;
-            }
-      }
-      const bool some = std::any_of(keep.begin(), keep.end(), [](uint8_t k) { return k != 0; });
-      if (some || !opt.skip_empty) ++detail_done;
-      for (int c = 1; c < 4; ++c) {
-        if (!p.channels[c].enabled) continue;
-        const noise3d::FractalParams cp = channel_params(p, c);
-        std::vector<float>& out = res.detail[c - 1];
-        out.assign(cnt, 0.0f);
-        if (!opt.skip_empty) {  // evaluate everything, keep what the rule keeps: same bytes
-          noise.resize(cnt);
-          noise3d::evaluate_grid(cp, grid_of(bx), noise.data(), {1});
-        }
-        size_t n_kept = 0;
-        for (uint32_t kz = 0; kz < nbk[2]; ++kz)
-          for (uint32_t ky = 0; ky < nbk[1]; ++ky)
-            for (uint32_t kx = 0; kx < nbk[0]; ++kx) {
-              if (!keep[(size_t(kz) * nbk[1] + ky) * nbk[0] + kx]) continue;
-              PlannedBrick blk;  // the block, clipped to the region part of the brick
-              const uint32_t k3[3] = {kx, ky, kz};
-              for (int a = 0; a < 3; ++a) {
-                blk.lo[a] = std::max(bx.lo[a], wb.lo[a] + k3[a] * S[a]);
-                blk.hi[a] = std::min(bx.hi[a], wb.lo[a] + (k3[a] + 1) * S[a]);
-              }
-              if (blk.lo[0] >= blk.hi[0] || blk.lo[1] >= blk.hi[1] || blk.lo[2] >= blk.hi[2]) continue;
-              ++n_kept;
-              const uint32_t bw = bx.hi[0] - bx.lo[0], bh = bx.hi[1] - bx.lo[1];
-              auto at_out = [&](uint32_t x, uint32_t y, uint32_t z) {
-                return (size_t(z - bx.lo[2]) * bh + (y - bx.lo[1])) * bw + (x - bx.lo[0]);
-              };
-              if (opt.skip_empty) {
-                std::vector<float> part(blk.count());
-                noise3d::evaluate_grid(cp, grid_of(blk), part.data(), {1});
-                size_t k = 0;
-                for (uint32_t z = blk.lo[2]; z < blk.hi[2]; ++z)
-                  for (uint32_t y = blk.lo[1]; y < blk.hi[1]; ++y)
-                    for (uint32_t x = blk.lo[0]; x < blk.hi[0]; ++x, ++k)
-                      out[at_out(x, y, z)] = channel_value(p.channels[c], part[k]);
-              } else {
-                for (uint32_t z = blk.lo[2]; z < blk.hi[2]; ++z)
-                  for (uint32_t y = blk.lo[1]; y < blk.hi[1]; ++y)
-                    for (uint32_t x = blk.lo[0]; x < blk.hi[0]; ++x)
-                      out[at_out(x, y, z)] = channel_value(p.channels[c], noise[at_out(x, y, z)]);
-              }
-            }
-        if (!n_kept) out.clear();
-      }
+    if (bx.density || !opt_.skip_empty) dens = density(bx, wb, noise, res);
+    if (!bx.density && opt_.skip_empty) ++c_.skipped;
+    if (plan_.detail && (bx.detail || !opt_.skip_empty)) {
+      const DetailBlocks blocks = detail_blocks(bx, wb, dens);
+      const bool some = std::any_of(blocks.keep.begin(), blocks.keep.end(), [](uint8_t k) { return k != 0; });
+      if (some || !opt_.skip_empty) ++c_.detail_done;
+      for (int c = 1; c < 4; ++c)
+        if (p_.channels[c].enabled) detail_channel(c, bx, wb, blocks, noise, res.detail[c - 1]);
     }
     res.any_value = res.any_density;
     for (int c = 0; c < 3 && !res.any_value; ++c)
       res.any_value = std::any_of(res.detail[c].begin(), res.detail[c].end(), [](float x) { return x != 0; });
     const BrickWork kind = !bx.density ? (bx.detail ? BrickWork::DetailOnly : BrickWork::Skipped)
                                        : (res.any_density ? BrickWork::Cloud : BrickWork::Empty);
-    sink(b, res);
-    work_n[int(kind)]++;
-    work_ns[int(kind)] += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
-    const size_t d = ++done;
-    if (opt.progress && (d % 16 == 0 || d == n)) opt.progress(double(d) / n);
-    if (opt.cancel && opt.cancel->load()) throw Cancelled();
-  };
+    sink_(b, res);
+    c_.work_n[int(kind)]++;
+    c_.work_ns[int(kind)] +=
+        std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
+    const size_t d = ++c_.done;
+    if (opt_.progress && (d % 16 == 0 || d == n_)) opt_.progress(double(d) / n_);
+    if (opt_.cancel && opt_.cancel->load()) throw Cancelled();
+  }
+
+ private:
+  /// The density of the whole brick `wb` (returned); its region part `bx` goes into res.
+  std::vector<float> density(const PlannedBrick& bx, const PlannedBrick& wb, std::vector<float>& noise,
+                             BrickResult& res) {
+    const uint32_t W[3] = {wb.hi[0] - wb.lo[0], wb.hi[1] - wb.lo[1], wb.hi[2] - wb.lo[2]};
+    auto widx = [&](uint32_t x, uint32_t y, uint32_t z) {
+      return (size_t(z - wb.lo[2]) * W[1] + (y - wb.lo[1])) * W[0] + (x - wb.lo[0]);
+    };
+    const Channel& rc = p_.channels[0];
+    std::vector<float> dens(wb.count());
+    noise.resize(wb.count());
+    noise3d::evaluate_grid(rp_, grid_of(N_, wb), noise.data(), {1});
+    size_t q = 0;
+    for (uint32_t z = wb.lo[2]; z < wb.hi[2]; ++z)
+      for (uint32_t y = wb.lo[1]; y < wb.hi[1]; ++y)
+        for (uint32_t x = wb.lo[0]; x < wb.hi[0]; ++x, ++q)
+          dens[q] = shape_.finish(channel_value(rc, noise[q]), shape_(x, y, z));
+    size_t k = 0, act = 0;
+    for (uint32_t z = bx.lo[2]; z < bx.hi[2]; ++z)
+      for (uint32_t y = bx.lo[1]; y < bx.hi[1]; ++y)
+        for (uint32_t x = bx.lo[0]; x < bx.hi[0]; ++x, ++k) act += (res.density[k] = dens[widx(x, y, z)]) > 0;
+    res.any_density = act > 0;
+    c_.active += act;
+    return dens;
+  }
+
+  /// Detail blocks (16x8x8, aligned like the bricks) that keep their noise: those within one voxel
+  /// of this brick's density > 0 or, beyond the brick's faces, of the bound > 0.
+  DetailBlocks detail_blocks(const PlannedBrick& bx, const PlannedBrick& wb, const std::vector<float>& dens) const {
+    const uint32_t W[3] = {wb.hi[0] - wb.lo[0], wb.hi[1] - wb.lo[1], wb.hi[2] - wb.lo[2]};
+    const uint32_t* S = kBlock;
+    DetailBlocks blocks{{(W[0] + S[0] - 1) / S[0], (W[1] + S[1] - 1) / S[1], (W[2] + S[2] - 1) / S[2]}, {}};
+    const uint32_t* nbk = blocks.n;
+    blocks.keep.assign(static_cast<size_t>(nbk[0]) * nbk[1] * nbk[2], 0);
+    if (!bx.detail) return blocks;
+    const int64_t M[3] = {W[0] + 2, W[1] + 2, W[2] + 2};  // the brick and its one-voxel shell
+    const std::vector<uint8_t> maybe = maybe_cloud(wb, dens);
+    for (uint32_t kz = 0; kz < nbk[2]; ++kz)
+      for (uint32_t ky = 0; ky < nbk[1]; ++ky)
+        for (uint32_t kx = 0; kx < nbk[0]; ++kx) {
+          bool any = false;  // the block dilated by one voxel (or not), in maybe's coordinates
+          const uint32_t d0 = opt_.detail_only_in_cloud ? 1 : 0, d1 = opt_.detail_only_in_cloud ? 0 : 1;
+          for (uint32_t z = kz * S[2] + d0; z <= std::min(W[2], (kz + 1) * S[2]) + d1 && !any; ++z)
+            for (uint32_t y = ky * S[1] + d0; y <= std::min(W[1], (ky + 1) * S[1]) + d1 && !any; ++y)
+              for (uint32_t x = kx * S[0] + d0; x <= std::min(W[0], (kx + 1) * S[0]) + d1 && !any; ++x)
+                any = maybe[size_t((z * M[1] + y) * M[0] + x)];
+          blocks.keep[blocks.index(kx, ky, kz)] = any;
+        }
+    return blocks;
+  }
+
+  /// 1 where the whole brick `wb` and its one-voxel shell may hold cloud: density > 0 inside, the
+  /// bound > 0 in the shell (0 there when detail is read only where density > 0).
+  std::vector<uint8_t> maybe_cloud(const PlannedBrick& wb, const std::vector<float>& dens) const {
+    const uint32_t W[3] = {wb.hi[0] - wb.lo[0], wb.hi[1] - wb.lo[1], wb.hi[2] - wb.lo[2]};
+    const int64_t M[3] = {W[0] + 2, W[1] + 2, W[2] + 2};
+    std::vector<uint8_t> maybe(size_t(M[0] * M[1] * M[2]), 0);
+    for (int64_t z = -1; z <= W[2]; ++z)
+      for (int64_t y = -1; y <= W[1]; ++y)
+        for (int64_t x = -1; x <= W[0]; ++x) {
+          const bool inside = x >= 0 && y >= 0 && z >= 0 && x < W[0] && y < W[1] && z < W[2];
+          uint8_t m;
+          if (inside) m = !dens.empty() && dens[(size_t(z) * W[1] + y) * W[0] + x] > 0;
+          else if (opt_.detail_only_in_cloud) m = 0;  // read only where density > 0: no shell
+          else m = shape_.bound_at(int64_t(wb.lo[0]) + x, int64_t(wb.lo[1]) + y, int64_t(wb.lo[2]) + z, p_.tiling);
+          maybe[size_t(((z + 1) * M[1] + (y + 1)) * M[0] + (x + 1))] = m;
+        }
+    return maybe;
+  }
+
+  /// Detail channel c over the region part `bx` into `out`: noise in the kept blocks, 0 elsewhere
+  /// (emptied when no block is kept).
+  void detail_channel(int c, const PlannedBrick& bx, const PlannedBrick& wb, const DetailBlocks& blocks,
+                      std::vector<float>& noise, std::vector<float>& out) const {
+    const noise3d::FractalParams cp = channel_params(p_, c);
+    const size_t cnt = bx.count();
+    out.assign(cnt, 0.0f);
+    if (!opt_.skip_empty) {  // evaluate everything, keep what the rule keeps: same bytes
+      noise.resize(cnt);
+      noise3d::evaluate_grid(cp, grid_of(N_, bx), noise.data(), {1});
+    }
+    const uint32_t bw = bx.hi[0] - bx.lo[0], bh = bx.hi[1] - bx.lo[1];
+    auto at_out = [&](uint32_t x, uint32_t y, uint32_t z) {
+      return (size_t(z - bx.lo[2]) * bh + (y - bx.lo[1])) * bw + (x - bx.lo[0]);
+    };
+    size_t n_kept = 0;
+    for (uint32_t kz = 0; kz < blocks.n[2]; ++kz)
+      for (uint32_t ky = 0; ky < blocks.n[1]; ++ky)
+        for (uint32_t kx = 0; kx < blocks.n[0]; ++kx) {
+          if (!blocks.keep[blocks.index(kx, ky, kz)]) continue;
+          PlannedBrick blk;  // the block, clipped to the region part of the brick
+          const uint32_t k3[3] = {kx, ky, kz};
+          for (int a = 0; a < 3; ++a) {
+            blk.lo[a] = std::max(bx.lo[a], wb.lo[a] + k3[a] * kBlock[a]);
+            blk.hi[a] = std::min(bx.hi[a], wb.lo[a] + (k3[a] + 1) * kBlock[a]);
+          }
+          if (blk.lo[0] >= blk.hi[0] || blk.lo[1] >= blk.hi[1] || blk.lo[2] >= blk.hi[2]) continue;
+          ++n_kept;
+          if (opt_.skip_empty) {
+            std::vector<float> part(blk.count());
+            noise3d::evaluate_grid(cp, grid_of(N_, blk), part.data(), {1});
+            size_t k = 0;
+            for (uint32_t z = blk.lo[2]; z < blk.hi[2]; ++z)
+              for (uint32_t y = blk.lo[1]; y < blk.hi[1]; ++y)
+                for (uint32_t x = blk.lo[0]; x < blk.hi[0]; ++x, ++k)
+                  out[at_out(x, y, z)] = channel_value(p_.channels[c], part[k]);
+          } else {
+            for (uint32_t z = blk.lo[2]; z < blk.hi[2]; ++z)
+              for (uint32_t y = blk.lo[1]; y < blk.hi[1]; ++y)
+                for (uint32_t x = blk.lo[0]; x < blk.hi[0]; ++x)
+                  out[at_out(x, y, z)] = channel_value(p_.channels[c], noise[at_out(x, y, z)]);
+          }
+        }
+    if (!n_kept) out.clear();
+  }
+
+  const Preset& p_;
+  const BrickPlan& plan_;
+  const GenerateOptions& opt_;
+  const BrickSink& sink_;
+  const size_t n_;  ///< bricks in this run, for the progress
+  PlanCounters& c_;
+  const std::array<uint32_t, 3> N_;
+  const noise3d::FractalParams rp_;
+  const Shape shape_;
+};
+
+}  // namespace
+
+void execute_plan(const Preset& p, const BrickPlan& plan, const std::vector<size_t>* which,
+                  const GenerateOptions& opt, const BrickSink& sink, GenerateStats* stats) {
+  const auto t_start = std::chrono::steady_clock::now();
+  if (plan.dims != p.resolution) throw Error("execute_plan: the plan was made for another resolution");
+  const size_t n = which ? which->size() : plan.bricks.size();
+  PlanCounters counters;
+  BrickWorker worker(p, plan, opt, sink, n, counters);
   in_arena(opt.threads, [&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1), [&](const tbb::blocked_range<size_t>& r) {
       std::vector<float> noise;
-      for (size_t i = r.begin(); i != r.end(); ++i) one(brick_at(i), noise);
+      for (size_t i = r.begin(); i != r.end(); ++i) worker.run(which ? (*which)[i] : i, noise);
     });
   });
-  if (stats) {
-    stats->bricks = n;
-    stats->bricks_skipped = skipped;
-    stats->detail_bricks = detail_done;
-    stats->active_voxels = active;
-    for (int k = 0; k < kBrickWorkKinds; ++k) {
-      stats->work_bricks[k] = work_n[k];
-      stats->work_seconds[k] = work_ns[k] * 1e-9;
-    }
-    stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-  }
+  if (stats) counters.report(n, t_start, *stats);
 }
 
 Volume generate(const Preset& p, const GenerateOptions& opt, GenerateStats* stats) {

@@ -1,0 +1,155 @@
+// `cloudgen generate`: a preset into one volume, exported to every -o file in one batch (or to a VDB
+// sequence with --frames, or over MPI ranks with --mpi).
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <sstream>
+
+#include "cloudgen/cli_parse.h"
+#include "cloudgen/generate.h"
+#include "cloudgen/io.h"
+#include "cloudgen/motion.h"
+#include "cloudgen/preset.h"
+#include "cloudgen/view.h"
+#include "commands.h"
+
+namespace cloudgen::cli {
+namespace {
+
+std::string human(uint64_t b) {
+  std::ostringstream o;
+  o.precision(3);
+  if (b >= (1ull << 30)) o << b / double(1ull << 30) << " GiB";
+  else o << b / double(1ull << 20) << " MiB";
+  return o.str();
+}
+
+void run_generate(const GenerateArgs& a) {
+  std::vector<std::string> sets = a.sets;
+  if (!a.seed.empty()) sets.push_back("seed=" + std::to_string(parse_uint(a.seed, "--seed", kMaxSeed)));
+  if (!a.up.empty()) sets.push_back("export.vdb.up=" + a.up);
+  const std::string path = resolve_preset_path(a.preset);
+  Preset p = load_preset(path, sets);
+  if (a.resolution) rescale(p, a.resolution);
+  if (!a.frames.empty() || !a.fps.empty() || a.loop) return run_generate_sequence(p, path, a);
+  if (a.outputs.empty()) throw InputError("-o/--output: give at least one output file (.vdb, .nvdb, .raw, .ktx2, .png, .exr)");
+  const ExportOptions& eo = p.export_options;
+  std::vector<Format> formats;
+  bool detail = false;
+  // Every file of every output is claimed before any work: an output that would replace the
+  // preset, or a sidecar that would collide with another output, is refused up front.
+  OutputBatch batch;
+  batch.protect(path, "the input preset " + path);
+  for (const auto& o : a.outputs) {
+    Format f = a.format.empty() ? format_from_path(o) : parse_format(a.format);
+    formats.push_back(f);
+    detail |= needs_detail(f, eo);
+    for (const OutputFile& of : output_files(o, f, true)) batch.claim(of.path, of.role);
+  }
+  const bool mpi = mpi_requested(a.mpi);  // ranks hold sparse bricks, not the dense volume
+  const uint64_t need = memory_estimate(p, detail), limit = parse_bytes(a.max_memory, "--max-memory");
+  if (!mpi && need > limit)
+    throw InputError(path + ": resolution " + std::to_string(p.resolution[0]) + "x" + std::to_string(p.resolution[1]) + "x" +
+                     std::to_string(p.resolution[2]) + " needs about " + human(need) + ", more than --max-memory " +
+                     a.max_memory + " (lower /resolution or use --resolution N)");
+  GenerateOptions go;
+  go.threads = a.threads;
+  go.detail = detail;
+  // Only baked VDB / NanoVDB outputs: the detail channels matter only where the erosion is baked
+  // (all three channels and a non-zero erosion: the viewer's rule), and there only where density
+  // is non-zero. The files' bytes are the same either way.
+  bool baked_only = eo.vdb_detail && eo.vdb_bake_erosion;
+  for (Format f : formats) baked_only = baked_only && (f == Format::Vdb || f == Format::Nvdb);
+  if (baked_only) {
+    const bool erodes = p.channels[1].enabled && p.channels[2].enabled && p.channels[3].enabled &&
+                        look_of_view(p.view, path).erosion > 0;
+    if (erodes) go.detail_only_in_cloud = true;
+    else go.detail = false;
+  }
+  go.skip_empty = !a.no_skip;
+  go.cancel = &g_cancel;
+  auto bar = progress_bar("generate", a.quiet);
+  auto held = std::make_shared<std::atomic<bool>>(false);
+  go.progress = [bar, held](double f) {
+    if (!held->exchange(true)) test_hold("generate");
+    if (bar) bar(f);
+  };
+  if (!a.region.empty()) {
+    const Region r = parse_region(a.region, p.resolution);
+    go.region_origin = r.origin;
+    go.region_extent = r.extent;
+  }
+  if (mpi) return run_generate_mpi(p, go, a.outputs, formats, a.quiet, a.stats);
+  GenerateStats st;
+  Volume v = generate(p, go, &st);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (size_t i = 0; i < a.outputs.size(); ++i) {
+    if (g_cancel) throw Cancelled();
+    write_volume(v, a.outputs[i], formats[i], eo, batch);
+  }
+  test_hold("commit");
+  if (g_cancel) throw Cancelled();
+  batch.commit();
+  if (!a.quiet)
+    for (size_t i = 0; i < a.outputs.size(); ++i)
+      std::fprintf(stderr, "wrote %s (%s)\n", printable(a.outputs[i]).c_str(), format_name(formats[i]));
+  const double write_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!a.quiet || a.stats) {
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    std::fprintf(stderr,
+                 "%s: %ux%ux%u voxels, %zu active (%.2f%%), bricks %zu (%zu skipped, %zu with detail), "
+                 "generate %.3f s, write %.3f s, peak memory %s\n",
+                 printable(p.name).c_str(), v.dims[0], v.dims[1], v.dims[2], st.active_voxels,
+                 100.0 * st.active_voxels / std::max<size_t>(1, v.voxel_count()), st.bricks, st.bricks_skipped,
+                 st.detail_bricks, st.seconds, write_s, human(uint64_t(ru.ru_maxrss) * 1024).c_str());
+  }
+  if (g_cancel) {
+    std::fprintf(stderr, "interrupted after every output was complete and in place\n");
+    g_cancel_reported = true;  // main exits 130 without claiming nothing was written
+  }
+}
+
+}  // namespace
+
+void add_generate_command(CLI::App& app, std::function<void()>& run) {
+  auto ga = std::make_shared<GenerateArgs>();
+  CLI::App* gen = app.add_subcommand("generate", "Generate a cloud volume from a preset and export it.");
+  gen->add_option("preset", ga->preset, "Preset file, or the name of a shipped preset (see `cloudgen presets`)")->required();
+  gen->add_option("-o,--output", ga->outputs, "Output file; repeat for several formats from one generation")->required();
+  gen->add_option("--format", ga->format, "vdb | nvdb | raw | ktx2 | atlas-png | atlas-exr (default: from each extension)");
+  gen->add_option("--seed", ga->seed, "Override the preset's seed: an integer in [0, 2^53]");
+  gen->add_option("--up", ga->up, "VDB up axis: z (Blender, default) or y (Houdini, Maya); = --set export.vdb.up=...");
+  gen->add_option("--resolution", ga->resolution, "Rescale so the longest axis has N voxels (world size kept)");
+  gen->add_option("--threads", ga->threads, "Worker threads (0 = all cores); output bytes are identical for any count")
+      ->check(CLI::Range(0, kMaxThreads));
+  gen->add_option("--set", ga->sets, "Override a preset key with the same validation, e.g. --set threshold=0.4 "
+                                     "--set channels.r.octaves=6 --set resolution=[256,64,256]");
+  gen->add_option("--region", ga->region,
+                  "Generate only X,Y,Z:W,H,D voxels, each extent >= 1, inside the volume (values equal the full run's)");
+  gen->add_option("--max-memory", ga->max_memory, "Refuse presets whose memory estimate exceeds this (default 16G)");
+  gen->add_flag("--no-skip", ga->no_skip, "Evaluate noise in empty bricks too (for benchmarks; same output)");
+  gen->add_flag("--stats", ga->stats, "Print timing and memory even with --quiet");
+  gen->add_flag("--mpi", ga->mpi, "Generate on the ranks of an MPI job (implied under mpirun; docs/scale-out.md)");
+  gen->add_flag("-q,--quiet", ga->quiet, "No progress bar or summary");
+  gen->add_option("--frames", ga->frames,
+                  "Bake frames A:B of the preset's motion into a VDB sequence, -o out/cloud_####.vdb (#### = the frame "
+                  "number, Blender's naming); frame F is the volume displaced by the motion at F / fps s (docs/motion.md)");
+  gen->add_option("--fps", ga->fps, "Frames per second of --frames (default 24)");
+  gen->add_flag("--loop", ga->loop,
+                "Snap the motion so frame B + 1 equals frame A: whole flow cycles, and whole tiles of wind "
+                "(needs motion.wind_shear = 0; box presets need motion.wind_speed = 0)");
+  std::string keys;
+  for (const auto& pi : params()) {
+    std::string k = pi.pointer.substr(1);
+    std::replace(k.begin(), k.end(), '/', '.');
+    keys += "  " + k + " (" + pi.range + ", default " + pi.default_value + ")\n";
+  }
+  gen->footer("Preset keys (docs/presets.md explains each):\n" + keys + "\n" + motion_help());
+  gen->callback([ga, &run] { run = [ga] { run_generate(*ga); }; });
+}
+
+}  // namespace cloudgen::cli
