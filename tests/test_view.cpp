@@ -224,6 +224,16 @@ TEST(BlenderExport, BlenderCommandErrorsNameTheProblem) {
   EXPECT_EQ(run("env PATH=/nonexistent CLOUDGEN_BLENDER=", "blender tiny -o " + (dir / "x.blend"), out), 2) << out;
   EXPECT_NE(out.find("install Debian's package `blender`"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir / "x.blend"));
+  // A "blender" that exits 0 but writes nothing (here /bin/true) is a failure, not a written scene.
+  EXPECT_EQ(run("env CLOUDGEN_BLENDER=/bin/true", "blender tiny -o " + (dir / "x.blend") + " --render " + (dir / "x.png"),
+                out),
+            2)
+      << out;
+  EXPECT_EQ(out.find("wrote " + (dir / "x.blend")), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir / "x.blend"));
+  EXPECT_FALSE(fs::exists(dir / "x.png"));
+  for (const std::string& f : testutil::list_dir(dir.path))
+    EXPECT_EQ(f.find(".tmp-"), std::string::npos) << "a temporary was left: " << f;
 }
 
 TEST(BlenderExport, BakedErosionReplacesTheDetailGrids) {

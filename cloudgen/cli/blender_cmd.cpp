@@ -60,6 +60,13 @@ std::string script_path() {
   return std::string(CLOUD_SOURCE_DIR) + "/scripts/blender_scene.py";
 }
 
+/// Whether the file at `path` begins with the bytes of `magic`.
+bool starts_with_bytes(const std::string& path, const std::string& magic) {
+  std::ifstream in(path, std::ios::binary);
+  std::string head(magic.size(), '\0');
+  return in.read(&head[0], std::streamsize(head.size())) && head == magic;
+}
+
 /// Runs argv with stdout and stderr into `log`; returns the exit status (-1 when killed).
 int run_logged(const std::vector<std::string>& argv, const std::string& log) {
   std::vector<char*> cargs;
@@ -330,7 +337,9 @@ void write_scene(const BlenderArgs& a, json& s, const std::string& blender, cons
                                scene_json},
                               log);
     if (g_cancel) throw Cancelled();
-    if (rc != 0 || !fs::exists(tmp_blend) || (!tmp_png.empty() && !fs::exists(tmp_png)))
+    // The temporaries exist before Blender runs (empty): what it wrote must start as its format does.
+    if (rc != 0 || !starts_with_bytes(tmp_blend, "BLENDER") ||
+        (!tmp_png.empty() && !starts_with_bytes(tmp_png, "\x89PNG\r\n\x1a\n")))
       throw IoError(blender + " failed (exit " + std::to_string(rc) + ") building " + a.output + "; its last lines:\n" +
                     tail_of(log, 15));
   };
