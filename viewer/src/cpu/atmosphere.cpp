@@ -181,9 +181,23 @@ namespace {
 
 using namespace glm;
 
-// atmosphere.glsl in double precision; the LUT lookup reads `lut` (may be empty while computing).
-struct AtmosphereShader {
+// Every lookup atmosphere.glsl makes, each reading nothing (0): a shader class below derives from
+// this and defines only the lookups its computation reads.
+struct NoAtmosphereTexels {
   CV_GLSL_DOUBLE_TYPES;
+  vec3 transmittance_texel(ivec2) const { return vec3(0.0); }
+  vec3 multiple_scattering_texel(ivec2) const { return vec3(0.0); }
+  vec3 irradiance_texel(int) const { return vec3(0.0); }
+  vec3 scattering_texel(ivec3) const { return vec3(0.0); }  // the 4D LUT: ScatteringShader
+  vec3 single_mie_texel(ivec3) const { return vec3(0.0); }
+  vec3 scattering_multiple_texel(ivec3) const { return vec3(0.0); }
+  vec3 air_texel(int, ivec3) const { return vec3(0.0); }  // the camera's air LUT: the CPU renderer's
+  vec3 orders_texel(int, ivec3) const { return vec3(0.0); }
+  vec3 orders_irradiance_texel(int) const { return vec3(0.0); }
+};
+
+// atmosphere.glsl in double precision; the LUT lookup reads `lut` (may be empty while computing).
+struct AtmosphereShader : NoAtmosphereTexels {
 
   const ref::AtmosphereParams& u_atmo;
   const std::vector<glm::dvec3>* lut = nullptr;  // transmittance
@@ -193,20 +207,13 @@ struct AtmosphereShader {
   vec3 transmittance_texel(ivec2 t) const { return (*lut)[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
   vec3 multiple_scattering_texel(ivec2 t) const { return (*ms)[size_t(t.y) * CV_MS_LUT_SIZE + size_t(t.x)]; }
   vec3 irradiance_texel(int t) const { return (*irr)[size_t(t)]; }
-  vec3 scattering_texel(ivec3) const { return vec3(0.0); }  // the 4D LUT: ScatteringShader below
-  vec3 single_mie_texel(ivec3) const { return vec3(0.0); }
-  vec3 scattering_multiple_texel(ivec3) const { return vec3(0.0); }
-  vec3 air_texel(int, ivec3) const { return vec3(0.0); }  // the camera's air LUT: the CPU renderer
-  vec3 orders_texel(int, ivec3) const { return vec3(0.0); }
-  vec3 orders_irradiance_texel(int) const { return vec3(0.0); }
 
 #include "../../shaders/atmosphere.glsl"
 };
 
 // The same header at other LUT sizes (Num/Den times 256x64), for the size-against-error study only.
 template <int Num, int Den>
-struct SizedAtmosphereShader {
-  CV_GLSL_DOUBLE_TYPES;
+struct SizedAtmosphereShader : NoAtmosphereTexels {
 
   const ref::AtmosphereParams& u_atmo;
   const std::vector<glm::dvec3>* lut = nullptr;
@@ -219,14 +226,6 @@ struct SizedAtmosphereShader {
 #define CV_TRANSMITTANCE_H (64 * Num / Den)
   static constexpr int W = CV_TRANSMITTANCE_W, H = CV_TRANSMITTANCE_H;
   vec3 transmittance_texel(ivec2 t) const { return (*lut)[size_t(t.y) * W + size_t(t.x)]; }
-  vec3 multiple_scattering_texel(ivec2) const { return vec3(0.0); }  // not studied at other sizes
-  vec3 irradiance_texel(int) const { return vec3(0.0); }
-  vec3 scattering_texel(ivec3) const { return vec3(0.0); }
-  vec3 single_mie_texel(ivec3) const { return vec3(0.0); }
-  vec3 scattering_multiple_texel(ivec3) const { return vec3(0.0); }
-  vec3 air_texel(int, ivec3) const { return vec3(0.0); }  // the camera's air LUT: the CPU renderer
-  vec3 orders_texel(int, ivec3) const { return vec3(0.0); }
-  vec3 orders_irradiance_texel(int) const { return vec3(0.0); }
 #include "../../shaders/atmosphere.glsl"
 #pragma pop_macro("CV_TRANSMITTANCE_W")
 #pragma pop_macro("CV_TRANSMITTANCE_H")
@@ -237,10 +236,10 @@ std::vector<glm::dvec3> sized_lookups(const ref::AtmosphereParams& p, const std:
   using S = SizedAtmosphereShader<Num, Den>;
   std::vector<glm::dvec3> texels(size_t(S::W) * S::H);
   tbb::parallel_for(0, S::H, [&](int y) {
-    S sh{p};
+    S sh{{}, p};
     for (int x = 0; x < S::W; ++x) texels[size_t(y) * S::W + size_t(x)] = sh.compute_transmittance_texel(glm::ivec2(x, y));
   });
-  S sh{p, &texels};
+  S sh{{}, p, &texels};
   std::vector<glm::dvec3> out;
   for (const glm::dvec2& q : r_mu)
     out.push_back(sh.ray_intersects_ground(q.x, q.y) ? glm::dvec3(0.0) : sh.transmittance_to_top(q.x, q.y));
@@ -251,8 +250,7 @@ std::vector<glm::dvec3> sized_lookups(const ref::AtmosphereParams& p, const std:
 // The header with the multiple-scattering LUT at N x N texels (the transmittance at its shipped
 // size), for the size-against-error study only.
 template <int N>
-struct SizedMsShader {
-  CV_GLSL_DOUBLE_TYPES;
+struct SizedMsShader : NoAtmosphereTexels {
 
   const ref::AtmosphereParams& u_atmo;
   const std::vector<glm::dvec3>* lut = nullptr;
@@ -263,13 +261,6 @@ struct SizedMsShader {
 #define CV_MS_LUT_SIZE N
   vec3 transmittance_texel(ivec2 t) const { return (*lut)[size_t(t.y) * CV_TRANSMITTANCE_W + size_t(t.x)]; }
   vec3 multiple_scattering_texel(ivec2 t) const { return (*ms)[size_t(t.y) * N + size_t(t.x)]; }
-  vec3 irradiance_texel(int) const { return vec3(0.0); }
-  vec3 scattering_texel(ivec3) const { return vec3(0.0); }
-  vec3 single_mie_texel(ivec3) const { return vec3(0.0); }
-  vec3 scattering_multiple_texel(ivec3) const { return vec3(0.0); }
-  vec3 air_texel(int, ivec3) const { return vec3(0.0); }  // the camera's air LUT: the CPU renderer
-  vec3 orders_texel(int, ivec3) const { return vec3(0.0); }
-  vec3 orders_irradiance_texel(int) const { return vec3(0.0); }
 #include "../../shaders/atmosphere.glsl"
 #pragma pop_macro("CV_MS_LUT_SIZE")
 };
@@ -280,10 +271,10 @@ std::vector<glm::dvec3> sized_ms_lookups(const ref::AtmosphereParams& p, const s
   AtmosphereLuts base = compute_atmosphere_luts(p);
   std::vector<glm::dvec3> texels(static_cast<size_t>(N) * N);
   tbb::parallel_for(0, N, [&](int y) {
-    SizedMsShader<N> sh{p, &base.transmittance};
+    SizedMsShader<N> sh{{}, p, &base.transmittance};
     for (int x = 0; x < N; ++x) texels[size_t(y) * N + size_t(x)] = sh.compute_multiple_scattering_texel(glm::ivec2(x, y));
   });
-  SizedMsShader<N> sh{p, &base.transmittance, &texels};
+  SizedMsShader<N> sh{{}, p, &base.transmittance, &texels};
   std::vector<glm::dvec3> out;
   for (const glm::dvec2& q : r_mu_s) out.push_back(sh.multiple_scattering_at(q.x, q.y));
   size = N;
@@ -293,8 +284,7 @@ std::vector<glm::dvec3> sized_ms_lookups(const ref::AtmosphereParams& p, const s
 // The orders passes of atmosphere.density_orders on the CPU: the header over the orders table's
 // six parts (single Rayleigh, single Mie, the last order, the density's Rayleigh part, the sum, its Mie part) and the last
 // order's ground irradiance, as the GL passes read them.
-struct OrdersShader {
-  CV_GLSL_DOUBLE_TYPES;
+struct OrdersShader : NoAtmosphereTexels {
 
   const ref::AtmosphereParams& u_atmo;
   const AtmosphereLuts& base;
@@ -306,10 +296,6 @@ struct OrdersShader {
     return base.multiple_scattering[size_t(t.y) * CV_MS_LUT_SIZE + size_t(t.x)];
   }
   vec3 irradiance_texel(int t) const { return base.irradiance[size_t(t)]; }
-  vec3 scattering_texel(ivec3) const { return vec3(0.0); }
-  vec3 single_mie_texel(ivec3) const { return vec3(0.0); }
-  vec3 scattering_multiple_texel(ivec3) const { return vec3(0.0); }
-  vec3 air_texel(int, ivec3) const { return vec3(0.0); }  // the camera's air LUT: the CPU renderer
   vec3 orders_texel(int p, ivec3 t) const { return (*part[size_t(p)])[orders_index(t)]; }
   vec3 orders_irradiance_texel(int t) const { return (*irr_orders)[size_t(t)]; }
 #include "../../shaders/atmosphere.glsl"
@@ -320,7 +306,7 @@ void compute_orders_table(const AtmosphereLuts& base, OrdersTable& out) {
   const size_t n = size_t(kOrdersNX) * kOrdersNY * kOrdersNZ;
   std::vector<glm::dvec3> single_r(n), single_m(n), delta(n), density_r(n), density_m(n), sum(n, glm::dvec3(0.0));
   std::vector<glm::dvec3> irr(CV_IRRADIANCE_W, glm::dvec3(0.0));
-  OrdersShader sh{base.params, base, {{&single_r, &single_m, &delta, &density_r, &sum, &density_m}}, &irr};
+  OrdersShader sh{{}, base.params, base, {{&single_r, &single_m, &delta, &density_r, &sum, &density_m}}, &irr};
   auto each_texel = [&](const std::function<void(const glm::ivec3&, size_t)>& fn) {
     tbb::parallel_for(0, kOrdersNZ * kOrdersNY, [&](int row) {
       const int z = row / kOrdersNY, y = row % kOrdersNY;
@@ -349,8 +335,7 @@ void compute_orders_table(const AtmosphereLuts& base, OrdersTable& out) {
 // lookup reads them (a lookup reads 32 of the 1M; thread-safe), each by the header's
 // compute_scattering_texel, so a study of a few hundred rays costs milliseconds.
 template <int MuS, int Mu, int R>
-struct ScatteringShader {
-  CV_GLSL_DOUBLE_TYPES;
+struct ScatteringShader : NoAtmosphereTexels {
 
   using Table = ScatteringTexels;
   const ref::AtmosphereParams& u_atmo;
@@ -380,7 +365,7 @@ struct ScatteringShader {
       if (it != table.texels.end()) return it->second;
     }
     std::array<glm::dvec3, 3> v;
-    ScatteringShader self{u_atmo, base, table};
+    ScatteringShader self{{}, u_atmo, base, table};
     self.compute_scattering_texel(t, v[0], v[1], v[2]);
     std::lock_guard<std::mutex> lock(table.mutex);
     return table.texels.emplace(key, v).first->second;  // unordered_map: references stay valid
@@ -388,9 +373,7 @@ struct ScatteringShader {
   vec3 scattering_texel(ivec3 t) const { return lut_texel(t)[0]; }
   vec3 single_mie_texel(ivec3 t) const { return lut_texel(t)[1]; }
   vec3 scattering_multiple_texel(ivec3 t) const { return lut_texel(t)[2]; }
-  vec3 air_texel(int, ivec3) const { return vec3(0.0); }  // the camera's air LUT: the CPU renderer
   vec3 orders_texel(int part, ivec3 t) const { return part == 4 ? base.orders_sum()[orders_index(t)] : vec3(0.0); }
-  vec3 orders_irradiance_texel(int) const { return vec3(0.0); }
 #include "../../shaders/atmosphere.glsl"
 #pragma pop_macro("CV_SCATTERING_MU_S")
 #pragma pop_macro("CV_SCATTERING_MU")
@@ -402,7 +385,7 @@ std::vector<glm::dvec3> sized_scattering_lookups(const AtmosphereLuts& base, con
                                                  glm::ivec3& size, size_t* texels_computed) {
   using S = ScatteringShader<MuS, Mu, R>;
   typename S::Table table;
-  S sh{base.params, base, table};
+  S sh{{}, base.params, base, table};
   std::vector<glm::dvec3> out;
   for (const SkyQuery& q : queries) {
     glm::dvec3 transmittance(1.0), ground(0.0);
@@ -454,7 +437,7 @@ std::vector<glm::dvec3> scattering_lookups_at_size(const AtmosphereLuts& luts, i
 glm::dvec4 scattering_parametrisation_roundtrip(const AtmosphereLuts& luts) {
   using S = ScatteringShader<CV_SCATTERING_MU_S, CV_SCATTERING_MU, CV_SCATTERING_R>;
   S::Table table;
-  S sh{luts.params, luts, table};
+  S sh{{}, luts.params, luts, table};
   glm::dvec4 worst(0.0);
   for (int z = 0; z < S::NZ; ++z)
     for (int y = 0; y < S::NY; ++y)
@@ -489,7 +472,7 @@ AtmosphereLuts compute_atmosphere_luts(const ref::AtmosphereParams& p) {
   };
   luts.transmittance.resize(size_t(CV_TRANSMITTANCE_W) * CV_TRANSMITTANCE_H);
   tbb::parallel_for(0, CV_TRANSMITTANCE_H, [&](int y) {
-    AtmosphereShader sh{luts.params};
+    AtmosphereShader sh{{}, luts.params};
     for (int x = 0; x < CV_TRANSMITTANCE_W; ++x)
       luts.transmittance[size_t(y) * CV_TRANSMITTANCE_W + size_t(x)] = sh.compute_transmittance_texel(glm::ivec2(x, y));
   });
@@ -497,7 +480,7 @@ AtmosphereLuts compute_atmosphere_luts(const ref::AtmosphereParams& p) {
   luts.multiple_scattering.assign(size_t(CV_MS_LUT_SIZE) * CV_MS_LUT_SIZE, glm::dvec3(0.0));
   if (p.scattering_orders > 1.5)
     tbb::parallel_for(0, CV_MS_LUT_SIZE, [&](int y) {
-      AtmosphereShader sh{luts.params, &luts.transmittance};
+      AtmosphereShader sh{{}, luts.params, &luts.transmittance};
       for (int x = 0; x < CV_MS_LUT_SIZE; ++x)
         luts.multiple_scattering[size_t(y) * CV_MS_LUT_SIZE + size_t(x)] =
             sh.compute_multiple_scattering_texel(glm::ivec2(x, y));
@@ -505,7 +488,7 @@ AtmosphereLuts compute_atmosphere_luts(const ref::AtmosphereParams& p) {
   lap(1);
   luts.irradiance.assign(CV_IRRADIANCE_W, glm::dvec3(0.0));
   tbb::parallel_for(0, CV_IRRADIANCE_W, [&](int x) {
-    AtmosphereShader sh{luts.params, &luts.transmittance, &luts.multiple_scattering, &luts.irradiance};
+    AtmosphereShader sh{{}, luts.params, &luts.transmittance, &luts.multiple_scattering, &luts.irradiance};
     luts.irradiance[size_t(x)] = sh.compute_irradiance_texel(x);
   });
   lap(2);
@@ -518,23 +501,23 @@ const std::vector<glm::dvec3>& AtmosphereLuts::orders_sum() const {
 }
 
 glm::dvec3 AtmosphereLuts::to_top(double r, double mu) const {
-  AtmosphereShader sh{params, &transmittance, &multiple_scattering, &irradiance};
+  AtmosphereShader sh{{}, params, &transmittance, &multiple_scattering, &irradiance};
   if (sh.ray_intersects_ground(r, mu)) return glm::dvec3(0.0);
   return sh.transmittance_to_top(r, mu);
 }
 
 glm::dvec3 AtmosphereLuts::sun_transmittance(double r, double mu_s) const {
-  AtmosphereShader sh{params, &transmittance, &multiple_scattering, &irradiance};
+  AtmosphereShader sh{{}, params, &transmittance, &multiple_scattering, &irradiance};
   return sh.transmittance_to_sun(r, mu_s);
 }
 
 glm::dvec3 AtmosphereLuts::ground_irradiance(double mu_s) const {
-  AtmosphereShader sh{params, &transmittance, &multiple_scattering, &irradiance};
+  AtmosphereShader sh{{}, params, &transmittance, &multiple_scattering, &irradiance};
   return sh.ground_sky_irradiance(mu_s);
 }
 
 glm::dvec3 AtmosphereLuts::sky_radiance(double alt, const glm::dvec3& v, const glm::dvec3& s, double t_max) const {
-  AtmosphereShader sh{params, &transmittance, &multiple_scattering, &irradiance};
+  AtmosphereShader sh{{}, params, &transmittance, &multiple_scattering, &irradiance};
   glm::dvec3 t, g;
   double t_end = 0;
   return sh.atmosphere_scattering(alt, v, s, glm::dvec3(1.0), t_max, t, t_end, g);
@@ -564,7 +547,7 @@ SkyAmbient sky_ambient(const AtmosphereSettings& s, const glm::dvec3& sun_dir, d
     if (last_s == s && last_sun == sun_dir && last_solar == solar && last_alt == altitude) return last_value;
   }
   std::shared_ptr<const AtmosphereLuts> luts = shared_atmosphere_luts(s);
-  AtmosphereShader sh{luts->params, &luts->transmittance, &luts->multiple_scattering, &luts->irradiance};
+  AtmosphereShader sh{{}, luts->params, &luts->transmittance, &luts->multiple_scattering, &luts->irradiance};
   // Midpoint rule over each hemisphere in (|cos theta|, phi): E = int L |cos theta| d(cos theta) d phi.
   // Below: the air under the camera and the ground (lit by the sun and the sky) behind it.
   const int n_theta = 16, n_phi = 32;
