@@ -26,7 +26,7 @@ using namespace cloudviewer;
 namespace {
 
 // The sky tests' frame: 160x90, or 64x36 under the sanitizers (test_util.h).
-const int kW = testutil::sized(160, 64), kH = testutil::sized(90, 36);
+const int kW = testutil::kFrameW, kH = testutil::kFrameH;  // 160x90, 64x36 under the sanitizers
 
 using testutil::gl_context;
 using testutil::run;

@@ -32,8 +32,7 @@ using testutil::with;
 
 namespace {
 
-// The render tests' frame: 160x90, or 64x36 under the sanitizers (test_util.h).
-const int kW = testutil::sized(160, 64), kH = testutil::sized(90, 36);
+const int kW = testutil::kFrameW, kH = testutil::kFrameH;
 const double kAspect = double(kW) / kH;
 
 }  // namespace

@@ -33,15 +33,12 @@ using testutil::with;
 
 namespace {
 
-// The render tests' frame: 160x90, or 64x36 under the sanitizers (test_util.h).
-const int kW = testutil::sized(160, 64), kH = testutil::sized(90, 36);
+const int kW = testutil::kFrameW, kH = testutil::kFrameH;
 const double kAspect = double(kW) / kH;
 
-uint32_t lcg(uint32_t& h) { return (h = h * 1664525u + 1013904223u) >> 8; }
+using testutil::lcg;
 
-FrameImages render(bool on_gl, const PreparedVolume& vol, const FrameSetup& f) {
-  return on_gl ? render_gl(vol, f) : render_cpu(vol, f);
-}
+auto& render = testutil::render_on;  // render(on_gl, vol, frame)
 
 }  // namespace
 

@@ -299,8 +299,8 @@ TEST(ViewerMotion, OccupancySkippingStaysExactWhileMoving) {
     FrameSetup fon = frame_at(vol, on, 240.0), foff = frame_at(vol, off, 240.0);
     EXPECT_LT(fon.params.large_step_count, frame_at(vol, on, 0.0).params.large_step_count)
         << "the large step must shrink while the displacement is steep";
-    FrameImages a = gl ? render_gl(vol, fon) : render_cpu(vol, fon);
-    FrameImages b = gl ? render_gl(vol, foff) : render_cpu(vol, foff);
+    FrameImages a = testutil::render_on(gl, vol, fon);
+    FrameImages b = testutil::render_on(gl, vol, foff);
     EXPECT_LE(max_abs_diff(a.linear, b.linear), 1e-5) << (gl ? "GL" : "CPU");
   }
 }

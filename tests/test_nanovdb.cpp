@@ -397,7 +397,7 @@ TEST(NanoVdb, TreeSkippingKeepsEverySampleOfThePlainMarch) {
       const int w = testutil::sized(96, 32), h = testutil::sized(54, 18);
       const FrameSetup fn = frame_for(c.vol, none, w, h), ft = frame_for(c.vol, tree, w, h);
       ASSERT_EQ(ft.params.skip_tree, 1.0) << what;
-      auto draw = [&](const FrameSetup& f) { return on_gl ? render_gl(c.vol, f) : render_cpu(c.vol, f); };
+      auto draw = [&](const FrameSetup& f) { return testutil::render_on(on_gl, c.vol, f); };
       const FrameImages a = draw(fn), b = draw(ft);
       EXPECT_GT(image_stats(a.display).stddev, 0.01) << what << ": a picture to compare";
       EXPECT_EQ(max_abs_diff(a.linear, b.linear), 0.0) << what;

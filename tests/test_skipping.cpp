@@ -32,20 +32,17 @@ using testutil::with;
 
 namespace {
 
-// The render tests' frame: 160x90, or 64x36 under the sanitizers (test_util.h).
-const int kW = testutil::sized(160, 64), kH = testutil::sized(90, 36);
+const int kW = testutil::kFrameW, kH = testutil::kFrameH;
 const double kAspect = double(kW) / kH;
 
-FrameImages render(bool on_gl, const PreparedVolume& vol, const FrameSetup& f) {
-  return on_gl ? render_gl(vol, f) : render_cpu(vol, f);
-}
+auto& render = testutil::render_on;  // render(on_gl, vol, frame)
 
 double loop_trips(bool on_gl, const PreparedVolume& vol, RenderSettings s, const Camera& cam, int w, int h) {
   s.output = OutputMode::Iterations;
   return testutil::loop_trips_sum(render(on_gl, vol, make_frame(vol, s, cam, default_sun(cam), w, h)));
 }
 
-uint32_t lcg(uint32_t& h) { return (h = h * 1664525u + 1013904223u) >> 8; }
+using testutil::lcg;
 
 // 60 voxels of density 1 at random places of a 64^3 box of 10 m voxels (the rest empty): what a
 // skipping radius one voxel too long gets wrong.

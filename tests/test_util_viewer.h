@@ -3,6 +3,7 @@
 // from key=value strings, the default framing, and `cloudviewer ARGS` run in process.
 #pragma once
 
+#include <cstdint>
 #include <initializer_list>
 #include <map>
 #include <memory>
@@ -44,6 +45,18 @@ inline cloudviewer::FrameImages render_gl(const cloudviewer::PreparedVolume& vol
   r.render(f);
   return r.read_back();
 }
+
+/// One frame of `vol` on GL (render_gl) or on the CPU reference.
+inline cloudviewer::FrameImages render_on(bool on_gl, const cloudviewer::PreparedVolume& vol,
+                                          const cloudviewer::FrameSetup& f) {
+  return on_gl ? render_gl(vol, f) : cloudviewer::render_cpu(vol, f);
+}
+
+/// The render tests' frame: 160x90, or 64x36 under the sanitizers (sized, test_util.h).
+inline const int kFrameW = sized(160, 64), kFrameH = sized(90, 36);
+
+/// A small deterministic generator for the tests' random cases: the next 24-bit value of `h`.
+inline uint32_t lcg(uint32_t& h) { return (h = h * 1664525u + 1013904223u) >> 8; }
 
 /// Primary-march loop trips summed over a frame rendered with render.output=iterations (each
 /// pixel's count in the red channel of the linear image).

@@ -287,7 +287,7 @@ TEST(ViewerRender, UniformSlabTransmittanceIsBeerLambert) {
                                "render.bloom=0"});
       s.steps = steps;
       FrameSetup f = make_frame(vol, s, cam, Sun{}, 41, 33);
-      FrameImages img = gl ? render_gl(vol, f) : render_cpu(vol, f);
+      FrameImages img = testutil::render_on(gl, vol, f);
       glm::dvec3 bmin = vol.origin - cam.eye, bmax = bmin + vol.size();
       int hits = 0;
       double worst = 0;
@@ -390,8 +390,8 @@ TEST(ViewerRender, OccupancySkippingDoesNotChangeTheImage) {
       on.occupancy_light = g.padding == 1;  // the light march's skipping too, on the tighter grids
       RenderSettings off = with({"render.occupancy=false", "render.steps=128"});
       FrameSetup fon = frame_for(vol, on, W, H), foff = frame_for(vol, off, W, H);
-      FrameImages a = gl ? render_gl(vol, fon) : render_cpu(vol, fon);
-      FrameImages b = gl ? render_gl(vol, foff) : render_cpu(vol, foff);
+      FrameImages a = testutil::render_on(gl, vol, fon);
+      FrameImages b = testutil::render_on(gl, vol, foff);
       double diff = max_abs_diff(a.linear, b.linear);
       std::cout << what << ": occupied " << vol.occupied_fraction << ", on vs off max |diff| " << diff << "\n";
       EXPECT_LE(diff, 1e-5) << what;
@@ -399,8 +399,8 @@ TEST(ViewerRender, OccupancySkippingDoesNotChangeTheImage) {
       // Fewer loop trips with skipping.
       RenderSettings ion = on, ioff = off;
       ion.output = ioff.output = OutputMode::Iterations;
-      FrameImages ia = gl ? render_gl(vol, frame_for(vol, ion, W, H)) : render_cpu(vol, frame_for(vol, ion, W, H));
-      FrameImages ib = gl ? render_gl(vol, frame_for(vol, ioff, W, H)) : render_cpu(vol, frame_for(vol, ioff, W, H));
+      FrameImages ia = testutil::render_on(gl, vol, frame_for(vol, ion, W, H));
+      FrameImages ib = testutil::render_on(gl, vol, frame_for(vol, ioff, W, H));
       double sa = 0, sb = 0;
       for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) sa += ia.linear.at(x, y)[0], sb += ib.linear.at(x, y)[0];
@@ -445,8 +445,8 @@ TEST(ViewerRender, OccupancyComparisonCatchesMissedIsolatedVoxels) {
       FrameSetup foff = make_frame(vol, off, cam, default_sun(cam), 160, 90);
       ASSERT_EQ(fon.params.occupancy_skip, 1.0);
       if (padding < 0) fon.params.large_step_count *= 3;
-      double diff = max_abs_diff((gl ? render_gl(vol, fon) : render_cpu(vol, fon)).linear,
-                                 (gl ? render_gl(vol, foff) : render_cpu(vol, foff)).linear);
+      double diff = max_abs_diff(testutil::render_on(gl, vol, fon).linear,
+                                 testutil::render_on(gl, vol, foff).linear);
       std::cout << (gl ? "GL" : "CPU") << " padding " << padding << " (large step " << fon.params.large_step_count
                 << " small steps): occupied " << vol.occupied_fraction << ", max |diff| " << diff << "\n";
       if (padding < 0) {

@@ -779,8 +779,9 @@ struct GlRenderer::Impl {
   // The Mie table (1D RGB float texture, fetched by index and interpolated by hand), uploaded for
   // the first Mie frame (computing it takes seconds) and again when a frame brings another table.
   uint64_t mie_uploaded = 0;
-  // The coverage map's texels, from the frame that last brought a map (layer mode).
-  const std::vector<float>* coverage_uploaded = nullptr;
+  // The coverage map whose texels are on the GPU (layer mode), held so that its address cannot
+  // be reused by another map.
+  std::shared_ptr<const std::vector<float>> coverage_uploaded;
   void ensure_mie_texture(const MiePhaseTable& mie) {
     if (tex_mie && mie.id == mie_uploaded) return;
     if (!tex_mie) {
@@ -1363,10 +1364,10 @@ void GlRenderer::Impl::bind_inputs(const FrameSetup& f, bool atlas, bool moved_o
   nvdb_table = nvdb_pages_ok && f.settings.nanovdb_lookup == NanoLookup::Table ? 1 : 0;
   if (int(f.params.phase_mode) == CV_PHASE_MIE) ensure_mie_texture(f.mie ? *f.mie : *computed_mie_table());
   glBindTextureUnit(CV_UNIT_MIE, tex_mie);
-  if (f.coverage && f.coverage.get() != coverage_uploaded) {
+  if (f.coverage && f.coverage != coverage_uploaded) {
     const int n = CV_COVERAGE_MAP_SIZE;
     glTextureSubImage2D(tex_coverage, 0, 0, 0, n, n, GL_RG, GL_FLOAT, f.coverage->data());
-    coverage_uploaded = f.coverage.get();
+    coverage_uploaded = f.coverage;
   }
   glBindTextureUnit(CV_UNIT_COVERAGE, tex_coverage);
   glBindTextureUnit(CV_UNIT_MOTION, tex_motion);
