@@ -301,6 +301,10 @@ TEST(Shape, BadInputNamesTheFieldAndWhatIsAllowed) {
     const std::string e = error_of(R"({"tiling": false, "shape": {"sources": )" + c.sources + "}}");
     EXPECT_NE(e.find("bad.json: " + c.expect), std::string::npos) << "for " << c.sources << "\n got: " << e << "\n want: " << c.expect;
   }
+  std::string many = "[";
+  for (int i = 0; i < 65; ++i) many += std::string(i ? ", " : "") + R"({"kind": "sphere", "center": [0, 0, 0], "radius": 1})";
+  EXPECT_NE(error_of(R"({"tiling": false, "shape": {"sources": )" + many + "]}}").find("/shape/sources: 65 sources; at most 64"),
+            std::string::npos);
   EXPECT_NE(error_of(R"({"shape": {"falloff": 0}})").find("/shape/falloff: 0 is out of range; allowed: number in [0.001, 1e+09]"),
             std::string::npos);
   EXPECT_NE(error_of(R"({"shape": {"blend": -1}})").find("/shape/blend: -1 is out of range"), std::string::npos);
@@ -331,16 +335,17 @@ TEST(Shape, CliValidatesAndGeneratesShapedPresets) {
   EXPECT_TRUE(std::filesystem::exists(dir / "x.vdb"));
 }
 
-// The proof skipping rests on: wherever zero_in_ball says so, s is 0 at every point of the ball,
-// for long, flat and turned ellipsoids, capsules and spheres, blended; and the smooth minimum never
-// exceeds the minimum nor falls below it by more than blend / 4.
+// The proofs skipping and the tiling check rest on: wherever zero_in_ball says so, s is 0 at every
+// point of the ball, and s is 0 outside support_box, for long, flat and turned ellipsoids, capsules
+// and spheres, blended; and the smooth minimum never exceeds the minimum nor falls below it by more
+// than blend / 4.
 TEST(Shape, BallBoundIsConservative) {
   uint64_t st = 12345;
   auto uni = [&](double a, double b) {
     st = st * 6364136223846793005ull + 1442695040888963407ull;
     return a + (b - a) * double(st >> 11) * (1.0 / 9007199254740992.0);
   };
-  size_t proven = 0;
+  size_t proven = 0, in_cloud = 0;
   for (int trial = 0; trial < 40; ++trial) {
     ShapeParams sp;
     sp.blend = trial % 3 ? uni(0, 200) : 0;
@@ -359,6 +364,13 @@ TEST(Shape, BallBoundIsConservative) {
     }
     ASSERT_TRUE(shape_problems(sp).empty());
     const ShapeField f(sp);
+    const auto box = f.support_box();
+    for (int q = 0; q < 4000; ++q) {  // cloud never outside the support box
+      const ShapeVec p{uni(-1500, 1500), uni(-1500, 1500), uni(-1500, 1500)};
+      if (!(f.density(p) > 0)) continue;
+      ++in_cloud;
+      for (int a = 0; a < 3; ++a) ASSERT_TRUE(p[a] > box[0][a] && p[a] < box[1][a]) << "trial " << trial << " axis " << a;
+    }
     for (int b = 0; b < 200; ++b) {
       const ShapeVec c{uni(-900, 900), uni(-900, 900), uni(-900, 900)};
       const double r = uni(0, 150);
@@ -373,9 +385,34 @@ TEST(Shape, BallBoundIsConservative) {
     }
   }
   EXPECT_GT(proven, 1000u);
+  EXPECT_GT(in_cloud, 1000u);
   for (int i = 0; i < 1000; ++i) {
     const double a = uni(-100, 100), b = uni(-100, 100), k = uni(0, 80), m = smooth_min(a, b, k);
     EXPECT_LE(m, std::min(a, b));
     EXPECT_GE(m, std::min(a, b) - k / 4 - 1e-12);
+  }
+}
+
+// Sources at the ends of their ranges (tiny and huge radii, far centres, hard and endless falloff,
+// endless blend): values stay finite and in [0, 1], and skipping still changes nothing.
+TEST(Shape, ExtremeSourcesStayFiniteAndExact) {
+  const std::vector<std::string> shapes = {
+      R"({"falloff": 0.001, "sources": [{"kind": "sphere", "center": [160, 160, 160], "radius": 0.001}]})",
+      R"({"falloff": 0.001, "blend": 1e9, "sources": [{"kind": "ellipsoid", "center": [160, 160, 160], "radii": [1e9, 0.001, 1e9]},
+                                                    {"kind": "capsule", "a": [0, 0, 0], "b": [0, 0, 0], "radius": 100}]})",
+      R"({"falloff": 1e9, "sources": [{"kind": "ellipsoid", "center": [-1e9, 1e9, -1e9], "radii": [0.001, 1e9, 0.001],
+                                       "scale": [1000, 0.001, 1000], "rotate": [360, -360, 45]}]})",
+      R"({"falloff": 50, "blend": 1e9, "sources": [{"kind": "sphere", "center": [100, 100, 100], "radius": 50},
+                                                  {"kind": "sphere", "center": [200, 200, 200], "radius": 50},
+                                                  {"kind": "capsule", "a": [1e9, 0, 0], "b": [-1e9, 0, 0], "radius": 1e9}]})",
+  };
+  for (const std::string& sh : shapes) {
+    SCOPED_TRACE(sh);
+    const Preset p = parse_preset(R"({"resolution": [32, 32, 32], "voxel_size": 10, "tiling": false, "shape": )" + sh + "}", "x.json");
+    GenerateOptions off;
+    off.skip_empty = false;
+    const Volume a = generate(p), b = generate(p, off);
+    for (float d : a.density) ASSERT_TRUE(d >= 0.0f && d <= 1.0f);
+    EXPECT_TRUE(same_bytes(a.density, b.density));
   }
 }

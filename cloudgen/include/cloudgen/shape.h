@@ -12,6 +12,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -42,8 +43,12 @@ struct ShapeParams {
   std::vector<ShapeSource> sources;
 };
 
-/// The problems of a shape section ("<pointer>", "<what>"), empty when it can be placed: each
-/// source has its kind's keys and no other kind's; a capsule's scale is uniform.
+/// At most this many sources (each costs every voxel near the shape an evaluation).
+inline constexpr size_t kMaxShapeSources = 64;
+
+/// The problems of a shape section ("<pointer>", "<what>"), empty when it can be placed: at most
+/// kMaxShapeSources sources, each with its kind's keys and no other kind's; a capsule's scale is
+/// uniform.
 std::vector<std::pair<std::string, std::string>> shape_problems(const ShapeParams& s);
 
 /// The sources placed in the world, ready to evaluate. Thread-safe to read.
@@ -63,6 +68,9 @@ class ShapeField {
   /// of `voxel_size` from `origin` (a tiling volume wraps there and shapes do not), or none.
   std::optional<ShapeVec> nonzero_at_side_faces(const ShapeVec& origin, const std::array<uint32_t, 3>& n,
                                                  double voxel_size) const;
+
+  /// A box (min, max corners) outside which s is 0: conservative, loose for long ellipsoids.
+  std::array<ShapeVec, 2> support_box() const;
 
   struct Prim {
     bool capsule;        ///< else an ellipsoid

@@ -67,7 +67,7 @@ void add_shape_keys(Add& add, double big) {
       "d the signed distance to the sources (negative inside); s = 0.5 on the surface, 0 from falloff / 2 outside.",
       [](Preset& p, const json& j, const Index&) { p.shape.falloff = j.get<double>(); });
   add("/shape/sources", "array", "[]", 0, 0,
-      "Shape sources (docs/shaping.md). Non-empty: s replaces the height profile, towers and coverage, and "
+      "Shape sources (docs/shaping.md), at most " + std::to_string(kMaxShapeSources) + ". Non-empty: s replaces the height profile, towers and coverage, and "
       "density = clamp(density_scale * (R * s - t) / (1 - t), 0, 1).",
       [](Preset& p, const json& j, const Index&) { p.shape.sources.resize(j.size()); });
   add("/shape/sources/*/kind", "string", "null", 0, 0,

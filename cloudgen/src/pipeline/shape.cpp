@@ -122,6 +122,8 @@ double shape_falloff(double d, double falloff) {
 
 std::vector<std::pair<std::string, std::string>> shape_problems(const ShapeParams& sp) {
   std::vector<std::pair<std::string, std::string>> out;
+  if (sp.sources.size() > kMaxShapeSources)
+    return {{"/shape/sources", std::to_string(sp.sources.size()) + " sources; at most " + std::to_string(kMaxShapeSources)}};
   for (size_t i = 0; i < sp.sources.size(); ++i) {
     const ShapeSource& s = sp.sources[i];
     const std::string ptr = "/shape/sources/" + std::to_string(i);
@@ -166,10 +168,35 @@ bool ShapeField::zero_in_ball(const ShapeVec& c, double radius) const {
   return lb >= falloff_ / 2 + 1e-6 * scale;
 }
 
+std::array<ShapeVec, 2> ShapeField::support_box() const {
+  // s > 0 needs d < falloff / 2, and the fold lowers min_i d_i by at most (n - 1) blend / 4, so
+  // some source has d_i < g: within r + g of a capsule's segment, or, for an ellipsoid, L < g, that
+  // is k0 < 1 + g / rmin: inside the ellipsoid with its radii grown by that factor.
+  const double g = falloff_ / 2 + double(prims_.size() - 1) * blend_ / 4;
+  std::array<ShapeVec, 2> box{{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}}};
+  for (const Prim& e : prims_) {
+    for (int a = 0; a < 3; ++a) {
+      double lo, hi;
+      if (e.capsule) {
+        lo = std::min(e.a[a], e.b[a]) - e.r - g, hi = std::max(e.a[a], e.b[a]) + e.r + g;
+      } else {
+        const double f = 1 + g / e.r;  // half extent of the grown ellipsoid along world axis a
+        const double h = f * std::hypot(e.rot[a][0] * e.radii[0], e.rot[a][1] * e.radii[1], e.rot[a][2] * e.radii[2]);
+        lo = e.c[a] - h, hi = e.c[a] + h;
+      }
+      box[0][a] = std::min(box[0][a], lo), box[1][a] = std::max(box[1][a], hi);
+    }
+  }
+  return box;
+}
+
 std::optional<ShapeVec> ShapeField::nonzero_at_side_faces(const ShapeVec& origin, const std::array<uint32_t, 3>& n,
                                                            double vs) const {
   auto at = [&](int a, uint32_t i) { return origin[a] + (i + 0.5) * vs; };
+  const std::array<ShapeVec, 2> box = support_box();
   for (int a : {0, 2}) {
+    const double margin = 1e-6 * (1 + std::abs(at(a, 0)) + std::abs(at(a, n[a] - 1)));
+    if (box[0][a] > at(a, 0) + margin && box[1][a] < at(a, n[a] - 1) - margin) continue;  // the usual case
     const int b = 2 - a;  // the other horizontal axis; the face spans b and y in patches of 16 x 16
     for (uint32_t side : {0u, n[a] - 1})
       for (uint32_t j0 = 0; j0 < n[1]; j0 += 16)
