@@ -416,3 +416,42 @@ TEST(Shape, ExtremeSourcesStayFiniteAndExact) {
     EXPECT_TRUE(same_bytes(a.density, b.density));
   }
 }
+
+// The placement convention the docs state: right-handed degrees about x, then y, then z (fixed
+// axes), about the source's centre, after scale, before translate. An ellipsoid long along its own
+// y (radii 10, 100, 10) must end up long along the axis each rotation predicts.
+TEST(Shape, RotationsFollowTheStatedConvention) {
+  struct Case {
+    ShapeVec rotate, scale, translate;
+    int long_axis;   ///< world axis of the tip at 100 m (times the scale) from the centre
+    double length;   ///< the tip's distance from the placed centre
+  };
+  const std::vector<Case> cases = {
+      {{0, 0, 0}, {1, 1, 1}, {0, 0, 0}, 1, 100},
+      {{90, 0, 0}, {1, 1, 1}, {0, 0, 0}, 2, 100},    // +y turns to +z about x
+      {{0, 0, 90}, {1, 1, 1}, {0, 0, 0}, 0, 100},    // +y turns to -x about z
+      {{90, 90, 0}, {1, 1, 1}, {0, 0, 0}, 0, 100},   // x first (+y to +z), then y (+z to +x)
+      {{0, 0, 90}, {1, 3, 1}, {7, -5, 2}, 0, 300},   // scaled along its own y first, moved last
+  };
+  for (const Case& c : cases) {
+    ShapeParams sp;
+    ShapeSource s;
+    s.kind = ShapeKind::Ellipsoid;
+    s.center = ShapeVec{50, 60, 70};
+    s.radii = ShapeVec{10, 100, 10};
+    s.rotate = c.rotate, s.scale = c.scale, s.translate = c.translate;
+    sp.sources = {s};
+    const ShapeField f(sp);
+    const ShapeVec m{50 + c.translate[0], 60 + c.translate[1], 70 + c.translate[2]};
+    for (int a = 0; a < 3; ++a)
+      for (double sign : {-1.0, 1.0}) {
+        ShapeVec p = m;
+        p[a] += sign * c.length;
+        const double d = f.distance(p);
+        SCOPED_TRACE("rotate " + std::to_string(c.rotate[0]) + "," + std::to_string(c.rotate[1]) + "," +
+                     std::to_string(c.rotate[2]) + " axis " + std::to_string(a));
+        if (a == c.long_axis) EXPECT_NEAR(d, 0.0, 1e-6);
+        else EXPECT_GT(d, 0.5 * c.length);
+      }
+  }
+}

@@ -4,6 +4,11 @@
 // noise R in [0, 1]. Float multiplication is monotone, so fl(fl(R*P)*C) <= fl(P*C) for R <= 1:
 // a brick whose max of P*C (no noise needed) is <= t is zero everywhere, and its noise is never
 // evaluated. Skipped and unskipped runs therefore give the same bytes (tested).
+//
+// With shape sources (shape.h) the noise-free factor is their base density s in place of P*C: a
+// brick is empty when a lower bound of the signed distance over the ball around its voxel centres
+// proves s = 0 (no voxel visited), else when no voxel's s (the value the brick itself computes)
+// passes the threshold with R = 1 (tests/test_shape.cpp).
 #include "cloudgen/generate.h"
 
 #include "cloudgen/channel.h"
