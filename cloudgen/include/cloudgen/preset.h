@@ -9,6 +9,7 @@
 
 #include "cloudgen/export_options.h"
 #include "cloudgen/motion.h"
+#include "cloudgen/shape.h"
 #include "cloudgen/view.h"
 #include "cloudgen/volume.h"
 #include "noise3d/noise3d.h"
@@ -77,6 +78,8 @@ struct Preset {
   uint32_t coverage_period = 2;
   int coverage_octaves = 3;
   double coverage_low = 0.35, coverage_high = 0.65;  ///< smoothstep edges on the noise in [0, 1]
+
+  ShapeParams shape;  ///< the `shape` section: sources that replace profile, towers and coverage (shape.h)
 
   double threshold = 0.3;
   double density_scale = 1.0;

@@ -4,10 +4,16 @@
 // noise R in [0, 1]. Float multiplication is monotone, so fl(fl(R*P)*C) <= fl(P*C) for R <= 1:
 // a brick whose max of P*C (no noise needed) is <= t is zero everywhere, and its noise is never
 // evaluated. Skipped and unskipped runs therefore give the same bytes (tested).
+//
+// With shape sources (shape.h) the noise-free factor is their base density s in place of P*C: a
+// brick is empty when a lower bound of the signed distance over the ball around its voxel centres
+// proves s = 0 (no voxel visited), else when no voxel's s (the value the brick itself computes)
+// passes the threshold with R = 1 (tests/test_shape.cpp).
 #include "cloudgen/generate.h"
 
 #include "cloudgen/channel.h"
 #include "cloudgen/cloud_type.h"
+#include "cloudgen/shape.h"
 #include "cloudgen/view.h"
 
 #include <tbb/blocked_range.h>
@@ -89,7 +95,8 @@ std::vector<float> coverage_map(const Preset& p, int threads) {
 namespace {
 
 /// The noise-free factors of the density, shared by the plan (bound) and its execution (values):
-/// profile by row, coverage by column, towers per voxel.
+/// profile by row, coverage by column, towers per voxel; or, when the preset has shape sources,
+/// their base density s alone (shape.h).
 struct Shape {
   const Preset& p;
   std::array<uint32_t, 3> N;
@@ -97,13 +104,20 @@ struct Shape {
   std::vector<float> coverage;  // [z][x] over the whole x-z plane (2D, cheap), empty = 1
   std::vector<Tower> towers;
   float t, inv, scale;
+  const ShapeField field;                 // empty: no shape sources
+  std::array<std::vector<double>, 3> pos;  // shape sources: world metres of the voxel centres per axis
 
-  Shape(const Preset& pr, int threads) : p(pr), N(pr.resolution) {
+  Shape(const Preset& pr, int threads) : p(pr), N(pr.resolution), field(pr.shape) {
     profile.resize(N[1]);
     for (uint32_t y = 0; y < N[1]; ++y) profile[y] = float(height_profile(p, (y + 0.5) / N[1]));
+    t = float(p.threshold), inv = float(1.0 / (1.0 - p.threshold)), scale = float(p.density_scale);
+    if (!field.empty()) {
+      for (int a = 0; a < 3; ++a)
+        for (uint32_t i = 0; i < N[a]; ++i) pos[a].push_back(p.origin[a] + (i + 0.5) * p.voxel_size);
+      return;  // the sources replace coverage and towers
+    }
     coverage = coverage_map(p, threads);
     towers = resolve_towers(p);
-    t = float(p.threshold), inv = float(1.0 / (1.0 - p.threshold)), scale = float(p.density_scale);
     for (const Tower& w : towers) {
       std::array<std::vector<double>, 3> q;
       for (int a = 0; a < 3; ++a) {
@@ -128,6 +142,7 @@ struct Shape {
   std::vector<std::array<int64_t, 6>> tower_box;  // inclusive voxel bounds (lo xyz, hi xyz), with a margin
   /// Shape factor without noise; the density is R * shape before the threshold.
   float operator()(uint32_t x, uint32_t y, uint32_t z) const {
+    if (!field.empty()) return float(field.density({pos[0][x], pos[1][y], pos[2][z]}));
     float prof = profile[y];
     if (!towers.empty()) {
       // q = sum over axes of ((i + 0.5) / N - c)^2 / sigma^2, in the order x, y, z; the terms are
@@ -172,6 +187,7 @@ struct Shape {
       c[a] = axis_set(a, lo[a], hi[a], wrap);
       if (c[a].empty()) return false;
     }
+    if (!field.empty()) return shaped_any(c);
     bool tower = false;
     for (const auto& r : tower_box) {
       bool hit = true;
@@ -192,6 +208,23 @@ struct Shape {
       for (uint32_t z : c[2])
         for (uint32_t x : c[0]) cmax = std::max(cmax, coverage[size_t(z) * N[0] + x]);
     return finish(1.0f, coverage.empty() ? pmax : pmax * cmax) > 0;
+  }
+  /// any_in for shape sources: none where a lower bound of d over the ball around the voxels' box
+  /// proves s = 0 (no voxel visited), else voxel by voxel, with the values the bricks compute.
+  bool shaped_any(const std::vector<uint32_t> (&c)[3]) const {
+    ShapeVec mid;
+    double r2 = 0;
+    for (int a = 0; a < 3; ++a) {
+      const auto [lo, hi] = std::minmax_element(c[a].begin(), c[a].end());
+      mid[a] = (pos[a][*lo] + pos[a][*hi]) / 2;
+      r2 += (pos[a][*hi] - mid[a]) * (pos[a][*hi] - mid[a]);
+    }
+    if (field.zero_in_ball(mid, std::sqrt(r2))) return false;
+    for (uint32_t z : c[2])
+      for (uint32_t y : c[1])
+        for (uint32_t x : c[0])
+          if (finish(1.0f, (*this)(x, y, z)) > 0) return true;
+    return false;
   }
   /// Whether the bound allows density > 0 at a voxel that may lie outside the volume: outside in
   /// y, or in x/z without wrapping, there is nothing; with wrapping x and z are taken modulo.
@@ -609,6 +642,26 @@ uint64_t memory_estimate(const Preset& p, bool need_detail) {
   return voxels * 4 * (channels + 1);
 }
 
+namespace {
+
+void hash_shape(std::ostream& o, const ShapeParams& s) {
+  auto vec = [&](const std::optional<ShapeVec>& v) {
+    if (v) o << (*v)[0] << ',' << (*v)[1] << ',' << (*v)[2] << ',';
+    else o << "-,";
+  };
+  o << "shape:" << s.blend << ',' << s.falloff << ';';
+  for (const ShapeSource& src : s.sources) {
+    o << (src.kind ? shape_kind_name(*src.kind) : "-") << ',';
+    vec(src.center), vec(src.radii), vec(src.a), vec(src.b);
+    if (src.radius) o << *src.radius << ',';
+    else o << "-,";
+    vec(src.translate), vec(src.rotate), vec(src.scale);
+    o << ';';
+  }
+}
+
+}  // namespace
+
 std::string preset_hash(const Preset& p) {
   // FNV-1a over a text rendering of every value-changing field (hex floats: exact). A new Preset
   // field that changes generated values must be added here.
@@ -626,6 +679,7 @@ std::string preset_hash(const Preset& p) {
   o << p.coverage_enabled << ',' << int(p.coverage_kind) << ',' << p.coverage_period << ',' << p.coverage_octaves << ','
     << p.coverage_low << ',' << p.coverage_high << ';' << p.threshold << ',' << p.density_scale << ';'
     << p.occupancy_cell << ',' << p.occupancy_padding << ';';
+  if (!p.shape.sources.empty()) hash_shape(o, p.shape);  // presets without sources keep their hash
   const ExportOptions& e = p.export_options;
   o << e.vdb_half << ',' << e.vdb_detail << ',' << e.vdb_up << ',' << e.vdb_physical << ',' << e.vdb_bake_erosion << ';';
   uint64_t h = 0xcbf29ce484222325ull;

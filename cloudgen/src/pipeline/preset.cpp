@@ -48,6 +48,60 @@ std::vector<std::string> names_of(const E (&values)[N], const char* (*name)(E)) 
   return v;
 }
 
+/// The `shape` section (shape.h): its keys, in world metres, y up; voxel (i, j, k) is centred at
+/// origin + (i + 0.5, j + 0.5, k + 0.5) * voxel_size.
+template <class Add>
+void add_shape_keys(Add& add, double big) {
+  auto opt3 = [](std::optional<ShapeVec>& dst, const json& j) {
+    if (j.is_null()) dst.reset();
+    else dst = ShapeVec{j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
+  };
+  auto src = [](Preset& p, const Index& i) -> ShapeSource& { return p.shape.sources[i[0]]; };
+  auto v3 = [](const json& j) { return ShapeVec{j[0].get<double>(), j[1].get<double>(), j[2].get<double>()}; };
+  const std::string where = " World metres, y up: voxel (i, j, k) is centred at origin + (i + 0.5, j + 0.5, k + 0.5) * voxel_size.";
+  add("/shape/blend", "number", "0", 0, big,
+      "(metres) Smooth-union width of the sources (polynomial smooth-min); 0 = hard union.",
+      [](Preset& p, const json& j, const Index&) { p.shape.blend = j.get<double>(); });
+  add("/shape/falloff", "number", "100", 1e-3, big,
+      "(metres) Width of the edge: base density s = S(clamp(0.5 - d / falloff, 0, 1)), S(u) = u^2 (3 - 2u), "
+      "d the signed distance to the sources (negative inside); s = 0.5 on the surface, 0 from falloff / 2 outside.",
+      [](Preset& p, const json& j, const Index&) { p.shape.falloff = j.get<double>(); });
+  add("/shape/sources", "array", "[]", 0, 0,
+      "Shape sources (docs/shaping.md), at most " + std::to_string(kMaxShapeSources) + ". Non-empty: s replaces the height profile, towers and coverage, and "
+      "density = clamp(density_scale * (R * s - t) / (1 - t), 0, 1).",
+      [](Preset& p, const json& j, const Index&) { p.shape.sources.resize(j.size()); });
+  add("/shape/sources/*/kind", "string", "null", 0, 0,
+      "Required. ellipsoid (center, radii), sphere (center, radius) or capsule (a, b, radius).",
+      [=](Preset& p, const json& j, const Index& i) {
+        src(p, i).kind.reset();
+        for (ShapeKind k : {ShapeKind::Ellipsoid, ShapeKind::Sphere, ShapeKind::Capsule})
+          if (j.is_string() && j.get<std::string>() == shape_kind_name(k)) src(p, i).kind = k;
+      },
+      {"ellipsoid", "sphere", "capsule"});
+  add("/shape/sources/*/center", "vec3", "null", -big, big, "(metres) Ellipsoid or sphere centre." + where,
+      [=](Preset& p, const json& j, const Index& i) { opt3(src(p, i).center, j); });
+  add("/shape/sources/*/radii", "vec3", "null", 1e-3, big, "(metres) Ellipsoid semi-axes along x, y, z (before rotate).",
+      [=](Preset& p, const json& j, const Index& i) { opt3(src(p, i).radii, j); });
+  add("/shape/sources/*/radius", "number", "null", 1e-3, big, "(metres) Sphere or capsule radius.",
+      [=](Preset& p, const json& j, const Index& i) {
+        if (j.is_null()) src(p, i).radius.reset();
+        else src(p, i).radius = j.get<double>();
+      });
+  add("/shape/sources/*/a", "vec3", "null", -big, big, "(metres) Capsule: one end of its axis." + where,
+      [=](Preset& p, const json& j, const Index& i) { opt3(src(p, i).a, j); });
+  add("/shape/sources/*/b", "vec3", "null", -big, big, "(metres) Capsule: the other end of its axis.",
+      [=](Preset& p, const json& j, const Index& i) { opt3(src(p, i).b, j); });
+  add("/shape/sources/*/scale", "vec3", "[1, 1, 1]", 1e-3, 1e3,
+      "Scale along the source's own axes about its centre (a capsule's: the middle of a-b; uniform for capsules), "
+      "applied first.",
+      [=](Preset& p, const json& j, const Index& i) { src(p, i).scale = v3(j); });
+  add("/shape/sources/*/rotate", "vec3", "[0, 0, 0]", -360, 360,
+      "(degrees) Right-handed rotation about the source's centre: about x, then y, then z (fixed axes), after scale.",
+      [=](Preset& p, const json& j, const Index& i) { src(p, i).rotate = v3(j); });
+  add("/shape/sources/*/translate", "vec3", "[0, 0, 0]", -big, big, "(metres) Moves the source, applied last.",
+      [=](Preset& p, const json& j, const Index& i) { src(p, i).translate = v3(j); });
+}
+
 std::vector<Spec> build_table() {
   std::vector<Spec> t;
   auto add = [&](std::string ptr, std::string type, std::string def, double lo, double hi, std::string doc,
@@ -169,6 +223,8 @@ std::vector<Spec> build_table() {
       [](Preset& p, const json& j, const Index&) { p.coverage_low = j.get<double>(); });
   add("/coverage/high", "number", "0.65", 0, 1, "Coverage noise value above which coverage is full.",
       [](Preset& p, const json& j, const Index&) { p.coverage_high = j.get<double>(); });
+
+  add_shape_keys(add, big);
 
   add("/threshold", "number", "0.3", 0, 0.999, "Cut-off remap clamp((d - t) / (1 - t), 0, 1).",
       [](Preset& p, const json& j, const Index&) { p.threshold = j.get<double>(); });
@@ -349,6 +405,18 @@ void apply_override(json& doc, const std::string& ov, Reader& r) {
   }
 }
 
+/// Each source has its kind's keys; in a tiling volume the shape must be 0 at the tile's x and z
+/// faces (shapes do not wrap), as towers must.
+void shape_checks(const Preset& p, Reader& r) {
+  const auto problems = shape_problems(p.shape);
+  for (const auto& [ptr, what] : problems) r.problem(ptr, what);
+  if (!problems.empty() || p.shape.sources.empty() || !p.tiling) return;
+  if (const auto q = ShapeField(p.shape).nonzero_at_side_faces(p.origin, p.resolution, p.voxel_size))
+    r.problem("/shape/sources", "with /tiling true the shape must be 0 on the voxels of the x and z faces (the volume wraps "
+                                "there, shapes do not), but the voxel at (" + fmt((*q)[0]) + ", " + fmt((*q)[1]) + ", " +
+                                    fmt((*q)[2]) + ") m has s > 0: move the sources inward or set \"tiling\": false");
+}
+
 void cross_checks(const Preset& p, Reader& r) {
   if (p.coverage_low >= p.coverage_high)
     r.problem("/coverage/high", fmt(p.coverage_high) + " must be greater than /coverage/low (" + fmt(p.coverage_low) + ")");
@@ -375,6 +443,7 @@ void cross_checks(const Preset& p, Reader& r) {
                         ", " + fmt(t.center[a] + 3 * t.sigma[a]) +
                         "] must lie inside [0, 1] so the tower is zero at the tile edges and the volume still wraps");
     }
+  shape_checks(p, r);
   if (p.tower_count > 0 && p.tiling)
     for (int a : {0, 2})
       if (6 * p.tower_sigma[a] >= 1)

@@ -1,0 +1,95 @@
+// Shape sources: analytic primitives (ellipsoid, sphere, capsule) that say where a cloud is. Their
+// smooth union is a signed distance d in metres (negative inside), and the cloud's noise-free base
+// density is a smoothstep falloff of d:
+//
+//     s(d) = S(clamp(0.5 - d / falloff, 0, 1)),   S(u) = u^2 (3 - 2 u)
+//
+// so s = 1 for d <= -falloff/2, s = 0.5 on the surface, s = 0 for d >= falloff/2. The noise then
+// erodes it as without shapes: density = clamp(density_scale * (R * s - t) / (1 - t), 0, 1).
+//
+// Frame: the preset's world frame in metres, y up (the frame of `origin` and `view.eye`). Voxel
+// (i, j, k) has its centre at origin + (i + 0.5, j + 0.5, k + 0.5) * voxel_size.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace cloudgen {
+
+using ShapeVec = std::array<double, 3>;
+
+enum class ShapeKind { Ellipsoid, Sphere, Capsule };
+const char* shape_kind_name(ShapeKind k);
+
+/// One source as the preset writes it. Placement: scale (in the source's own axes) and rotate
+/// (degrees about x, then y, then z) about the source's centre (a capsule's: the middle of a-b),
+/// then translate.
+struct ShapeSource {
+  std::optional<ShapeKind> kind;
+  std::optional<ShapeVec> center, radii, a, b;  ///< ellipsoid: center, radii; sphere: center; capsule: a, b
+  std::optional<double> radius;                  ///< sphere, capsule
+  ShapeVec translate{{0, 0, 0}}, rotate{{0, 0, 0}}, scale{{1, 1, 1}};
+};
+
+/// The preset's `shape` section. No sources: the height profile, towers and coverage place the
+/// cloud as before (and the bytes are those of a preset without the section).
+struct ShapeParams {
+  double blend = 0;      ///< metres of the smooth union (polynomial smooth-min); 0 = hard union
+  double falloff = 100;  ///< metres from s = 1 to s = 0 across the surface
+  std::vector<ShapeSource> sources;
+};
+
+/// At most this many sources (each costs every voxel near the shape an evaluation).
+inline constexpr size_t kMaxShapeSources = 64;
+
+/// The problems of a shape section ("<pointer>", "<what>"), empty when it can be placed: at most
+/// kMaxShapeSources sources, each with its kind's keys and no other kind's; a capsule's scale is
+/// uniform.
+std::vector<std::pair<std::string, std::string>> shape_problems(const ShapeParams& s);
+
+/// The sources placed in the world, ready to evaluate. Thread-safe to read.
+class ShapeField {
+ public:
+  explicit ShapeField(const ShapeParams& s);  ///< s must have no shape_problems
+  bool empty() const { return prims_.empty(); }
+
+  /// The signed distance d at p: the smooth union of the sources in their order.
+  double distance(const ShapeVec& p) const;
+  /// The base density s(d) at p, in [0, 1].
+  double density(const ShapeVec& p) const;
+  /// Whether s is 0 at every point within `radius` of `c` (a conservative proof: a lower bound of d
+  /// over the ball, with a margin for rounding, reaches falloff / 2).
+  bool zero_in_ball(const ShapeVec& c, double radius) const;
+  /// The centre of a voxel with s > 0 in the layers at the x and z faces of a volume of n voxels
+  /// of `voxel_size` from `origin` (a tiling volume wraps there and shapes do not), or none.
+  std::optional<ShapeVec> nonzero_at_side_faces(const ShapeVec& origin, const std::array<uint32_t, 3>& n,
+                                                 double voxel_size) const;
+
+  /// A box (min, max corners) outside which s is 0: conservative, loose for long ellipsoids.
+  std::array<ShapeVec, 2> support_box() const;
+
+  struct Prim {
+    bool capsule;        ///< else an ellipsoid
+    ShapeVec c, radii;   ///< ellipsoid: centre and radii along its own axes
+    double rot[3][3];    ///< ellipsoid: columns are its axes in the world
+    ShapeVec a, b;       ///< capsule: the segment (a == b: a sphere)
+    double r;            ///< capsule radius; ellipsoid: its smallest radius
+  };
+
+ private:
+  double blend_, falloff_;
+  std::vector<Prim> prims_;
+};
+
+/// s(d) = S(clamp(0.5 - d / falloff, 0, 1)).
+double shape_falloff(double d, double falloff);
+/// Polynomial smooth minimum (Inigo Quilez): min(a, b) - h^2 k / 4, h = max(k - |a - b|, 0) / k.
+/// Never below min(a, b) - k / 4, non-decreasing in a and in b; k = 0 is min.
+double smooth_min(double a, double b, double k);
+
+}  // namespace cloudgen

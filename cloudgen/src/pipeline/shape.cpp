@@ -1,0 +1,219 @@
+// Shape sources placed in the world and their smooth union (shape.h).
+//
+// Distances: a capsule's (and an evenly scaled sphere's, a capsule with a == b) is the exact
+// Euclidean distance. An ellipsoid's is Inigo Quilez's approximation d = k0 (k0 - 1) / k1 with
+// k0 = |q / r|, k1 = |q / r^2| (q in the ellipsoid's axes): 0 exactly on the surface, exact for a
+// sphere. Its lower bound L = rmin (k0 - 1) is 1-Lipschitz (|grad k0| = k1 / k0 <= 1 / rmin), and
+// where L > 0, d = L * (k0 / k1) / rmin >= L because k0 / k1 >= rmin. So over a ball of radius h
+// around c every source's d is at least L(c) - h (capsules: d(c) - h), and because the smooth
+// minimum is non-decreasing in both arguments the same fold over those bounds bounds the union.
+#include "cloudgen/shape.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace cloudgen {
+namespace {
+
+using V = ShapeVec;
+
+V sub(const V& a, const V& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+double dot(const V& a, const V& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+double len(const V& a) { return std::sqrt(dot(a, a)); }
+
+/// R = Rz * Ry * Rx (degrees): about x first, then y, then z, on fixed axes.
+void rotation(const V& deg, double R[3][3]) {
+  const double k = 3.14159265358979323846 / 180.0;
+  const double cx = std::cos(deg[0] * k), sx = std::sin(deg[0] * k), cy = std::cos(deg[1] * k), sy = std::sin(deg[1] * k),
+               cz = std::cos(deg[2] * k), sz = std::sin(deg[2] * k);
+  const double r[3][3] = {{cz * cy, cz * sy * sx - sz * cx, cz * sy * cx + sz * sx},
+                          {sz * cy, sz * sy * sx + cz * cx, sz * sy * cx - cz * sx},
+                          {-sy, cy * sx, cy * cx}};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) R[i][j] = r[i][j];
+}
+
+/// m + t + R (s * (q - m)): a point of the source placed in the world.
+V place(const V& q, const V& m, const ShapeSource& s, const double R[3][3]) {
+  V l;
+  for (int i = 0; i < 3; ++i) l[i] = s.scale[i] * (q[i] - m[i]);
+  V w;
+  for (int i = 0; i < 3; ++i) w[i] = m[i] + s.translate[i] + R[i][0] * l[0] + R[i][1] * l[1] + R[i][2] * l[2];
+  return w;
+}
+
+bool uniform(const V& s) { return s[0] == s[1] && s[1] == s[2]; }
+
+ShapeField::Prim capsule(const V& a, const V& b, double r) {
+  ShapeField::Prim p{};
+  p.capsule = true, p.a = a, p.b = b, p.r = r;
+  return p;
+}
+
+ShapeField::Prim ellipsoid(const V& c, const V& radii, const double R[3][3]) {
+  ShapeField::Prim p{};
+  p.capsule = false, p.c = c, p.radii = radii;
+  p.r = std::min({radii[0], radii[1], radii[2]});
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) p.rot[i][j] = R[i][j];
+  return p;
+}
+
+ShapeField::Prim resolve(const ShapeSource& s) {
+  double R[3][3];
+  rotation(s.rotate, R);
+  if (*s.kind == ShapeKind::Capsule) {
+    const V m{(s.a->at(0) + s.b->at(0)) / 2, (s.a->at(1) + s.b->at(1)) / 2, (s.a->at(2) + s.b->at(2)) / 2};
+    return capsule(place(*s.a, m, s, R), place(*s.b, m, s, R), *s.radius * s.scale[0]);
+  }
+  const V c = place(*s.center, *s.center, s, R);
+  if (*s.kind == ShapeKind::Sphere && uniform(s.scale)) return capsule(c, c, *s.radius * s.scale[0]);
+  const V r0 = s.kind == ShapeKind::Sphere ? V{*s.radius, *s.radius, *s.radius} : *s.radii;
+  return ellipsoid(c, {r0[0] * s.scale[0], r0[1] * s.scale[1], r0[2] * s.scale[2]}, R);
+}
+
+/// p in the ellipsoid's own axes, divided by its radii (u = q / r).
+V ellipsoid_u(const ShapeField::Prim& e, const V& p) {
+  const V d = sub(p, e.c);
+  V u;
+  for (int j = 0; j < 3; ++j) u[j] = (e.rot[0][j] * d[0] + e.rot[1][j] * d[1] + e.rot[2][j] * d[2]) / e.radii[j];
+  return u;
+}
+
+double prim_distance(const ShapeField::Prim& e, const V& p) {
+  if (e.capsule) {
+    const V pa = sub(p, e.a), ba = sub(e.b, e.a);
+    const double bb = dot(ba, ba);
+    const double h = bb > 0 ? std::clamp(dot(pa, ba) / bb, 0.0, 1.0) : 0.0;
+    return len({pa[0] - ba[0] * h, pa[1] - ba[1] * h, pa[2] - ba[2] * h}) - e.r;
+  }
+  const V u = ellipsoid_u(e, p);
+  const double k0 = len(u), k1 = len({u[0] / e.radii[0], u[1] / e.radii[1], u[2] / e.radii[2]});
+  return k1 > 0 ? k0 * (k0 - 1) / k1 : -e.r;
+}
+
+/// A lower bound of prim_distance wherever it is positive, 1-Lipschitz (see the top of the file).
+double prim_lower_bound(const ShapeField::Prim& e, const V& p) {
+  if (e.capsule) return prim_distance(e, p);
+  return e.r * (len(ellipsoid_u(e, p)) - 1);
+}
+
+}  // namespace
+
+const char* shape_kind_name(ShapeKind k) {
+  switch (k) {
+    case ShapeKind::Ellipsoid: return "ellipsoid";
+    case ShapeKind::Sphere: return "sphere";
+    case ShapeKind::Capsule: return "capsule";
+  }
+  return "?";
+}
+
+double smooth_min(double a, double b, double k) {
+  if (!(k > 0)) return std::min(a, b);
+  const double h = std::max(k - std::abs(a - b), 0.0) / k;
+  return std::min(a, b) - h * h * k * 0.25;
+}
+
+double shape_falloff(double d, double falloff) {
+  const double u = std::clamp(0.5 - d / falloff, 0.0, 1.0);
+  return u * u * (3 - 2 * u);
+}
+
+std::vector<std::pair<std::string, std::string>> shape_problems(const ShapeParams& sp) {
+  std::vector<std::pair<std::string, std::string>> out;
+  if (sp.sources.size() > kMaxShapeSources)
+    return {{"/shape/sources", std::to_string(sp.sources.size()) + " sources; at most " + std::to_string(kMaxShapeSources)}};
+  for (size_t i = 0; i < sp.sources.size(); ++i) {
+    const ShapeSource& s = sp.sources[i];
+    const std::string ptr = "/shape/sources/" + std::to_string(i);
+    if (!s.kind) {
+      out.push_back({ptr + "/kind", "missing; expected one of: ellipsoid | sphere | capsule"});
+      continue;
+    }
+    const ShapeKind k = *s.kind;
+    const std::string kn = shape_kind_name(k);
+    auto need = [&](bool has, bool wanted, const char* key) {
+      if (has && !wanted) out.push_back({ptr + "/" + key, "is not a key of a " + kn});
+      if (!has && wanted) out.push_back({ptr, "a " + kn + " needs \"" + key + "\""});
+    };
+    need(bool(s.center), k != ShapeKind::Capsule, "center");
+    need(bool(s.radii), k == ShapeKind::Ellipsoid, "radii");
+    need(bool(s.radius), k != ShapeKind::Ellipsoid, "radius");
+    need(bool(s.a), k == ShapeKind::Capsule, "a");
+    need(bool(s.b), k == ShapeKind::Capsule, "b");
+    if (k == ShapeKind::Capsule && !uniform(s.scale))
+      out.push_back({ptr + "/scale", "a capsule takes a uniform scale [s, s, s] (a stretched capsule is no capsule)"});
+  }
+  return out;
+}
+
+ShapeField::ShapeField(const ShapeParams& s) : blend_(s.blend), falloff_(s.falloff) {
+  for (const ShapeSource& src : s.sources) prims_.push_back(resolve(src));
+}
+
+double ShapeField::distance(const ShapeVec& p) const {
+  double d = prim_distance(prims_[0], p);
+  for (size_t i = 1; i < prims_.size(); ++i) d = smooth_min(d, prim_distance(prims_[i], p), blend_);
+  return d;
+}
+
+double ShapeField::density(const ShapeVec& p) const { return shape_falloff(distance(p), falloff_); }
+
+bool ShapeField::zero_in_ball(const ShapeVec& c, double radius) const {
+  double lb = prim_lower_bound(prims_[0], c) - radius;
+  for (size_t i = 1; i < prims_.size(); ++i) lb = smooth_min(lb, prim_lower_bound(prims_[i], c) - radius, blend_);
+  // Rounding of d and of the bound is far below a millionth of the scales involved.
+  const double scale = 1 + falloff_ + radius + std::max({std::abs(c[0]), std::abs(c[1]), std::abs(c[2])});
+  return lb >= falloff_ / 2 + 1e-6 * scale;
+}
+
+std::array<ShapeVec, 2> ShapeField::support_box() const {
+  // s > 0 needs d < falloff / 2, and the fold lowers min_i d_i by at most (n - 1) blend / 4, so
+  // some source has d_i < g: within r + g of a capsule's segment, or, for an ellipsoid, L < g, that
+  // is k0 < 1 + g / rmin: inside the ellipsoid with its radii grown by that factor.
+  const double g = falloff_ / 2 + double(prims_.size() - 1) * blend_ / 4;
+  std::array<ShapeVec, 2> box{{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}}};
+  for (const Prim& e : prims_) {
+    for (int a = 0; a < 3; ++a) {
+      double lo, hi;
+      if (e.capsule) {
+        lo = std::min(e.a[a], e.b[a]) - e.r - g, hi = std::max(e.a[a], e.b[a]) + e.r + g;
+      } else {
+        const double f = 1 + g / e.r;  // half extent of the grown ellipsoid along world axis a
+        const double h = f * std::hypot(e.rot[a][0] * e.radii[0], e.rot[a][1] * e.radii[1], e.rot[a][2] * e.radii[2]);
+        lo = e.c[a] - h, hi = e.c[a] + h;
+      }
+      box[0][a] = std::min(box[0][a], lo), box[1][a] = std::max(box[1][a], hi);
+    }
+  }
+  return box;
+}
+
+std::optional<ShapeVec> ShapeField::nonzero_at_side_faces(const ShapeVec& origin, const std::array<uint32_t, 3>& n,
+                                                           double vs) const {
+  auto at = [&](int a, uint32_t i) { return origin[a] + (i + 0.5) * vs; };
+  const std::array<ShapeVec, 2> box = support_box();
+  for (int a : {0, 2}) {
+    const double margin = 1e-6 * (1 + std::abs(at(a, 0)) + std::abs(at(a, n[a] - 1)));
+    if (box[0][a] > at(a, 0) + margin && box[1][a] < at(a, n[a] - 1) - margin) continue;  // the usual case
+    const int b = 2 - a;  // the other horizontal axis; the face spans b and y in patches of 16 x 16
+    for (uint32_t side : {0u, n[a] - 1})
+      for (uint32_t j0 = 0; j0 < n[1]; j0 += 16)
+        for (uint32_t k0 = 0; k0 < n[b]; k0 += 16) {
+          const uint32_t j1 = std::min(n[1], j0 + 16) - 1, k1 = std::min(n[b], k0 + 16) - 1;
+          ShapeVec mid;
+          mid[a] = at(a, side), mid[1] = (at(1, j0) + at(1, j1)) / 2, mid[b] = (at(b, k0) + at(b, k1)) / 2;
+          if (zero_in_ball(mid, std::hypot(at(1, j1) - mid[1], at(b, k1) - mid[b]))) continue;
+          for (uint32_t j = j0; j <= j1; ++j)
+            for (uint32_t k = k0; k <= k1; ++k) {
+              ShapeVec q;
+              q[a] = at(a, side), q[1] = at(1, j), q[b] = at(b, k);
+              if (density(q) > 0) return q;
+            }
+        }
+  }
+  return std::nullopt;
+}
+
+}  // namespace cloudgen
