@@ -76,6 +76,7 @@ def run(args, out):
     """Runs one render unless `out` exists already; returns its seconds (0 when reused)."""
     if os.path.exists(out):
         return 0.0
+    t0 = time.monotonic()
     r = subprocess.run(args + ["--out", out], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     if r.returncode != 0:
         raise SystemExit("accuracy_linear.py: %s failed (%d): %s" % (" ".join(args), r.returncode, r.stderr[-2000:]))
