@@ -539,8 +539,8 @@ TEST(ViewerMotionCli, FlowMapImageMovesTheClouds) {
     EXPECT_EQ(run(a, &err), 0) << err;
     return read_png((dir.path / out).string());
   };
-  const Image proc = frame("", "proc.png"), fine = frame((dir.path / "fine.png").string(), "fine.png"),
-              coarse = frame((dir.path / "coarse.png").string(), "coarse.png");
+  const Image proc = frame("", "proc.png"), fine = frame((dir.path / "fine.png").string(), "fine_frame.png"),
+              coarse = frame((dir.path / "coarse.png").string(), "coarse_frame.png");
   const double fine_diff = max_abs_diff(proc, fine), coarse_diff = max_abs_diff(proc, coarse);
   std::cout << "flow map image vs procedural: max |diff| fine " << fine_diff << ", coarse " << coarse_diff << "\n";
   EXPECT_LT(fine_diff, 3.0 / 255);

@@ -168,6 +168,43 @@ TEST(OutputSafety, OutputsThatWouldOverwriteAnInputOrEachOtherAreRefusedUpFront)
   EXPECT_EQ(r.code, 1) << "the cube's sidecar would be the cube itself: " << r.out;
 }
 
+// Issue 47, D6-D9: no output of a run replaces a file the run reads, named by another path or a
+// hard link included (cloudgen/input_scope.h).
+TEST(OutputSafety, NoOutputReplacesAFileTheRunReads) {
+  TempDir dir;
+  fs::copy_file(kPresets + "tiny.json", dir / "x.json");
+  const std::string preset = read_text(dir / "x.json");
+  fs::create_hard_link(dir / "x.json", dir / "link.json");
+  for (const std::string& out : {dir / "x.json", dir / "link.json"}) {
+    auto r = cli({"plan", dir / "x.json", "--tiles", "2,1,1", "-o", out}).run();
+    EXPECT_EQ(r.code, 1) << out << ": " << r.out;
+    EXPECT_NE(r.out.find("overwrite the input preset"), std::string::npos) << r.out;
+    EXPECT_EQ(read_text(dir / "x.json"), preset);
+  }
+  ASSERT_EQ(cli({"flowmap", "-q", "--size", "32x8", "-o", dir / "flow.png"}).run().code, 0);
+  const std::string flow = read_text(dir / "flow.png");
+  auto r = cli({"generate", "tiny", "-q", "--set", "motion.flow_map=" + (dir / "flow.png"), "-o", dir / "flow.png",
+                "--format", "atlas-png"}).run();
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("overwrite the flow map"), std::string::npos) << r.out;
+  EXPECT_EQ(read_text(dir / "flow.png"), flow);
+
+  // merge: the merged file may be neither a tile nor the plan.
+  ASSERT_EQ(cli({"plan", "tiny", "--tiles", "2,1,1", "-o", dir / "plan.json"}).run().code, 0);
+  ASSERT_EQ(cli({"merge", dir / "plan.json", "--resume", "-q", "-o", dir / "whole.vdb"}).run().code, 0);
+  const std::string plan = read_text(dir / "plan.json"), tile = read_text(dir / "tile_0000.vdb");
+  fs::create_hard_link(dir / "tile_0000.vdb", dir / "same_tile.vdb");
+  for (const std::string& out : {dir / "tile_0000.vdb", dir / "same_tile.vdb"}) {
+    r = cli({"merge", dir / "plan.json", "-q", "-o", out}).run();
+    EXPECT_EQ(r.code, 1) << out << ": " << r.out;
+    EXPECT_NE(r.out.find("would overwrite"), std::string::npos) << r.out;
+  }
+  EXPECT_EQ(read_text(dir / "plan.json"), plan);
+  EXPECT_EQ(read_text(dir / "tile_0000.vdb"), tile);
+  r = cli({"merge", dir / "plan.json", "-q", "-o", dir / "again.vdb"}).run();
+  EXPECT_EQ(r.code, 0) << "merge still records the checksums in its own plan: " << r.out;
+}
+
 TEST(OutputSafety, KilledRunsLeaveNoDebrisAndStaleTemporariesAreRemoved) {
   TempDir dir;
   Process p = cli({"generate", "tiny", "-q", "-o", dir / "c.vdb"});

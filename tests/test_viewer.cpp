@@ -28,6 +28,7 @@
 #include "cloudviewer/settings.h"
 #include "noise3d/noise3d.h"
 #include "../viewer/src/internal.h"
+#include "test_util.h"
 #include "test_util_viewer.h"
 
 namespace fs = std::filesystem;
@@ -1094,6 +1095,20 @@ TEST(ViewerCli, PathTracerImageAndStandardErrorAreWrittenBothOrNeither) {
   EXPECT_NE(err.find("keep.stderr.exr"), std::string::npos) << err;
   EXPECT_TRUE(slurp(dir / "keep.png") == png0) << "the PNG was replaced although its standard error was not";
   EXPECT_TRUE(slurp(dir / "keep.stderr.exr") == exr0);
+}
+
+// Issue 47, D7: --lighting-json and --dump-lut --out never replace the input (cloudgen/input_scope.h).
+TEST(ViewerCli, NoOutputReplacesTheInput) {
+  testutil::TempDir dir;
+  fs::copy_file(testutil::kPresets + "tiny.json", dir / "x.json");
+  const std::string preset = testutil::read_text(dir / "x.json");
+  std::string err;
+  EXPECT_EQ(run({dir / "x.json", "--lighting-json", dir / "x.json"}, &err), 1) << err;
+  EXPECT_NE(err.find("overwrite the input"), std::string::npos) << err;
+  EXPECT_EQ(run({dir / "x.json", "--dump-lut", "transmittance", "--out", dir / "x.json"}, &err), 1) << err;
+  EXPECT_NE(err.find("overwrite the input"), std::string::npos) << err;
+  EXPECT_EQ(testutil::read_text(dir / "x.json"), preset);
+  EXPECT_EQ(run({dir / "x.json", "--lighting-json", dir / "light.json"}, &err), 0) << err;
 }
 
 TEST(ViewerCli, FailedWriteLeavesTheExistingPngByteForByte) {

@@ -7,6 +7,7 @@
 
 #include "cloudgen/exit_codes.h"
 #include "cloudgen/help_text.h"
+#include "cloudgen/input_scope.h"
 #include "commands.h"
 
 namespace {
@@ -18,6 +19,7 @@ void on_signal(int) { cloudgen::cli::g_cancel = true; }
 int main(int argc, char** argv) {
   using namespace cloudgen;
   using namespace cloudgen::cli;
+  InputScope inputs;  // no output of this run may replace a file it reads (cloudgen/input_scope.h)
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   // A file-size limit (ulimit -f) then fails the write with EFBIG, reported like a full disk,

@@ -3,6 +3,7 @@
 // and `cloudgen merge` checks the tiles and writes the one-process VDB (`--resume` regenerates
 // exactly the missing or damaged ones).
 #include <sys/resource.h>
+#include <sys/stat.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -13,6 +14,8 @@
 #include "cloudgen/exit_codes.h"
 #include "cloudgen/mpi_run.h"
 #include "cloudgen/scale.h"
+#include "cloudgen/input_scope.h"
+#include "cloudgen/printable.h"
 #include "commands.h"
 
 namespace fs = std::filesystem;
@@ -169,6 +172,7 @@ struct MergeArgs {
 };
 
 json read_plan(const std::string& path) {
+  protect_input(path, "the plan " + printable(path));
   std::ifstream in(path);
   if (!in) throw InputError(path + ": cannot open plan file");
   json doc;
@@ -250,10 +254,21 @@ void run_merge(const MergeArgs& a) {
   json& tiles = plan["tiles"];
   auto file_of = [&](const json& t) { return (dir / t["file"].get<std::string>()).string(); };
   auto name_of = [&](const json& t) { return "tile " + std::to_string(t["index"].get<size_t>()) + " (" + file_of(t) + ")"; };
+  // The merged file may replace neither the plan nor a tile (by path, or by inode where it exists):
+  // refused before any tile is read or regenerated.
+  auto same_file = [&](const std::string& f) {
+    struct stat s1, s2;
+    if (::stat(a.out.c_str(), &s1) == 0 && ::stat(f.c_str(), &s2) == 0) return s1.st_dev == s2.st_dev && s1.st_ino == s2.st_ino;
+    return file_identity(f) == file_identity(a.out);
+  };
+  if (same_file(a.plan)) throw InputError("-o " + a.out + ": would overwrite the plan " + a.plan + "; choose another output name");
+  for (const json& t : tiles)
+    if (same_file(file_of(t))) throw InputError("-o " + a.out + ": would overwrite " + name_of(t) + "; choose another output name");
 
   std::vector<bool> regenerated(tiles.size(), false);
   auto regenerate = [&](size_t i, const std::string& why) {
     if (!a.quiet) std::fprintf(stderr, "regenerating %s: %s\n", name_of(tiles[i]).c_str(), why.c_str());
+    release_input(file_of(tiles[i]));  // read for its checksum; merge owns it and writes it anew
     regenerate_tile(p, tiles[i], file_of(tiles[i]), a.threads);
     regenerated[i] = true;
   };
@@ -305,6 +320,7 @@ void run_merge(const MergeArgs& a) {
   }
   // Record each tile's checksum so a later merge notices a tile damaged or replaced since.
   for (auto& t : tiles) t["checksum"] = file_checksum(file_of(t));
+  release_input(a.plan);  // the plan is merge's own record: it is read, then updated with the checksums
   atomic_write(a.plan, [&](const std::string& tmp) {
     std::ofstream o(tmp);
     o << plan.dump(2) << "\n";

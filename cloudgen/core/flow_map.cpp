@@ -16,6 +16,7 @@
 #include "cloudgen/motion.h"
 #include "noise3d/noise3d.h"
 #include "cloudgen/volume.h"
+#include "cloudgen/input_scope.h"
 
 namespace cloudgen {
 namespace {
@@ -62,6 +63,7 @@ std::shared_ptr<const FlowMap> load_flow_map(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw InputError(what + ": no such file");
   if (!std::filesystem::is_regular_file(path, ec)) throw InputError(what + ": not a regular file");
+  protect_input(path, "the flow map " + path);
   PngRead r;
   r.file = std::fopen(path.c_str(), "rb");
   if (!r.file) throw InputError(what + ": cannot open the file");

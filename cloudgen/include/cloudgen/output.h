@@ -12,8 +12,9 @@
 //  - A symlink destination is followed: its target is replaced atomically in the target's folder
 //    and the link stays. A character device or FIFO (/dev/null, /dev/stdout, a pipe) is written
 //    through, never replaced. A folder, block device or socket is refused.
-//  - An output that would replace one of the run's inputs, or another output of the same run
-//    (a sidecar included), is refused before anything is written.
+//  - An output that would replace one of the run's inputs (those given to protect(), and every
+//    input the readers recorded in the live InputScope, by device and inode), or another output
+//    of the same run (a sidecar included), is refused before anything is written.
 #pragma once
 
 #include <functional>
@@ -21,6 +22,8 @@
 #include <ostream>
 #include <string>
 #include <vector>
+
+#include "cloudgen/input_scope.h"
 
 namespace cloudgen {
 

@@ -227,6 +227,8 @@ void OutputBatch::claim(const std::string& path, const std::string& role) {
   if (auto it = impl_->protected_.find(id); it != impl_->protected_.end())
     throw InputError(path + ": writing " + role + " here would overwrite " + it->second +
                      "; choose another output name");
+  if (const std::string input = protected_input_role(r.path); !input.empty())
+    throw InputError(path + ": writing " + role + " here would overwrite " + input + "; choose another output name");
   if (auto it = impl_->claimed_.find(id); it != impl_->claimed_.end()) {
     if (it->second == role) return;  // the same claim twice (claim, then stage)
     throw InputError(path + ": would be written twice in this run, as " + it->second + " and as " + role +
@@ -249,6 +251,8 @@ void OutputBatch::stage_impl(const std::string& path, const std::function<void(c
   const std::string id = file_identity(s.target.path);
   if (impl_->protected_.count(id))
     throw InputError(path + ": would overwrite " + impl_->protected_[id] + "; choose another output name");
+  if (const std::string input = protected_input_role(s.target.path); !input.empty())
+    throw InputError(path + ": would overwrite " + input + "; choose another output name");
   for (const Impl::Staged& o : impl_->staged_)
     if (file_identity(o.target.path) == id)
       throw InputError(path + ": would be written twice in this run (also as " + o.dest + ")");
@@ -459,6 +463,7 @@ void write_file_stream(const std::string& path, const std::function<void(std::os
 }
 
 std::vector<uint8_t> read_file_bytes(const std::string& path, size_t max_bytes) {
+  protect_input(path, "the input " + path);
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) {
     const int e = errno;

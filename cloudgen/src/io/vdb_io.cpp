@@ -24,6 +24,7 @@
 #include "cloudgen/motion.h"
 #include "cloudgen/view.h"
 #include "io/vdb_internal.h"
+#include "cloudgen/input_scope.h"
 
 namespace cloudgen {
 namespace vdb {
@@ -255,6 +256,7 @@ void check_vdb_layout(const std::string& path) {
 class VdbFile {
  public:
   explicit VdbFile(const std::string& path) : path_(path) {
+    protect_input(path, "the input " + printable(path));
     init();
     check_vdb_layout(path);
     std::ifstream in(path, std::ios::binary);

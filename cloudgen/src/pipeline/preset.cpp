@@ -19,6 +19,8 @@
 #include "cloudgen/io.h"
 #include "cloudgen/json_checked.h"
 #include "cloudgen/schema.h"
+#include "cloudgen/input_scope.h"
+#include "cloudgen/printable.h"
 
 namespace cloudgen {
 namespace {
@@ -523,6 +525,7 @@ Preset parse_preset(const std::string& text, const std::string& source, const st
 }
 
 Preset load_preset(const std::string& path, const std::vector<std::string>& overrides) {
+  protect_input(path, "the input preset " + printable(path));
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open preset file");
   std::stringstream ss;

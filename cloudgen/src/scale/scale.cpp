@@ -6,6 +6,8 @@
 #include <numeric>
 
 #include "cloudgen/scale.h"
+#include "cloudgen/input_scope.h"
+#include "cloudgen/printable.h"
 
 namespace cloudgen {
 
@@ -27,6 +29,7 @@ std::vector<std::vector<size_t>> balance_bricks(const BrickPlan& plan, int parts
 }
 
 std::string file_checksum(const std::string& path) {
+  protect_input(path, "the input " + printable(path));
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path + ": cannot read");
   uint64_t h = 0xcbf29ce484222325ull;

@@ -14,6 +14,7 @@
 #include "cloudgen/scale.h"
 #include "cloudgen/view.h"
 #include "io/vdb_internal.h"
+#include "cloudgen/input_scope.h"
 
 namespace cloudgen {
 
@@ -99,6 +100,7 @@ void VdbAssembler::add(const std::array<uint32_t, 3>& lo, const std::array<uint3
 namespace {
 
 openvdb::io::File& open_file(openvdb::io::File& f, const std::string& path) {
+  protect_input(path, "the tile " + path);
   vdb::init();
   try {
     f.open();

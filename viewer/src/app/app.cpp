@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cloudgen/exit_codes.h"
+#include "cloudgen/input_scope.h"
 #include "cloudgen/output.h"
 #include "cloudviewer/atmosphere_luts.h"
 #include "cloudviewer/errors.h"
@@ -460,6 +461,10 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
     return code == 0 ? 0 : 1;
   }
   if (print_reference(text, out)) return 0;
+  // Every file this run reads, before anything is written (the readers record them again).
+  cloudgen::protect_input(o.input, "the input " + o.input);
+  if (!o.bench.empty()) cloudgen::protect_input(o.bench, "the bench track " + o.bench);
+  if (!o.mie_table.empty()) cloudgen::protect_input(o.mie_table, "the Mie table " + o.mie_table);
   for (const std::string& s : o.sets) apply_setting(o.settings, s);
   validate_atmosphere(o.settings.atmosphere);
   if (!text.dump_lut.empty()) return dump_atmosphere_lut(o, out);
@@ -485,6 +490,7 @@ Camera resolve_camera(const Options& o, const PreparedVolume& vol, int width, in
 Sun resolve_sun(const Options& o, const Camera& cam) { return default_view_sun(o, cam); }
 
 int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  cloudgen::InputScope inputs;  // no output of this run may replace a file it reads
   try {
     return run(args, out, err);
   } catch (...) {

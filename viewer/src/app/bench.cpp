@@ -19,6 +19,7 @@
 #include "internal.h"
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
 #include "cloudgen/output.h"
+#include "cloudgen/input_scope.h"
 #endif
 
 namespace cloudviewer {
@@ -183,6 +184,7 @@ BenchPlan parse_track(const std::string& text, const std::string& where, const O
 namespace {
 
 std::string read_track_file(const std::string& path) {
+  cloudgen::protect_input(path, "the bench track " + path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError("--bench " + path + ": no such file");
   std::stringstream ss;

@@ -15,6 +15,7 @@
 #include "cloudviewer/constants.h"
 #include "cloudviewer/errors.h"
 #include "cloudviewer/scene.h"
+#include "cloudgen/input_scope.h"
 
 namespace cloudviewer {
 
@@ -62,6 +63,7 @@ std::shared_ptr<const MiePhaseTable> read_mie_table(const std::string& path) {
   std::error_code ec;
   if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
     throw InputError(what + ": not a regular file (a FIFO or a device would block or never end)");
+  cloudgen::protect_input(path, "the Mie table " + path);
   std::ifstream in(path);
   if (!in) throw InputError(what + ": no such file");
   std::vector<double> theta, value[3];

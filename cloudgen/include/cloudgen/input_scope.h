@@ -1,0 +1,38 @@
+// The inputs of one command run ("every input protected", docs/robustness.md). While an InputScope
+// is alive, every input a reader opens is recorded by device and inode (links followed, so a
+// symlink or a hard link to an input is that input), and every OutputBatch and atomic_write of the
+// process refuses to replace one of them, before anything is written (cloudgen/output.h). Both
+// programs hold one for the whole run; scopes nest (the inner one ends with its block). Without
+// one (the library in tests) nothing is recorded.
+#pragma once
+
+#include <memory>
+#include <string>
+
+namespace cloudgen {
+
+class InputScope {
+ public:
+  InputScope();
+  ~InputScope();
+  InputScope(const InputScope&) = delete;
+  InputScope& operator=(const InputScope&) = delete;
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Records `path` as an input of the current InputScope (none: nothing happens); `role` names it in
+/// the refusal ("the input preset x.json"). Only an existing regular file is recorded: nothing else
+/// can be replaced, and the reader's own error says why a path cannot be read. Thread-safe.
+void protect_input(const std::string& path, const std::string& role);
+
+/// Forgets `path` as an input: for a command that updates a file it owns after reading it (a
+/// merge records the tiles' checksums in its plan, and regenerates a damaged tile).
+void release_input(const std::string& path);
+
+/// The role of the recorded input that `path` is (links followed), or "" when it is none.
+std::string protected_input_role(const std::string& path);
+
+}  // namespace cloudgen
