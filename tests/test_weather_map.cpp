@@ -88,6 +88,7 @@ std::string error_of(const std::function<void()>& f) {
 
 struct Agreement {
   double max_diff = 0, iou = 0;
+  size_t only_one = 0;  ///< voxels with density > 0 in one volume only
 };
 
 Agreement compare(const Volume& a, const Volume& b) {
@@ -98,6 +99,7 @@ Agreement compare(const Volume& a, const Volume& b) {
     const bool x = a.density[i] > 0, y = b.density[i] > 0;
     inter += x && y, uni += x || y;
   }
+  r.only_one = uni - inter;
   r.iou = uni ? double(inter) / uni : 1.0;
   return r;
 }
@@ -122,7 +124,8 @@ TEST(WeatherMap, RoundTripReproducesTheDensity) {
     o.detail = false;
     const Volume a = generate(p, o), b = generate(q, o);
     const Agreement g = compare(a, b);
-    std::printf("  %s, 96x80 map: max |density difference| %.3g, IoU of density > 0 %.6f\n", name, g.max_diff, g.iou);
+    std::printf("  %s, 96x80 map: max |density difference| %.3g, IoU of density > 0 %.6f (%zu of %zu voxels differ)\n",
+                name, g.max_diff, g.iou, g.only_one, a.density.size());
     EXPECT_LT(g.max_diff, 1e-4);
     EXPECT_GE(g.iou, 0.99);
     EXPECT_NE(preset_hash(p), preset_hash(q));
@@ -322,7 +325,9 @@ TEST(WeatherMap, CliWritesTheMapAndRefusesBadInput) {
   // Never over an input: the preset's own image, or the preset.
   EXPECT_EQ(run_cli("weather-map -q " + (dir / "q.json") + " -o " + (dir / "w.png"), &out), 1) << out;
   EXPECT_EQ(run_cli("weather-map -q " + (dir / "q.json") + " -o " + (dir / "q.json"), &out), 1) << out;
-  EXPECT_EQ(load_weather_map(dir / "w.png")->width, 40);
+  EXPECT_EQ(run_cli("generate -q " + (dir / "q.json") + " -o " + (dir / "w.png"), &out), 1) << out;
+  EXPECT_NE(out.find("weather map"), std::string::npos) << out;
+  EXPECT_EQ(load_weather_map(dir / "w.png")->width, 40) << "the image is still the map";
   EXPECT_EQ(run_cli("weather-map -q " + (dir / "p.json") + " --size 5000 -o " + (dir / "y.png"), &out), 1) << out;
   EXPECT_NE(out.find("--size 5000: at most 4096"), std::string::npos) << out;
   EXPECT_EQ(run_cli("weather-map --help", &out), 0);
