@@ -14,6 +14,7 @@
 #include "cloudgen/motion.h"
 #include "cloudgen/preset.h"
 #include "cloudgen/view.h"
+#include "cloudgen/weather_map.h"
 #include "commands.h"
 
 namespace cloudgen::cli {
@@ -43,6 +44,7 @@ void run_generate(const GenerateArgs& a) {
   // preset, or a sidecar that would collide with another output, is refused up front.
   OutputBatch batch;
   batch.protect(path, "the input preset " + path);
+  if (p.weather_map) batch.protect(p.weather_map->path, "the preset's weather map " + p.weather_map->path);
   for (const auto& o : a.outputs) {
     Format f = a.format.empty() ? format_from_path(o) : parse_format(a.format);
     formats.push_back(f);

@@ -44,6 +44,7 @@ int main(int argc, char** argv) {
   add_noise_command(app, run);
   add_phase_command(app, run);
   add_flowmap_command(app, run);
+  add_weather_map_command(app, run);
   add_blender_command(app, run);
   add_scale_commands(app, run);
 

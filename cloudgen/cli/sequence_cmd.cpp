@@ -8,6 +8,7 @@
 
 #include "cloudgen/cli_parse.h"
 #include "cloudgen/sequence.h"
+#include "cloudgen/weather_map.h"
 #include "commands.h"
 
 namespace cloudgen::cli {
@@ -79,6 +80,7 @@ void run_generate_sequence(const Preset& p, const std::string& preset_path, cons
   ensure_descriptors(r.count());
   OutputBatch batch;
   batch.protect(preset_path, "the input preset " + preset_path);
+  if (p.weather_map) batch.protect(p.weather_map->path, "the preset's weather map " + p.weather_map->path);
   for (int64_t fr = r.first; fr <= r.last; ++fr)
     batch.claim(frame_path(pattern, fr), "frame " + std::to_string(fr) + " of the sequence");
 

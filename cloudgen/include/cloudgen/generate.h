@@ -118,9 +118,15 @@ std::string preset_hash(const Preset& p);
 
 /// The vertical profile (height distribution plus cloud-type gradient) at normalised height h.
 double height_profile(const Preset& p, double h);
+/// The continuous cloud-type gradient of cloud_type.glsl at normalised height h: type 0 stratus,
+/// 0.5 cumulus, 1 cumulonimbus (bit for bit the three profiles there), linear in between.
+double cloud_type_height_gradient(double h, double type);
 /// The coverage map over the whole x-z plane, [z][x] (x fastest), in [0, 1]; empty when the
 /// preset has no coverage (then coverage is 1 everywhere).
 std::vector<float> coverage_map(const Preset& p, int threads = 0);
+/// The coverage noise on a w x h grid of columns over the x-z extent ([j][i]), whether or not
+/// coverage is enabled; coverage_map is this grid at the volume's x and z resolution.
+std::vector<float> coverage_grid(const Preset& p, uint32_t w, uint32_t h, int threads = 0);
 /// The Gaussian towers (explicit plus random), resolved to an explicit list.
 std::vector<Tower> resolve_towers(const Preset& p);
 

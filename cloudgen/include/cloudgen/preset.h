@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -15,6 +16,8 @@
 #include "noise3d/noise3d.h"
 
 namespace cloudgen {
+
+struct WeatherMap;  // weather_map.h
 
 /// Largest seed: 2^53, the largest integer a JSON number holds exactly.
 inline constexpr uint64_t kMaxSeed = 9007199254740992ull;
@@ -78,6 +81,9 @@ struct Preset {
   uint32_t coverage_period = 2;
   int coverage_octaves = 3;
   double coverage_low = 0.35, coverage_high = 0.65;  ///< smoothstep edges on the noise in [0, 1]
+  bool coverage_image = false;  ///< coverage.kind "image": the painted weather map (weather_map.h)
+  std::string coverage_file;    ///< /coverage/file as written (weather_map holds the image)
+  std::shared_ptr<const WeatherMap> weather_map;
 
   ShapeParams shape;  ///< the `shape` section: sources that replace profile, towers and coverage (shape.h)
 

@@ -15,6 +15,7 @@
 #include "cloudgen/cloud_type.h"
 #include "cloudgen/shape.h"
 #include "cloudgen/view.h"
+#include "cloudgen/weather_map.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -65,6 +66,8 @@ double height_profile(const Preset& p, double h) {
   return cloud_type::cumulus_gradient(h);
 }
 
+double cloud_type_height_gradient(double h, double type) { return cloud_type::cloud_type_gradient(h, type); }
+
 std::vector<Tower> resolve_towers(const Preset& p) {
   std::vector<Tower> t = p.towers;
   SplitMix rng{p.tower_seed};
@@ -79,17 +82,20 @@ std::vector<Tower> resolve_towers(const Preset& p) {
   return t;
 }
 
-std::vector<float> coverage_map(const Preset& p, int threads) {
+std::vector<float> coverage_grid(const Preset& p, uint32_t w, uint32_t h, int threads) {
   std::vector<float> coverage;
-  if (!p.coverage_enabled) return coverage;
-  const std::array<uint32_t, 3> N = p.resolution;
   const noise3d::FractalParams cp = coverage_params(p);
   noise3d::GridRegion g;
-  g.size = {N[0], 1, N[2]};
+  g.size = {w, 1, h};
   coverage.resize(g.count());
   noise3d::evaluate_grid(cp, g, coverage.data(), {threads});
   for (float& c : coverage) c = float(smoothstep(p.coverage_low, p.coverage_high, noise_to_unit(cp.kind, c)));
   return coverage;
+}
+
+std::vector<float> coverage_map(const Preset& p, int threads) {
+  if (!p.coverage_enabled) return {};
+  return coverage_grid(p, p.resolution[0], p.resolution[2], threads);
 }
 
 namespace {
@@ -103,6 +109,7 @@ struct Shape {
   std::vector<float> profile;
   std::vector<float> coverage;  // [z][x] over the whole x-z plane (2D, cheap), empty = 1
   std::vector<Tower> towers;
+  WeatherColumns columns;  // a painted weather map's columns (empty: the profile by row applies)
   float t, inv, scale;
   const ShapeField field;                 // empty: no shape sources
   std::array<std::vector<double>, 3> pos;  // shape sources: world metres of the voxel centres per axis
@@ -116,7 +123,12 @@ struct Shape {
         for (uint32_t i = 0; i < N[a]; ++i) pos[a].push_back(p.origin[a] + (i + 0.5) * p.voxel_size);
       return;  // the sources replace coverage and towers
     }
-    coverage = coverage_map(p, threads);
+    if (p.coverage_enabled && p.coverage_image) {  // painted: coverage, type and top per column
+      columns = weather_columns(p, N[0], N[2], threads);
+      coverage = columns.coverage;
+    } else {
+      coverage = coverage_map(p, threads);
+    }
     towers = resolve_towers(p);
     for (const Tower& w : towers) {
       std::array<std::vector<double>, 3> q;
@@ -143,7 +155,7 @@ struct Shape {
   /// Shape factor without noise; the density is R * shape before the threshold.
   float operator()(uint32_t x, uint32_t y, uint32_t z) const {
     if (!field.empty()) return float(field.density({pos[0][x], pos[1][y], pos[2][z]}));
-    float prof = profile[y];
+    float prof = columns.top.empty() ? profile[y] : column_profile(p, columns, size_t(z) * N[0] + x, (y + 0.5) / N[1]);
     if (!towers.empty()) {
       // q = sum over axes of ((i + 0.5) / N - c)^2 / sigma^2, in the order x, y, z; the terms are
       // tabulated per axis (same expressions, same bits). Partial sums of non-negative terms never
@@ -202,12 +214,27 @@ struct Shape {
             if (finish(1.0f, (*this)(x, y, z)) > 0) return true;
       return false;
     }
+    if (!columns.top.empty()) return painted_any(c);
     float pmax = 0, cmax = coverage.empty() ? 1.0f : 0.0f;
     for (uint32_t y : c[1]) pmax = std::max(pmax, profile[y]);
     if (!coverage.empty())
       for (uint32_t z : c[2])
         for (uint32_t x : c[0]) cmax = std::max(cmax, coverage[size_t(z) * N[0] + x]);
     return finish(1.0f, coverage.empty() ? pmax : pmax * cmax) > 0;
+  }
+  /// any_in for a painted weather map without towers: column profiles are in [0, 1] and 0 where
+  /// hn / top >= 1, so none when the lowest row is at or above the highest top (division rounds
+  /// monotonically, as column_profile computes it), else fl(profile * coverage) <= max coverage.
+  bool painted_any(const std::vector<uint32_t> (&c)[3]) const {
+    float cmax = 0, bmax = 0;
+    for (uint32_t z : c[2])
+      for (uint32_t x : c[0]) {
+        cmax = std::max(cmax, coverage[size_t(z) * N[0] + x]);
+        bmax = std::max(bmax, columns.top[size_t(z) * N[0] + x]);
+      }
+    const uint32_t ylo = *std::min_element(c[1].begin(), c[1].end());
+    if (!((ylo + 0.5) / N[1] / double(bmax) < 1.0)) return false;
+    return finish(1.0f, cmax) > 0;
   }
   /// any_in for shape sources: none where a lower bound of d over the ball around the voxels' box
   /// proves s = 0 (no voxel visited), else voxel by voxel, with the values the bricks compute.
@@ -680,6 +707,9 @@ std::string preset_hash(const Preset& p) {
     << p.coverage_low << ',' << p.coverage_high << ';' << p.threshold << ',' << p.density_scale << ';'
     << p.occupancy_cell << ',' << p.occupancy_padding << ';';
   if (!p.shape.sources.empty()) hash_shape(o, p.shape);  // presets without sources keep their hash
+  if (p.coverage_image && p.weather_map)  // presets without an image keep their hash
+    o << "weather:" << p.weather_map->fnv1a << ',' << p.weather_map->width << ',' << p.weather_map->height << ','
+      << p.weather_map->channels << ';';
   const ExportOptions& e = p.export_options;
   o << e.vdb_half << ',' << e.vdb_detail << ',' << e.vdb_up << ',' << e.vdb_physical << ',' << e.vdb_bake_erosion << ';';
   uint64_t h = 0xcbf29ce484222325ull;

@@ -21,6 +21,7 @@
 #include "cloudgen/schema.h"
 #include "cloudgen/input_scope.h"
 #include "cloudgen/printable.h"
+#include "cloudgen/weather_map.h"
 
 namespace cloudgen {
 namespace {
@@ -214,9 +215,20 @@ std::vector<Spec> build_table() {
 
   add("/coverage/enabled", "bool", "false", 0, 0, "Multiply by a 2D coverage map over x, z (weather map).",
       [](Preset& p, const json& j, const Index&) { p.coverage_enabled = j.get<bool>(); });
-  add("/coverage/kind", "string", "\"perlin\"", 0, 0, "Noise of the coverage map.",
-      [](Preset& p, const json& j, const Index&) { p.coverage_kind = noise3d::parse_kind(j.get<std::string>()); },
-      {"perlin", "worley", "perlin-worley"});
+  add("/coverage/kind", "string", "\"perlin\"", 0, 0,
+      "Noise of the coverage map, or \"image\": a painted weather map read from coverage.file (docs/shaping.md).",
+      [](Preset& p, const json& j, const Index&) {
+        p.coverage_image = j.get<std::string>() == "image";
+        if (!p.coverage_image) p.coverage_kind = noise3d::parse_kind(j.get<std::string>());
+      },
+      {"perlin", "worley", "perlin-worley", "image"});
+  add("/coverage/file", "string", "\"\"", 0, 0,
+      "Weather map PNG for coverage.kind \"image\" (8/16-bit grey, RGB or RGBA, at most " +
+          std::to_string(kWeatherMapMaxSide) + " a side), relative to the preset's folder (to the current folder with "
+          "--set): R = coverage, G = cloud type (0 stratus, 0.5 cumulus, 1 cumulonimbus), B = cloud-top height / volume "
+          "height; grey = coverage only. Over the x-z extent, bilinear, wrapping when tiling. `cloudgen weather-map` "
+          "writes one to paint over.",
+      [](Preset& p, const json& j, const Index&) { p.coverage_file = j.get<std::string>(); });
   add("/coverage/period", "integer", "2", 1, 65536, "Coverage noise period across the x extent.",
       [](Preset& p, const json& j, const Index&) { p.coverage_period = j.get<uint32_t>(); });
   add("/coverage/octaves", "integer", "3", 1, noise3d::kMaxOctaves, "Coverage fBm octaves.",
@@ -452,6 +464,30 @@ void cross_checks(const Preset& p, Reader& r) {
         r.problem("/towers/sigma", "6 * sigma must be below 1 on x and z so random towers fit inside the tile");
 }
 
+/// coverage.kind "image": needs coverage.enabled and coverage.file, read like motion.flow_map (a
+/// file named in the preset is found next to it; one given with --set, from the current folder).
+void load_weather_image(Preset& p, const std::string& source, const std::vector<std::string>& overrides, Reader& r) {
+  if (!p.coverage_image) return;
+  if (!p.coverage_enabled) {
+    r.problem("/coverage/enabled", "coverage.kind \"image\" needs coverage.enabled true");
+    return;
+  }
+  if (p.coverage_file.empty()) {
+    r.problem("/coverage/file", "coverage.kind \"image\" needs a PNG file here (8/16-bit grey, RGB or RGBA)");
+    return;
+  }
+  const bool from_set = std::any_of(overrides.begin(), overrides.end(), [](const std::string& ov) {
+    return ov.rfind("coverage.file=", 0) == 0;
+  });
+  std::filesystem::path file = p.coverage_file;
+  if (!from_set && file.is_relative()) file = std::filesystem::path(source).parent_path() / file;
+  try {
+    p.weather_map = load_weather_map(file.string());
+  } catch (const InputError& e) {
+    r.problem("/coverage/file", e.what());
+  }
+}
+
 }  // namespace
 
 const char* height_profile_name(HeightProfile h) {
@@ -515,6 +551,7 @@ Preset parse_preset(const std::string& text, const std::string& source, const st
       r.problem("/motion/flow_map", e.what());
     }
   }
+  if (r.problems().empty()) load_weather_image(p, source, overrides, r);
   if (r.problems().empty()) cross_checks(p, r);
   if (!r.problems().empty()) {
     std::string all;
