@@ -77,6 +77,76 @@ TEST(OutputSafety, FifoIsWrittenThrough) {
   EXPECT_TRUE(S_ISFIFO(st.st_mode)) << "the FIFO must not be replaced by a file";
 }
 
+// Issue 47, D1 and item 1: a FIFO output with no reader is waited for, and a signal ends the wait
+// (exit 130, the FIFO kept); a FIFO *input* is refused at once by every reader (one rule, in
+// protect_input), since nothing guarantees a writer or an end.
+TEST(Interrupts, AFifoOutputWithNoReaderEndsOnTheSignal) {
+  TempDir dir;
+  ASSERT_EQ(::mkfifo((dir / "f.vdb").c_str(), 0600), 0);
+  Process p = cli({"generate", "tiny", "-q", "-o", dir / "f.vdb"});
+  p.signal_on = "waiting for a reader";
+  p.sig = SIGTERM;
+  const auto r = p.run();
+  ASSERT_TRUE(r.signalled) << r.out;
+  EXPECT_EQ(r.code, 130) << r.out;
+  EXPECT_NE(r.out.find("no output was written or replaced"), std::string::npos) << r.out;
+  struct stat st;
+  ASSERT_EQ(::lstat((dir / "f.vdb").c_str(), &st), 0);
+  EXPECT_TRUE(S_ISFIFO(st.st_mode));
+}
+
+TEST(Interrupts, PipeInputsAreRefusedByEveryReader) {
+  TempDir dir;
+  ASSERT_EQ(::mkfifo((dir / "p.json").c_str(), 0600), 0);
+  ASSERT_EQ(::mkfifo((dir / "p.vdb").c_str(), 0600), 0);
+  const std::string json = dir / "p.json", vdb = dir / "p.vdb";
+  const std::vector<std::vector<std::string>> runs = {
+      {"validate", json}, {"generate", json, "-q", "-o", dir / "o.vdb"}, {"info", json}, {"info", vdb},
+      {"plan", json, "--tiles", "2,1,1", "-o", dir / "plan.json"}, {"merge", json, "-o", dir / "m.vdb"}};
+  for (const auto& args : runs) {
+    const auto r = cli(args).run();
+    EXPECT_EQ(r.code, 1) << args[0] << ": " << r.out;
+    EXPECT_NE(r.out.find("is a pipe (FIFO), not a regular file"), std::string::npos) << args[0] << ": " << r.out;
+  }
+  Process v = cli({json, "--headless", "--size", "16x9", "--out", dir / "a.png"});
+  v.program = std::string(CLOUD_BINARY_DIR) + "/bin/cloudviewer";
+  if (fs::exists(v.program)) {
+    const auto r = v.run();
+    EXPECT_EQ(r.code, 1) << r.out;
+    EXPECT_NE(r.out.find("is a pipe (FIFO), not a regular file"), std::string::npos) << r.out;
+  }
+  EXPECT_EQ(list_dir(dir.path), (std::vector<std::string>{"p.json", "p.vdb"}));
+}
+
+// Work that cannot poll the cancel flag (the test hold "generate:stuck" stands for a call blocked
+// inside a library) is ended by the policy's forced exit after the signal: 130, its words, no output.
+TEST(Interrupts, WorkThatCannotPollIsEndedByTheForcedExit) {
+  TempDir dir;
+  write_text(dir / "old.vdb", "previous contents");
+  for (int sig : {SIGINT, SIGTERM}) {
+    Process p = cli({"generate", "cumulus-field", "--resolution", "64", "-q", "-o", dir / "old.vdb", "-o", dir / "new.ktx2"});
+    p.env = {"CLOUDGEN_TEST_HOLD=generate:stuck"};
+    p.signal_on = "test hold at generate";
+    p.sig = sig;
+    const auto r = p.run();
+    ASSERT_TRUE(r.signalled) << r.out;
+    EXPECT_EQ(r.code, 130) << "signal " << sig << ": " << r.out;
+    EXPECT_NE(r.out.find("interrupted: no output was written or replaced"), std::string::npos) << r.out;
+    EXPECT_EQ(list_dir(dir.path), std::vector<std::string>{"old.vdb"});
+    EXPECT_EQ(read_text(dir / "old.vdb"), "previous contents");
+  }
+}
+
+// A closed stdout pipe (`cloudgen presets --markdown | head -1` once head has quit) ends the
+// program quietly with 141, as Unix tools do.
+TEST(Interrupts, AClosedStdoutPipeEndsQuietlyWith141) {
+  Process p = cli({"presets", "--markdown"});
+  p.stdout_closed = true;
+  const auto r = p.run();
+  EXPECT_EQ(r.code, 141) << r.out;
+  EXPECT_EQ(r.out, "") << "nothing said on stderr";
+}
+
 TEST(OutputSafety, SymlinkTargetIsReplacedAndTheLinkStays) {
   TempDir dir;
   fs::create_directory(dir / "real");

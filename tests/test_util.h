@@ -87,6 +87,7 @@ inline int run_cli(const std::string& args, std::string* out = nullptr) { return
 
 /// One run of the cloudgen binary with full control, no shell in between.
 struct Process {
+  std::string program = kCli;
   std::vector<std::string> args;  ///< after the program name
   std::vector<std::string> env;   ///< extra "KEY=VALUE"
   long long fsize_limit = -1;     ///< RLIMIT_FSIZE in bytes (a small "disk")
@@ -94,6 +95,7 @@ struct Process {
   int sig = SIGINT;
   std::string cwd;
   size_t max_output = 1 << 20;    ///< stop collecting (and kill) beyond this many bytes
+  bool stdout_closed = false;     ///< stdout a pipe whose reader is gone (`| head` after it quit); `out` is stderr
 
   struct Result {
     int code = -1;        ///< exit status, or -1 if killed by a signal
@@ -105,9 +107,12 @@ struct Process {
   Result run() const {
     int fds[2];
     if (::pipe(fds) != 0) return {};
+    int gone[2] = {-1, -1};
+    if (stdout_closed && ::pipe(gone) != 0) return {};
+    if (stdout_closed) ::close(gone[0]);
     const pid_t pid = ::fork();
     if (pid == 0) {
-      ::dup2(fds[1], 1);
+      ::dup2(stdout_closed ? gone[1] : fds[1], 1);
       ::dup2(fds[1], 2);
       ::close(fds[0]);
       ::close(fds[1]);
@@ -117,13 +122,14 @@ struct Process {
         ::setrlimit(RLIMIT_FSIZE, &rl);
       }
       if (!cwd.empty() && ::chdir(cwd.c_str()) != 0) ::_exit(98);
-      std::vector<char*> argv{const_cast<char*>(kCli.c_str())};
+      std::vector<char*> argv{const_cast<char*>(program.c_str())};
       for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
       argv.push_back(nullptr);
-      ::execv(kCli.c_str(), argv.data());
+      ::execv(program.c_str(), argv.data());
       ::_exit(99);
     }
     ::close(fds[1]);
+    if (stdout_closed) ::close(gone[1]);
     Result r;
     char buf[4096];
     for (ssize_t n; (n = ::read(fds[0], buf, sizeof buf)) != 0;) {

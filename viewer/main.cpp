@@ -3,9 +3,11 @@
 #include <string>
 #include <vector>
 
+#include "cloudgen/interrupt.h"
 #include "cloudviewer/app.h"
 
 int main(int argc, char** argv) {
+  cloudgen::install_interrupt_policy();  // SIGINT/SIGTERM/SIGPIPE, as cloudgen (cloudgen/interrupt.h)
   std::vector<std::string> args(argv, argv + argc);
   return cloudviewer::run_cli(args, std::cout, std::cerr);
 }

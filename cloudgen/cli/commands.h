@@ -8,12 +8,13 @@
 #include <vector>
 
 #include "cloudgen/generate.h"
+#include "cloudgen/interrupt.h"
 #include "cloudgen/io.h"
 
 namespace cloudgen::cli {
 
-/// Set by SIGINT/SIGTERM; long work checks it and stops, leaving no partial output.
-extern std::atomic<bool> g_cancel;
+/// Set by SIGINT/SIGTERM (cloudgen/interrupt.h); long work checks it and stops, leaving no partial output.
+inline std::atomic<bool>& g_cancel = cloudgen::g_interrupted;
 /// Set when a command already said what an interrupt left behind (main then exits 130 quietly).
 extern bool g_cancel_reported;
 

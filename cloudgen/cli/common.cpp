@@ -13,7 +13,6 @@ namespace fs = std::filesystem;
 
 namespace cloudgen::cli {
 
-std::atomic<bool> g_cancel{false};
 bool g_cancel_reported = false;
 
 std::function<void(double)> progress_bar(const std::string& label, bool quiet) {
@@ -49,13 +48,17 @@ std::string resolve_preset_path(const std::string& p) {
 /// Test hook (tests/test_cloudgen.cpp): CLOUDGEN_TEST_HOLD=generate pauses at the first progress
 /// report, =commit pauses with every output staged but none published (=frames: a sequence with
 /// its first frame staged); each prints a line and waits for SIGINT/SIGTERM, so a test can
-/// interrupt at a known point without sleeping.
+/// interrupt at a known point without sleeping. =generate:stuck stands for work that cannot poll
+/// the flag (blocked inside a library): it never returns, and only the signal policy's forced exit
+/// ends it (cloudgen/interrupt.h).
 void test_hold(const char* where) {
   const char* e = std::getenv("CLOUDGEN_TEST_HOLD");
-  if (!e || std::string(e) != where) return;
+  if (!e) return;
+  const bool stuck = std::string(e) == std::string(where) + ":stuck";
+  if (std::string(e) != where && !stuck) return;
   std::fprintf(stderr, "cloudgen: test hold at %s\n", where);
   std::fflush(stderr);
-  while (!g_cancel) ::usleep(1000);
+  while (stuck || !g_cancel) ::usleep(1000);
 }
 
 }  // namespace cloudgen::cli

@@ -8,20 +8,14 @@
 #include "cloudgen/exit_codes.h"
 #include "cloudgen/help_text.h"
 #include "cloudgen/input_scope.h"
+#include "cloudgen/interrupt.h"
 #include "commands.h"
-
-namespace {
-
-void on_signal(int) { cloudgen::cli::g_cancel = true; }
-
-}  // namespace
 
 int main(int argc, char** argv) {
   using namespace cloudgen;
   using namespace cloudgen::cli;
+  install_interrupt_policy();  // SIGINT/SIGTERM/SIGPIPE (cloudgen/interrupt.h)
   InputScope inputs;  // no output of this run may replace a file it reads (cloudgen/input_scope.h)
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
   // A file-size limit (ulimit -f) then fails the write with EFBIG, reported like a full disk,
   // instead of killing the process mid-write.
   std::signal(SIGXFSZ, SIG_IGN);

@@ -7,6 +7,9 @@
 #include <mutex>
 #include <utility>
 
+#include "cloudgen/errors.h"
+#include "cloudgen/printable.h"
+
 namespace cloudgen {
 
 struct InputScope::Impl {
@@ -32,7 +35,15 @@ InputScope::~InputScope() {
 
 void protect_input(const std::string& path, const std::string& role) {
   struct stat st;
-  if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return;
+  if (::stat(path.c_str(), &st) != 0 || S_ISDIR(st.st_mode)) return;  // the reader says what is missing
+  if (!S_ISREG(st.st_mode)) {
+    const char* kind = S_ISFIFO(st.st_mode)  ? "a pipe (FIFO)"
+                       : S_ISSOCK(st.st_mode) ? "a socket"
+                                              : "a device";
+    throw InputError(printable(path) + ": is " + kind +
+                     ", not a regular file; every input must be a regular file (a pipe or a device can "
+                     "block or never end: save it to a file first)");
+  }
   std::lock_guard<std::mutex> lock(g_mutex);
   if (g_scope) g_scope->inputs.emplace(std::make_pair(st.st_dev, st.st_ino), role);
 }

@@ -24,8 +24,10 @@ class InputScope {
 };
 
 /// Records `path` as an input of the current InputScope (none: nothing happens); `role` names it in
-/// the refusal ("the input preset x.json"). Only an existing regular file is recorded: nothing else
-/// can be replaced, and the reader's own error says why a path cannot be read. Thread-safe.
+/// the refusal ("the input preset x.json"). Only an existing regular file is recorded; a missing
+/// path or a folder is left to the reader's own error. Every reader calls it before opening, so it
+/// is also the one rule on what an input may be: a pipe (FIFO), socket or device throws InputError
+/// (it could block with no writer or stream without end), scope or not. Thread-safe.
 void protect_input(const std::string& path, const std::string& role);
 
 /// Forgets `path` as an input: for a command that updates a file it owns after reading it (a

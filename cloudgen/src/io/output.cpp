@@ -8,11 +8,14 @@
 
 #include <atomic>
 #include <cerrno>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <streambuf>
 #include <system_error>
 
+#include "cloudgen/interrupt.h"
+#include "cloudgen/printable.h"
 #include "cloudgen/volume.h"
 
 namespace cloudgen {
@@ -322,15 +325,43 @@ void OutputBatch::stage_impl(const std::string& path, const std::function<void(c
   impl_->staged_.push_back(std::move(s));
 }
 
+namespace {
+
+/// Opens a device or FIFO for writing. A FIFO with no reader is waited for without blocking, so a
+/// signal still ends the wait (cloudgen/interrupt.h); the wait is said once on stderr.
+int open_write_through(const std::string& path, const std::string& shown) {
+  for (int tries = 0;; ++tries) {
+    const int fd = ::open(path.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC | O_NONBLOCK);
+    if (fd >= 0) {
+      const int fl = ::fcntl(fd, F_GETFL);
+      if (fl < 0 || ::fcntl(fd, F_SETFL, fl & ~O_NONBLOCK) < 0) {
+        const int e = errno;
+        ::close(fd);
+        throw_io(shown, "cannot open for writing", e);
+      }
+      return fd;
+    }
+    if (errno != ENXIO) throw_io(shown, "cannot open for writing", errno);
+    throw_if_interrupted();
+    if (tries == 50) std::fprintf(stderr, "%s: waiting for a reader on this pipe (Ctrl-C ends the wait)\n", printable(shown).c_str());
+    ::usleep(20000);
+  }
+}
+
+}  // namespace
+
 std::vector<std::string> OutputBatch::commit() {
   auto& staged = impl_->staged_;
   std::vector<std::string> written;
   // 1. Devices and FIFOs first: they cannot be rolled back, and a failure here leaves every
   //    regular output untouched.
+  //    A signal's forced exit waits until the regular files are published whole (cloudgen/interrupt.h);
+  //    a pipe is left as far as it was written.
+  std::unique_ptr<CommitSection> whole;
   for (Impl::Staged& s : staged) {
     if (s.target.kind != DestKind::WriteThrough) continue;
-    const int out = ::open(s.target.path.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
-    if (out < 0) throw_io(s.dest, "cannot open for writing", errno);
+    const int out = open_write_through(s.target.path, s.dest);
+    note_publishing();
     std::vector<char> buf(1 << 20);
     int err = 0;
     for (off_t off = 0;;) {
@@ -360,6 +391,7 @@ std::vector<std::string> OutputBatch::commit() {
   }
   // 2. Regular files: give each temporary a name, keep a hard link to the file it replaces, and
   //    rename. If any step fails, every file renamed so far is put back.
+  whole = std::make_unique<CommitSection>();
   struct Done {
     std::string dest, backup;
     bool had_old;
