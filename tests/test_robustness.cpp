@@ -147,6 +147,67 @@ TEST(Interrupts, AClosedStdoutPipeEndsQuietlyWith141) {
   EXPECT_EQ(r.out, "") << "nothing said on stderr";
 }
 
+// Issue 47, D2 and D3: a text input has a cap checked before it is read, and --resolution has the
+// preset table's range, so no memory estimate can overflow.
+TEST(InputBounds, TextInputsAreCappedAndResolutionHasTheTablesRange) {
+  TempDir dir;
+  {
+    std::ofstream f(dir / "huge.json");
+  }
+  fs::resize_file(dir / "huge.json", (uint64_t(64) << 20) + 1);  // sparse: costs no disk
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"validate", dir / "huge.json"}, {"merge", dir / "huge.json", "-o", dir / "m.vdb"}}) {
+    const auto r = cli(args).run();
+    EXPECT_EQ(r.code, 1) << r.out;
+    EXPECT_NE(r.out.find("67108865 bytes is more than the 64 MiB a text input may have"), std::string::npos) << r.out;
+  }
+  for (const char* cmd : {"generate", "plan"}) {
+    const auto r = cli({cmd, "tiny", "--resolution", "2147483648", "-o", dir / "t.vdb"}).run();
+    EXPECT_EQ(r.code, 1) << r.out;
+    EXPECT_NE(r.out.find("--resolution: 2147483648 is out of range [1, 4096]"), std::string::npos) << r.out;
+  }
+  EXPECT_EQ(list_dir(dir.path), std::vector<std::string>{"huge.json"});
+}
+
+// Issue 47, D10 and D11, item 5: a plan is untrusted input. Each edit below is refused (exit 1)
+// before any tile is read or regenerated, even with --resume, and nothing is written anywhere.
+TEST(PlansAreUntrusted, EveryEditMergeCannotAccountForIsRefused) {
+  TempDir dir;
+  fs::create_directory(dir / "plan");
+  const std::string plan = dir / "plan/plan.json";
+  ASSERT_EQ(cli({"plan", "tiny", "--tiles", "2,1,1", "-o", plan}).run().code, 0);
+  write_text(dir / "victim.txt", "precious");
+  const nlohmann::json good = nlohmann::json::parse(read_text(plan));
+  const struct {
+    std::function<void(nlohmann::json&)> edit;
+    const char* says;
+  } cases[] = {
+      {[](auto& d) { d["tiles"][1]["file"] = "../victim.txt"; }, "is not a plain file name"},
+      {[&](auto& d) { d["tiles"][1]["file"] = dir / "victim.txt"; }, "is not a plain file name"},
+      {[](auto& d) { d["tiles"][1]["file"] = d["tiles"][0]["file"]; }, "is already another tile's"},
+      {[](auto& d) { d["tiles"] = nlohmann::json::array(); }, "0 tiles listed"},
+      {[](auto& d) { d["cloudgen_plan"] = 999; }, "plan version 999"},
+      {[](auto& d) { d["resolution"] = {2147483648u, 1, 1}; }, "\"resolution\" is [2147483648,1,1]; allowed"},
+      {[](auto& d) { d["tiles_per_axis"] = {0, 1, 1}; }, "\"tiles_per_axis\" is [0,1,1]; allowed"},
+      {[](auto& d) { d["tiles"][1]["region"] = "-1,0,0:8,8,8"; }, "is not X,Y,Z:W,H,D"},
+      {[](auto& d) { d["tiles"][1]["region"] = d["tiles"][0]["region"]; }, "overlaps tile 0's"},
+      {[](auto& d) { d["tiles"][1]["index"] = "x"; }, "\"index\" is \"x\", not a whole number"},
+      {[](auto& d) { d["tiles"][1].erase("command"); }, "no \"command\""},
+      {[](auto& d) { d["args"] = {"--resolution", "abc"}; }, "--resolution \"abc\"; allowed"},
+  };
+  for (const auto& c : cases) {
+    nlohmann::json d = good;
+    c.edit(d);
+    write_text(dir / "plan/bad.json", d.dump());
+    const auto r = cli({"merge", dir / "plan/bad.json", "--resume", "-q", "-o", dir / "out.vdb"}).run();
+    EXPECT_EQ(r.code, 1) << c.says << ": " << r.out;
+    EXPECT_NE(r.out.find(c.says), std::string::npos) << r.out;
+  }
+  EXPECT_EQ(read_text(dir / "victim.txt"), "precious");
+  EXPECT_EQ(list_dir(dir / "plan"), (std::vector<std::string>{"bad.json", "plan.json"}));
+  EXPECT_EQ(list_dir(dir.path), (std::vector<std::string>{"plan", "victim.txt"}));
+}
+
 TEST(OutputSafety, SymlinkTargetIsReplacedAndTheLinkStays) {
   TempDir dir;
   fs::create_directory(dir / "real");

@@ -5,16 +5,23 @@
 #include <sys/resource.h>
 #include <sys/stat.h>
 
+#include <algorithm>
+#include <cctype>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
+#include <tuple>
 
 #include "cloudgen/exit_codes.h"
-#include "cloudgen/mpi_run.h"
-#include "cloudgen/scale.h"
 #include "cloudgen/input_scope.h"
+#include "cloudgen/json_checked.h"
+#include "cloudgen/mpi_run.h"
+#include "cloudgen/plan.h"
+#include "cloudgen/scale.h"
 #include "cloudgen/printable.h"
 #include "commands.h"
 
@@ -85,11 +92,18 @@ Preset load_with_args(const std::string& path, const std::vector<std::string>& a
     const std::string& v = args[++i];
     if (k == "--set") sets.push_back(v);
     else if (k == "--seed") sets.push_back("seed=" + v);
-    else if (k == "--resolution") resolution = uint32_t(std::stoul(v));
+    else if (k == "--resolution") {
+      size_t at = 0;
+      uint64_t n = 0;
+      if (!parse_whole(v, at, UINT32_MAX, n) || at != v.size())  // rescale() checks the range
+        throw InputError(where + ": --resolution \"" + printable(v) + "\"; allowed: a whole number in [1, " +
+                         std::to_string(kMaxResolution) + "]");
+      resolution = uint32_t(n);
+    }
     else throw InputError(where + ": unknown argument \"" + k + "\" (allowed: --set, --seed, --resolution)");
   }
   Preset p = load_preset(path, sets);
-  if (resolution) rescale(p, resolution);
+  if (resolution || std::find(args.begin(), args.end(), "--resolution") != args.end()) rescale(p, resolution);
   return p;
 }
 
@@ -171,27 +185,16 @@ struct MergeArgs {
   int threads = 0;
 };
 
-json read_plan(const std::string& path) {
-  protect_input(path, "the plan " + printable(path));
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open plan file");
-  json doc;
-  try {
-    doc = json::parse(in);
-  } catch (const json::exception& e) {
-    throw InputError(path + ": not a plan written by `cloudgen plan` (" + e.what() + ")");
-  }
-  for (const char* k : {"cloudgen_plan", "generator", "preset", "args", "preset_hash", "seed", "tiles"})
-    if (!doc.contains(k)) throw InputError(path + ": not a plan written by `cloudgen plan` (no \"" + std::string(k) + "\")");
-  return doc;
+std::array<uint32_t, 3> region_lo(const std::string& region, std::array<uint32_t, 3>* ext = nullptr) {
+  std::array<uint32_t, 3> lo, e;
+  if (!parse_region(region, lo, e)) throw InputError("plan: tile region \"" + printable(region) + "\" is not X,Y,Z:W,H,D");
+  if (ext) *ext = e;
+  return lo;
 }
 
-std::array<uint32_t, 3> region_lo(const std::string& region, std::array<uint32_t, 3>* ext = nullptr) {
-  unsigned o[3], e[3];
-  if (std::sscanf(region.c_str(), "%u,%u,%u:%u,%u,%u", &o[0], &o[1], &o[2], &e[0], &e[1], &e[2]) != 6)
-    throw InputError("plan: tile region \"" + region + "\" is not X,Y,Z:W,H,D");
-  if (ext) *ext = {e[0], e[1], e[2]};
-  return {o[0], o[1], o[2]};
+json read_plan(const std::string& path) {
+  const std::string text = read_text_input(path, "the plan " + printable(path), path);
+  return parse_plan(text, path);
 }
 
 /// Why a tile file is not usable, or "" when it is.
@@ -250,6 +253,9 @@ void run_merge(const MergeArgs& a) {
   if (preset_hash(p) != plan["preset_hash"].get<std::string>())
     throw InputError(a.plan + ": preset " + plan["preset"].get<std::string>() + " changed since the plan was made (hash " +
                      preset_hash(p) + ", plan " + plan["preset_hash"].get<std::string>() + "): make a new plan");
+  if (plan["resolution"] != json(p.resolution))
+    throw InputError(a.plan + ": \"resolution\" " + json_excerpt(plan["resolution"]) + " is not the preset's " +
+                     json(p.resolution).dump() + " (the plan was edited): make a new plan");
   const fs::path dir = fs::path(a.plan).parent_path();
   json& tiles = plan["tiles"];
   auto file_of = [&](const json& t) { return (dir / t["file"].get<std::string>()).string(); };

@@ -1,7 +1,12 @@
 // The inputs of one command run: (device, inode) -> role, in the innermost live InputScope.
 #include "cloudgen/input_scope.h"
 
+#include <fcntl.h>
 #include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 
 #include <map>
 #include <mutex>
@@ -62,6 +67,44 @@ std::string protected_input_role(const std::string& path) {
   if (!g_scope) return {};
   auto it = g_scope->inputs.find({st.st_dev, st.st_ino});
   return it == g_scope->inputs.end() ? std::string() : it->second;
+}
+
+std::string read_text_input(const std::string& path, const std::string& role, const std::string& what,
+                            size_t cap) {
+  protect_input(path, role);
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) {
+    const int e = errno;
+    throw InputError(printable(what) + (e == ENOENT ? ": no such file" : ": cannot open: " + std::string(std::strerror(e))));
+  }
+  struct stat st;
+  if (::fstat(fd, &st) == 0 && S_ISDIR(st.st_mode)) {
+    ::close(fd);
+    throw InputError(printable(what) + ": is a folder, not a file");
+  }
+  const auto too_big = [&](const std::string& size) {
+    ::close(fd);
+    return InputError(printable(what) + ": " + size + " is more than the " + std::to_string(cap >> 20) +
+                      " MiB a text input may have (presets, plans, tracks and tables are small)");
+  };
+  if (uint64_t(st.st_size) > cap) throw too_big(std::to_string(st.st_size) + " bytes");
+  std::string text;
+  text.reserve(size_t(st.st_size));
+  char buf[1 << 16];
+  for (;;) {
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const int e = errno;
+      ::close(fd);
+      throw InputError(printable(what) + ": read failed: " + std::strerror(e));
+    }
+    if (n == 0) break;
+    if (text.size() + size_t(n) > cap) throw too_big("the file (it grew while read)");
+    text.append(buf, size_t(n));
+  }
+  ::close(fd);
+  return text;
 }
 
 }  // namespace cloudgen

@@ -6,6 +6,7 @@
 // one (the library in tests) nothing is recorded.
 #pragma once
 
+#include <cstddef>
 #include <memory>
 #include <string>
 
@@ -36,5 +37,16 @@ void release_input(const std::string& path);
 
 /// The role of the recorded input that `path` is (links followed), or "" when it is none.
 std::string protected_input_role(const std::string& path);
+
+/// The most a text input (preset, plan, bench track, Mie table) may have: 64 MiB. The largest
+/// shipped one is about 10 KiB; a bigger file is a mistake (or hostile), and reading it whole would
+/// cost memory without bound.
+constexpr size_t kTextInputCap = size_t(64) << 20;
+
+/// Reads a whole text input under the one rule: protect_input first (so a pipe or device is
+/// refused), then at most `cap` bytes, or InputError naming the file, its size and the cap.
+/// `what` names it in the messages ("--bench track.json"); a missing file is "no such file".
+std::string read_text_input(const std::string& path, const std::string& role, const std::string& what,
+                            size_t cap = kTextInputCap);
 
 }  // namespace cloudgen

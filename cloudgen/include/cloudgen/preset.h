@@ -125,7 +125,12 @@ Preset parse_preset(const std::string& json_text, const std::string& source_name
 /// Every problem of a preset file, empty when valid (`cloudgen validate`).
 std::vector<std::string> check_preset(const std::string& path, const std::vector<std::string>& overrides = {});
 
-/// Rescales so the longest axis has n voxels, keeping proportions and world size.
+/// The most voxels along an axis: the table's range of /resolution, and of --resolution (so a
+/// memory estimate, at most 4096^3 voxels x 20 bytes, cannot overflow).
+inline constexpr uint32_t kMaxResolution = 4096;
+
+/// Rescales so the longest axis has n voxels, keeping proportions and world size; n outside
+/// [1, kMaxResolution] is an InputError.
 void rescale(Preset& p, uint32_t n);
 
 }  // namespace cloudgen

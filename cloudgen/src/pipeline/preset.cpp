@@ -128,7 +128,7 @@ std::vector<Spec> build_table() {
       [](Preset& p, const json& j, const Index&) { p.description = j.get<std::string>(); });
   add("/seed", "integer", "1", 0, double(kMaxSeed), "Master seed; every noise channel derives its own.",
       [](Preset& p, const json& j, const Index&) { p.seed = j.get<uint64_t>(); });
-  add("/resolution", "ivec3", "[128, 128, 128]", 1, 4096, "Voxels along x, y (up), z.",
+  add("/resolution", "ivec3", "[128, 128, 128]", 1, kMaxResolution, "Voxels along x, y (up), z.",
       [](Preset& p, const json& j, const Index&) {
         for (int a = 0; a < 3; ++a) p.resolution[a] = j[a].get<uint32_t>();
       });
@@ -562,12 +562,7 @@ Preset parse_preset(const std::string& text, const std::string& source, const st
 }
 
 Preset load_preset(const std::string& path, const std::vector<std::string>& overrides) {
-  protect_input(path, "the input preset " + printable(path));
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open preset file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_preset(ss.str(), path, overrides);
+  return parse_preset(read_text_input(path, "the input preset " + printable(path), path), path, overrides);
 }
 
 std::vector<std::string> check_preset(const std::string& path, const std::vector<std::string>& overrides) {
@@ -583,7 +578,10 @@ std::vector<std::string> check_preset(const std::string& path, const std::vector
 }
 
 void rescale(Preset& p, uint32_t n) {
-  if (n < 1) throw InputError("--resolution: must be at least 1");
+  // The preset table's own range of /resolution, so no estimate downstream can overflow.
+  if (n < 1 || n > kMaxResolution)
+    throw InputError("--resolution: " + std::to_string(n) + " is out of range [1, " + std::to_string(kMaxResolution) +
+                     "] (the range of /resolution)");
   const uint32_t longest = *std::max_element(p.resolution.begin(), p.resolution.end());
   const double f = double(n) / longest;
   for (auto& r : p.resolution) r = std::max<uint32_t>(1, uint32_t(std::lround(r * f)));

@@ -184,12 +184,7 @@ BenchPlan parse_track(const std::string& text, const std::string& where, const O
 namespace {
 
 std::string read_track_file(const std::string& path) {
-  cloudgen::protect_input(path, "the bench track " + path);
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError("--bench " + path + ": no such file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+  return cloudgen::read_text_input(path, "the bench track " + path, "--bench " + path);
 }
 
 Sun sun_of(const BenchPlan& plan, const TrackFrame& f) { return plan.has_sun ? plan.fixed_sun : default_sun(f.camera); }

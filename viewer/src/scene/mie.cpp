@@ -60,12 +60,7 @@ MiePhaseTable normalised(const std::vector<double> (&channels)[3], const std::st
 
 std::shared_ptr<const MiePhaseTable> read_mie_table(const std::string& path) {
   const std::string what = "--mie-table " + path;
-  std::error_code ec;
-  if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
-    throw InputError(what + ": not a regular file (a FIFO or a device would block or never end)");
-  cloudgen::protect_input(path, "the Mie table " + path);
-  std::ifstream in(path);
-  if (!in) throw InputError(what + ": no such file");
+  std::istringstream in(cloudgen::read_text_input(path, "the Mie table " + path, what));
   std::vector<double> theta, value[3];
   std::string line;
   int columns = 0, line_no = 0;
