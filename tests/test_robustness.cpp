@@ -208,6 +208,41 @@ TEST(PlansAreUntrusted, EveryEditMergeCannotAccountForIsRefused) {
   EXPECT_EQ(list_dir(dir.path), (std::vector<std::string>{"plan", "victim.txt"}));
 }
 
+// Issue 47, D14 and D17 (item 7): what a program prints is checked like any file (a full disk under
+// `> file` is exit 2 with the system's reason), and no option value means something it does not
+// say: empty values, NaN, and integers that round into the range are refused.
+TEST(Words, StdoutIsCheckedAndValuesAreRefusedAsTyped) {
+  const std::string viewer = std::string(CLOUD_BINARY_DIR) + "/bin/cloudviewer";
+  const bool has_viewer = fs::exists(viewer);
+  std::string out;
+  EXPECT_EQ(run_shell("(" + kCli + " presets --markdown > /dev/full)", &out), 2) << out;
+  EXPECT_NE(out.find("writing to standard output failed: No space left on device"), std::string::npos) << out;
+  if (has_viewer) {
+    EXPECT_EQ(run_shell("(" + viewer + " --params-markdown > /dev/full)", &out), 2) << out;
+    EXPECT_NE(out.find("No space left on device"), std::string::npos) << out;
+  }
+  TempDir dir;
+  const struct {
+    std::string cmd, says;
+  } refused[] = {
+      {kCli + " phase --model hg --g nan -o " + (dir / "p.csv"), "--g: \"nan\" is not a finite number"},
+      {kCli + " generate tiny --resolution '' -o " + (dir / "t.vdb"), "--resolution: an empty value"},
+      {kCli + " generate tiny --region '' -o " + (dir / "t.vdb"), "--region: an empty value"},
+      {kCli + " generate tiny --set seed=9007199254740993 -o " + (dir / "t.vdb"),
+       "/seed: 9007199254740993 is out of range; allowed: integer in [0, 9007199254740992]"},
+      {has_viewer ? viewer + " synthetic:sphere --headless --size 16x9 --frames 2 --fps nan --out " + (dir / "f_%d.png") : "",
+       "--fps: \"nan\" is not a finite number"},
+      {has_viewer ? viewer + " synthetic:sphere --headless --size 16x9 --fov '' --out " + (dir / "f.png") : "",
+       "--fov: an empty value"},
+  };
+  for (const auto& r : refused) {
+    if (r.cmd.empty()) continue;
+    EXPECT_EQ(run_shell(r.cmd, &out), 1) << r.cmd << ": " << out;
+    EXPECT_NE(out.find(r.says), std::string::npos) << r.cmd << ": " << out;
+  }
+  EXPECT_TRUE(list_dir(dir.path).empty());
+}
+
 TEST(OutputSafety, SymlinkTargetIsReplacedAndTheLinkStays) {
   TempDir dir;
   fs::create_directory(dir / "real");

@@ -3,11 +3,12 @@
 #include <string>
 #include <vector>
 
+#include "cloudgen/exit_codes.h"
 #include "cloudgen/interrupt.h"
 #include "cloudviewer/app.h"
 
 int main(int argc, char** argv) {
   cloudgen::install_interrupt_policy();  // SIGINT/SIGTERM/SIGPIPE, as cloudgen (cloudgen/interrupt.h)
   std::vector<std::string> args(argv, argv + argc);
-  return cloudviewer::run_cli(args, std::cout, std::cerr);
+  return cloudgen::finish_stdout(cloudviewer::run_cli(args, std::cout, std::cerr));  // stdout checked too
 }

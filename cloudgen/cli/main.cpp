@@ -44,24 +44,25 @@ int main(int argc, char** argv) {
 
   try {
     wrap_cli_help(app);
+    check_cli_values(app);
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     const int rc = app.exit(e);  // prints the message (or the help)
-    return rc == 0 ? kExitOk : kExitInput;
+    return finish_stdout(rc == 0 ? kExitOk : kExitInput);
   }
   try {
     if (run) run();
   } catch (const Cancelled&) {
     std::fprintf(stderr, "\ninterrupted: no output was written or replaced\n");
-    return kExitInterrupted;
+    return finish_stdout(kExitInterrupted);
   } catch (...) {
     const std::exception_ptr e = std::current_exception();
     std::fprintf(stderr, "%s\n", error_message_of(e).c_str());
-    return exit_code_of(e);
+    return finish_stdout(exit_code_of(e));
   }
   if (g_cancel) {
     if (!g_cancel_reported) std::fprintf(stderr, "interrupted\n");
-    return 130;
+    return finish_stdout(kExitInterrupted);
   }
-  return 0;
+  return finish_stdout(kExitOk);
 }

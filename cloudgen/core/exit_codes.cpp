@@ -1,7 +1,13 @@
 #include "cloudgen/exit_codes.h"
 
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <ios>
+#include <iostream>
 #include <new>
 
 #include "cloudgen/errors.h"
@@ -41,6 +47,21 @@ const char* exit_kind(int code) {
     case kExitInterrupted: return "interrupted";
     default: return "internal error";
   }
+}
+
+int finish_stdout(int code) {
+  std::cout.flush();
+  errno = 0;
+  const bool flushed = std::fflush(stdout) == 0;
+  const int e = errno;
+  if (flushed && !std::ferror(stdout) && std::cout.good()) return code;
+  // stdio does not keep the errno of the write that failed earlier: one more byte on the already
+  // damaged output asks the system again (a full disk says so again).
+  int why = e;
+  if (!why && ::write(STDOUT_FILENO, "\n", 1) < 0) why = errno;
+  std::fprintf(stderr, "I/O error: writing to standard output failed: %s; what was printed is incomplete\n",
+               why ? std::strerror(why) : "the stream reported an error");
+  return code == kExitOk ? kExitIo : code;
 }
 
 std::string error_message_of(const std::exception_ptr& e) {

@@ -39,7 +39,10 @@ bool number_ok(const FieldSpec& f, const json& v, bool integer, const std::strin
     return false;
   }
   const double d = v.get<double>();
-  if (!(d >= f.lo && d <= f.hi)) {
+  // An integer beyond 2^53 rounds to a double inside the range (2^53 + 1 -> 2^53): compare it exact.
+  const bool exact_out = v.is_number_unsigned() && d >= 9007199254740992.0 && f.hi >= 0 &&
+                         f.hi < 18446744073709551616.0 && v.get<uint64_t>() > uint64_t(f.hi);
+  if (!(d >= f.lo && d <= f.hi) || exact_out) {
     problem(ptr, shown(v) + " is out of range; allowed: " + f.range());
     return false;
   }

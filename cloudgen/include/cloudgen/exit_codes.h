@@ -23,6 +23,11 @@ int exit_code_of(const std::exception_ptr& e);
 /// What kind of failure code `code` reports, for a message's prefix: "error", "I/O error",
 /// "interrupted", "internal error".
 const char* exit_kind(int code);
+/// Flushes stdout (C stdio and std::cout) and returns `code`, or kExitIo with a line on stderr
+/// naming the system's reason when any write to stdout failed (a full disk under `> file`): what a
+/// program printed is checked like any file it writes. Call it on the way out of main.
+int finish_stdout(int code);
+
 /// The one-line (or, for lists of problems, multi-line) message to print for `e`, control
 /// characters escaped: "error: ...", "internal error: ...".
 std::string error_message_of(const std::exception_ptr& e);

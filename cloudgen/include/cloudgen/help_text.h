@@ -32,4 +32,30 @@ void wrap_cli_help(App& app) {
   }
 }
 
+/// The value rules every option of both programs shares (docs/robustness.md, "Inputs"): an empty
+/// value (`--resolution ""`) is refused instead of silently meaning the default, and a number
+/// option refuses "nan" and "inf" (which the conversion would accept). Subcommands too.
+template <class App>
+void check_cli_values(App& app) {
+  for (auto* opt : app.get_options()) {
+    if (opt->get_type_size() == 0) continue;  // a flag: no value
+    const std::string type = opt->get_type_name();
+    const bool number = type.rfind("FLOAT", 0) == 0 || type.rfind("INT", 0) == 0 || type.rfind("UINT", 0) == 0 ||
+                        type.rfind("NUMBER", 0) == 0;
+    opt->check(
+        [number](const std::string& v) -> std::string {
+          if (v.empty()) return "an empty value; give one, or leave the option out for its default";
+          if (!number) return "";
+          std::string l;
+          for (char c : v) l += char(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c);
+          if (l.find("nan") != std::string::npos || l.find("inf") != std::string::npos)
+            return "\"" + v + "\" is not a finite number";
+          return "";
+        },
+        "", "");
+  }
+  const std::function<bool(App*)> every = [](App*) { return true; };
+  for (App* sub : app.get_subcommands(every)) check_cli_values(*sub);
+}
+
 }  // namespace cloudgen

@@ -455,6 +455,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   std::reverse(argv_rest.begin(), argv_rest.end());
   try {
     cloudgen::wrap_cli_help(app);
+    cloudgen::check_cli_values(app);
     app.parse(argv_rest);
   } catch (const CLI::ParseError& e) {
     int code = app.exit(e, out, err);
