@@ -48,6 +48,15 @@ Volume read_vdb(const std::string& path, uint64_t max_bytes = kDefaultReadBudget
 Volume read_vdb_level(const std::string& path, uint32_t level, uint64_t max_bytes = kDefaultReadBudget);
 /// How many levels of detail a .vdb holds (grids density_level_1 .. density_level_N; 0 if none).
 uint32_t vdb_lod_levels(const std::string& path);
+/// A float grid of a .vdb as stored (no cropping): what `cloudgen info` says of it.
+struct VdbGridSummary {
+  std::string name;
+  double voxel_size = 0;  ///< metres
+  uint64_t active_voxels = 0;
+  double integral = 0;  ///< sum of the active values times the voxel volume (m^3; tiles count every voxel)
+};
+/// Every float grid of a .vdb, in file order.
+std::vector<VdbGridSummary> vdb_grid_summaries(const std::string& path);
 /// NanoVDB (.nvdb): the grids and metadata of the .vdb export as NanoVDB float grids
 /// (src/io/nvdb_io.cpp; sparse access in cloudgen/nvdb.h). read_nvdb_volume densifies.
 void write_nvdb(const Volume& v, const std::string& path, const ExportOptions& o, OutputBatch& batch);

@@ -333,7 +333,12 @@ openvdb::GridPtrVec lod_grids(const Volume& v, const openvdb::GridPtrVec& grids,
     const std::string name = src->getName();
     if (name != "density" && std::find(std::begin(v.detail_names), std::end(v.detail_names), name) == std::end(v.detail_names))
       continue;
-    openvdb::tools::MultiResGrid<openvdb::FloatTree> levels(o.vdb_lod + 1, *src);  // copies the fine tree
+    // The restriction reads inactive values too, and the detail grids keep values under the voxels
+    // their mask deactivated: averaged from a copy whose inactive values are 0, so a level holds
+    // exactly what the active voxels hold.
+    openvdb::FloatGrid::Ptr clean = src->deepCopy();
+    for (auto it = clean->tree().beginValueOff(); it; ++it) it.setValue(0.0f);
+    openvdb::tools::MultiResGrid<openvdb::FloatTree> levels(o.vdb_lod + 1, clean);  // takes the copy's tree
     for (uint32_t l = 1; l <= o.vdb_lod; ++l) {
       auto g = openvdb::FloatGrid::create(levels.treePtr(l));
       openvdb::tools::prune(g->tree());
@@ -542,6 +547,24 @@ uint32_t vdb_lod_levels(const std::string& path) {
   return n;
 }
 
+namespace {
+double grid_integral(const openvdb::FloatGrid& g) {
+  double sum = 0;
+  for (auto it = g.cbeginValueOn(); it; ++it) sum += double(*it) * double(it.getVoxelCount());
+  const double vs = g.voxelSize()[0];
+  return sum * vs * vs * vs;
+}
+}  // namespace
+
+std::vector<VdbGridSummary> vdb_grid_summaries(const std::string& path) {
+  const VdbFile file(path);
+  std::vector<VdbGridSummary> out;
+  for (const auto& base : file.grids())
+    if (auto g = openvdb::gridPtrCast<openvdb::FloatGrid>(base))
+      out.push_back({g->getName(), g->voxelSize()[0], g->activeVoxelCount(), grid_integral(*g)});
+  return out;
+}
+
 Volume read_vdb_level(const std::string& path, uint32_t level, uint64_t max_bytes) {
   const VdbFile file(path);
   openvdb::GridBase::Ptr base;
@@ -690,6 +713,8 @@ std::string describe_vdb(const std::string& path) {
         else lo = std::min(lo, f), hi = std::max(hi, f);
       }
       if (finite) o << "    values min " << lo << ", max " << hi << ", background " << fg->background() << "\n";
+      if (finite && !nan && !inf && fg->transform().isLinear())  // what a level of detail keeps (export.vdb.lod)
+        o << "    integral (values x voxel volume): " << grid_integral(*fg) << " m^3\n";
       if (nan || inf)
         o << "    WARNING: " << nan << " NaN and " << inf << " infinite values (not valid densities)\n";
       if (g->getGridClass() == openvdb::GRID_LEVEL_SET)
