@@ -640,7 +640,8 @@ Volume read_vdb_level(const std::string& path, uint32_t level, uint64_t max_byte
         !computed_meta().count(it->first))
       v.metadata.push_back({it->first, vdb::meta_text(*it->second)});
   // Every field cloudgen writes comes back: tiling, and normalised density from physical units.
-  if (auto t = grid->getMetadata<openvdb::BoolMetadata>("tiles_xz")) v.tiles_xz = t->value();
+  // A level is not periodic: its voxels straddle the fine box's faces and the restriction does not wrap.
+  if (auto t = grid->getMetadata<openvdb::BoolMetadata>("tiles_xz")) v.tiles_xz = t->value() && level == 0;
   auto units = grid->getMetadata<openvdb::StringMetadata>("density_units");
   auto ext = grid->getMetadata<openvdb::DoubleMetadata>("extinction_per_metre");
   if (units && units->value() == "extinction_per_metre") {
@@ -766,6 +767,7 @@ SceneInfo read_vdb_scene_info(const std::string& path) {
   for (auto it = g->beginMeta(); it != g->endMeta(); ++it)
     if (it->first.rfind("file_", 0) != 0 && it->first != "class" && it->first != "name")
       s.metadata.push_back({it->first, vdb::meta_text(*it->second)});
+  while (s.lod_levels < kMaxLodLevels && file.hasGrid("density_level_" + std::to_string(s.lod_levels + 1))) ++s.lod_levels;
   file.close();
   return s;
 }
