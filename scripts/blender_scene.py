@@ -83,7 +83,10 @@ pv = nt.nodes.new("ShaderNodeVolumePrincipled")
 pv.inputs["Color"].default_value = (M["albedo"], M["albedo"], M["albedo"], 1.0)
 pv.inputs["Absorption Color"].default_value = (0.0, 0.0, 0.0, 1.0)
 pv.inputs["Anisotropy"].default_value = M["anisotropy"]
-pv.inputs["Density Attribute"].default_value = "density"
+DENSITY = M.get("density_grid", "density")  # a level of detail: density_level_N (cloudgen blender --level)
+if DENSITY not in names:
+    raise SystemExit(f"{S['vdb']}: no grid '{DENSITY}' (grids: {names})")
+pv.inputs["Density Attribute"].default_value = DENSITY
 nt.links.new(pv.outputs["Volume"], out.inputs["Volume"])
 
 
@@ -123,7 +126,7 @@ if M["erosion"] > 0 and all(g in names for g in M["detail_grids"]):
     # mix(1 - d, d, t) = (1 - d) + t (2 d - 1)
     detail = math_node("ADD", math_node("SUBTRACT", 1.0, detail), math_node("MULTIPLY", t, math_node("SUBTRACT", math_node("MULTIPLY", detail, 2.0), 1.0)))
     e = math_node("MULTIPLY", detail, M["erosion"])
-    base = math_node("DIVIDE", attr("density"), M["grid_scale"])  # normalised density (physical units: / extinction)
+    base = math_node("DIVIDE", attr(DENSITY), M["grid_scale"])  # normalised density (physical units: / extinction)
     eroded = math_node("DIVIDE", math_node("SUBTRACT", base, e), math_node("MAXIMUM", math_node("SUBTRACT", 1.0, e), 1e-4), clamp=True)
     ratio = math_node("DIVIDE", eroded, math_node("MAXIMUM", base, 1e-6))
     nt.links.new(math_node("MULTIPLY", ratio, M["density"]), pv.inputs["Density"])

@@ -107,5 +107,27 @@ PY
 "$bin/cloudgen" blender "$tmp/voxel.vdb" -q -o "$tmp/voxel.blend" --size 64x64 --samples 8
 blender_py mask "$tmp/voxel.blend" "$tmp/voxel_cycles_mask.png" >/dev/null
 blender_py centroid "$tmp/voxel_viewer_t.png" "$tmp/voxel_cycles_mask.png" 1.5
+# 6. Levels of detail (generate --lod): Blender lists the level grids on the volume object, and
+#    `cloudgen blender --level 2` points Principled Volume's Density Attribute at density_level_2;
+#    a level the file lacks is refused with the allowed range, exit 1, no scene written.
+"$bin/cloudgen" generate tiny -q --lod 2 -o "$tmp/lod.vdb"
+"$bin/cloudgen" blender "$tmp/lod.vdb" -q --level 2 -o "$tmp/lod.blend" --size 64x36 --samples 4
+cat > "$tmp/lod_check.py" <<'PY'
+import bpy
+(vol,) = bpy.data.volumes
+vol.grids.load()
+names = [g.name for g in vol.grids]
+assert {"density", "density_level_1", "density_level_2"} <= set(names), names
+attrs = [n.inputs["Density Attribute"].default_value for m in bpy.data.materials for n in m.node_tree.nodes
+         if n.type == "PRINCIPLED_VOLUME"]
+assert attrs == ["density_level_2"], attrs
+print("blender: grids", names, "; the material reads", attrs[0])
+PY
+blender -b "$tmp/lod.blend" --python-exit-code 1 --python "$tmp/lod_check.py" 2>&1 | grep -E "^blender: grids|Error|assert"
+if "$bin/cloudgen" blender "$tmp/lod.vdb" -q --level 3 -o "$tmp/lod3.blend" 2>"$tmp/lod3.err"; then
+  echo "--level 3 of a file with 2 levels was accepted"; exit 1
+fi
+grep -q -- "--level: 3 is not a level of detail of .*; allowed: 0 .. 2" "$tmp/lod3.err" || { cat "$tmp/lod3.err"; exit 1; }
+test ! -e "$tmp/lod3.blend"
 if [ -n "${CLOUD_KEEP_RENDER:-}" ]; then mkdir -p "$CLOUD_KEEP_RENDER" && cp "$tmp"/*.png "$CLOUD_KEEP_RENDER"/; fi
 echo "blender round trip OK"

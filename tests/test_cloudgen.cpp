@@ -11,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <sstream>
 #include <thread>
@@ -584,6 +585,81 @@ TEST(Export, VdbRoundTripFloatAndHalf) {
   }
 }
 
+// Levels of detail (export.vdb.lod): grids NAME_level_L, voxels 2^L times as large, placed over the
+// fine grid in world space, and mean-preserving: every channel's integral (sum of values times the
+// voxel volume) equals the fine grid's within 0.1% at every level, in normalized and physical units.
+TEST(Export, LodLevelsDoubleTheVoxelAndKeepEveryChannelsIntegral) {
+  TempDir dir;
+  for (const char* name : {"tiny", "cumulus-field"}) {
+    Preset p = preset(name);
+    if (std::string(name) == "cumulus-field") rescale(p, 64);
+    const Volume v = generate(p);
+    for (bool physical : {false, true}) {
+      SCOPED_TRACE(std::string(name) + (physical ? " physical" : " normalized"));
+      ExportOptions o;
+      o.vdb_lod = 3;
+      o.vdb_physical = physical;
+      o.vdb_bake_erosion = false;  // the detail grids, and their levels, too
+      const std::string path = dir / "lod.vdb";
+      write_vdb(v, path, o);
+      EXPECT_EQ(vdb_lod_levels(path), 3u);
+      const Volume fine = read_vdb(path);
+      auto integral = [](const Volume& w, const std::vector<float>& c) {
+        double s = 0;
+        for (float x : c) s += x;
+        return s * w.voxel_size * w.voxel_size * w.voxel_size;
+      };
+      auto centre = [](const Volume& w, int a) { return w.origin[a] + 0.5 * w.dims[a] * w.voxel_size; };
+      for (uint32_t l = 1; l <= 3; ++l) {
+        const Volume c = read_vdb_level(path, l);
+        EXPECT_DOUBLE_EQ(c.voxel_size, v.voxel_size * double(1u << l)) << "level " << l;
+        const double f = integral(fine, fine.density), g = integral(c, c.density);
+        ASSERT_GT(f, 0);
+        EXPECT_NEAR(g / f, 1.0, 1e-3) << "level " << l << ": density integral " << g << " against " << f;
+        for (int d = 0; d < 3; ++d) {
+          if (!fine.detail[d].empty()) {
+            EXPECT_EQ(c.detail[d].size(), c.density.size()) << v.detail_names[d];
+          }
+        }
+        // Overlaid in world space: the level's box holds the fine box, at most a coarse voxel wider a side.
+        for (int a = 0; a < 3; ++a) {
+          EXPECT_LE(c.origin[a], fine.origin[a] + 1e-6) << "axis " << a << " level " << l;
+          EXPECT_NEAR(centre(c, a), centre(fine, a), c.voxel_size) << "axis " << a << " level " << l;
+        }
+      }
+      // Every channel's grids as stored (the reader crops the detail grids, which reach a voxel past
+      // the density, to the density's box): the same integral at every level.
+      std::map<std::string, double> integral0;
+      size_t levels = 0;
+      for (const VdbGridSummary& g : vdb_grid_summaries(path)) {
+        const size_t at = g.name.find("_level_");
+        if (at == std::string::npos) {
+          integral0[g.name] = g.integral;
+          continue;
+        }
+        ++levels;
+        const uint32_t l = uint32_t(std::stoul(g.name.substr(at + 7)));
+        const double f = integral0.at(g.name.substr(0, at));
+        EXPECT_DOUBLE_EQ(g.voxel_size, v.voxel_size * double(1u << l)) << g.name;
+        EXPECT_NEAR(g.integral / f, 1.0, 1e-3) << g.name << ": " << g.integral << " against " << f;
+      }
+      EXPECT_EQ(levels, 3 * integral0.size()) << "every channel has its levels";
+      EXPECT_GE(integral0.size(), 2u) << "density and at least one detail channel";
+      const std::string info = describe_vdb(path);
+      EXPECT_NE(info.find("file lod_levels: 3"), std::string::npos) << info;
+      EXPECT_NE(info.find("levels of detail: 3 (density_level_1 .. density_level_3"), std::string::npos) << info;
+      for (const char* g : {"density_level_1", "density_level_3", "detail_g_level_2"})
+        EXPECT_NE(info.find("grid \"" + std::string(g) + "\""), std::string::npos) << g << "\n" << info;
+      try {
+        read_vdb_level(path, 4);
+        ADD_FAILURE() << "level 4 of a file with 3";
+      } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("the file has levels 0 .. 3"), std::string::npos) << e.what();
+      }
+    }
+  }
+}
+
 // KTX2 header fields a loader checks (every texel format's values: TextureRoundTrip in
 // test_robustness.cpp).
 TEST(Export, Ktx2HeaderHoldsWhatLoadersCheck) {
@@ -697,6 +773,38 @@ TEST(Cli, ErrorsExitNonZeroWithTheirMessage) {
   EXPECT_EQ(run_cli("validate " + (dir / "bad.json"), &out), 1);
   EXPECT_NE(out.find("/seed: -1 is out of range"), std::string::npos) << out;
   EXPECT_TRUE(fs::is_empty(dir.path) || !fs::exists(dir / "t.vdb"));
+}
+
+// --lod N and export.vdb.lod: levels in the file and its info; a count outside 0 .. 16 (the table's
+// range) or beyond one voxel along the longest axis (tiny, 32^3: 5) is refused by name, value and
+// range, exit 1, nothing written; 0 is the default (no levels, and the file without the metadata).
+TEST(Cli, LodWritesNamedLevelsAndRefusesBadCounts) {
+  TempDir dir;
+  std::string out;
+  ASSERT_EQ(run_cli("generate tiny -q --lod 2 -o " + (dir / "a.vdb"), &out), 0) << out;
+  ASSERT_EQ(run_cli("info " + (dir / "a.vdb"), &out), 0) << out;
+  EXPECT_NE(out.find("levels of detail: 2 (density_level_1 .. density_level_2; voxel size 25, 50, 100)"),
+            std::string::npos)
+      << out;
+  ASSERT_EQ(run_cli("generate tiny -q --set export.vdb.lod=5 -o " + (dir / "b.vdb"), &out), 0) << out;
+  EXPECT_EQ(vdb_lod_levels(dir / "b.vdb"), 5u);
+  ASSERT_EQ(run_cli("generate tiny -q --lod 0 -o " + (dir / "c.vdb"), &out), 0) << out;
+  EXPECT_EQ(vdb_lod_levels(dir / "c.vdb"), 0u);
+  ASSERT_EQ(run_cli("info " + (dir / "c.vdb"), &out), 0) << out;
+  EXPECT_EQ(out.find("lod"), std::string::npos) << out;
+  const size_t files = testutil::list_dir(dir.path).size();
+  const std::pair<const char*, const char*> bad[] = {
+      {"--lod 40", "/export/vdb/lod: 40 is out of range; allowed: integer in [0, 16]"},
+      {"--lod -1", "/export/vdb/lod: -1 is out of range"},
+      {"--lod two", "/export/vdb/lod"},
+      {"--lod 6", "export.vdb.lod (--lod): 6 is more levels than a 32x32x32 volume has; allowed: 0 .. 5"},
+      {"--set export.vdb.lod=9 --resolution 64", "allowed: 0 .. 6"},
+  };
+  for (const auto& [args, message] : bad) {
+    EXPECT_EQ(run_cli("generate tiny -q " + std::string(args) + " -o " + (dir / "d.vdb"), &out), 1) << args << "\n" << out;
+    EXPECT_NE(out.find(message), std::string::npos) << args << "\n" << out;
+  }
+  EXPECT_EQ(testutil::list_dir(dir.path).size(), files) << "a refused run writes nothing";
 }
 
 // Interrupted at known points (test hook CLOUDGEN_TEST_HOLD, a handshake, no sleeping): a run of

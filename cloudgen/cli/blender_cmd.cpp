@@ -37,6 +37,7 @@ struct BlenderArgs {
   bool quiet = false;
   std::string frames;  ///< a VDB sequence (input with a # run): its frames A:B
   int64_t render_frame = -1;  ///< the frame --render renders (default: the first)
+  uint32_t level = 0;  ///< the level of detail the volume's material reads (export.vdb.lod; 0 = full resolution)
 };
 
 /// The blender executable: $CLOUDGEN_BLENDER, else `blender` on PATH.
@@ -280,6 +281,9 @@ json scene_description(const BlenderArgs& a, const SceneInput& in, const Default
                        std::array<int, 2> size) {
   const Look& look = d.look;
   json s;
+  // A level of detail (cloudgen generate --lod): its grids, with the full resolution's extinction
+  // (the grids keep the density's integral, so the same Density gives the same cloud).
+  const std::string suffix = a.level ? "_level_" + std::to_string(a.level) : "";
   const fs::path blend_abs = fs::absolute(a.output);
   s["vdb"] = fs::absolute(in.vdb).string();
   s["vdb_relative"] = "//" + fs::relative(fs::absolute(in.vdb), blend_abs.parent_path()).string();
@@ -290,7 +294,8 @@ json scene_description(const BlenderArgs& a, const SceneInput& in, const Default
                    {"anisotropy", look.phase == "none" ? 0.0 : look.g},
                    {"albedo", look.albedo},
                    {"erosion", look.erosion},
-                   {"detail_grids", {"detail_g", "detail_b", "detail_a"}},
+                   {"density_grid", a.level ? "density_level_" + std::to_string(a.level) : std::string("density")},
+                   {"detail_grids", {"detail_g" + suffix, "detail_b" + suffix, "detail_a" + suffix}},
                    {"box_bottom", d.info.origin[1]},
                    {"box_height", d.info.size()[1]}};
   s["camera"] = {{"eye", zup(d.cam.eye)}, {"target", zup(d.cam.target)}, {"fov_y_deg", d.fov}};
@@ -361,6 +366,10 @@ void run_blender(const BlenderArgs& a) {
   if (!fs::exists(script)) throw IoError(script + ": the Blender scene script is missing (set CLOUDGEN_SCRIPT_DIR)");
   const SceneInput in = scene_input(a);
   const DefaultView d = default_view(in.vdb, a, size);
+  if (a.level > d.info.lod_levels)
+    throw InputError("--level: " + std::to_string(a.level) + " is not a level of detail of " + in.vdb +
+                     "; allowed: 0 .. " + std::to_string(d.info.lod_levels) +
+                     (d.info.lod_levels ? "" : " (write levels with cloudgen generate --lod N)"));
   const TempDir work;
   const Lighting lit = viewer_lighting(in.vdb, d.look, size, work.path);
   if (!a.quiet) std::fprintf(stderr, "lighting: %s\n", lit.source.c_str());
@@ -390,6 +399,9 @@ void add_blender_command(CLI::App& app, std::function<void()>& run) {
   c->add_option("--frames", a->frames,
                 "With a VDB sequence input (out/cloud_####.vdb from `generate --frames`): the frames A:B Blender plays "
                 "as a volume sequence, with its velocity grid for motion blur (docs/motion.md)");
+  c->add_option("--level", a->level,
+                 "The level of detail the volume's material reads (density_level_N of a .vdb written with "
+                 "generate --lod; 0 = full resolution, the default); in Blender, Principled Volume's Density Attribute");
   c->add_option("--render-frame", a->render_frame, "The frame of the sequence --render renders (default: the first)");
   c->footer("Runs Debian's `blender` headless (package blender; CLOUDGEN_BLENDER overrides the executable) with\n"
             "scripts/blender_scene.py. Example:\n"

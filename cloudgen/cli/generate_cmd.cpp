@@ -32,9 +32,11 @@ void run_generate(const GenerateArgs& a) {
   std::vector<std::string> sets = a.sets;
   if (!a.seed.empty()) sets.push_back("seed=" + std::to_string(parse_uint(a.seed, "--seed", kMaxSeed)));
   if (!a.up.empty()) sets.push_back("export.vdb.up=" + a.up);
+  if (!a.lod.empty()) sets.push_back("export.vdb.lod=" + a.lod);  // the table's type and range checks
   const std::string path = resolve_preset_path(a.preset);
   Preset p = load_preset(path, sets);
   if (a.resolution) rescale(p, a.resolution);
+  check_lod_levels(p.export_options.vdb_lod, p.resolution.data());  // before any work: nothing written
   if (!a.frames.empty() || !a.fps.empty() || a.loop) return run_generate_sequence(p, path, a);
   if (a.outputs.empty()) throw InputError("-o/--output: give at least one output file (.vdb, .nvdb, .raw, .ktx2, .png, .exr)");
   const ExportOptions& eo = p.export_options;
@@ -125,6 +127,9 @@ void add_generate_command(CLI::App& app, std::function<void()>& run) {
   gen->add_option("--format", ga->format, "vdb | nvdb | raw | ktx2 | atlas-png | atlas-exr (default: from each extension)");
   gen->add_option("--seed", ga->seed, "Override the preset's seed: an integer in [0, 2^53]");
   gen->add_option("--up", ga->up, "VDB up axis: z (Blender, default) or y (Houdini, Maya); = --set export.vdb.up=...");
+  gen->add_option("--lod", ga->lod,
+                  "Levels of detail in .vdb outputs: N grids density_level_1 .. density_level_N, each twice as coarse "
+                  "(0 = none, the default); = --set export.vdb.lod=N");
   gen->add_option("--resolution", ga->resolution, "Rescale so the longest axis has N voxels (world size kept)");
   gen->add_option("--threads", ga->threads, "Worker threads (0 = all cores); output bytes are identical for any count")
       ->check(CLI::Range(0, kMaxThreads));

@@ -44,6 +44,10 @@ double tileable_fbm(double x, double y, double z, int period, int octaves, uint3
 /// Camera from --camera or the default framing; sun from --sun or behind the viewer.
 Camera resolve_camera(const Options& o, const PreparedVolume& vol, int width, int height);
 Sun resolve_sun(const Options& o, const Camera& cam);
+/// A .vdb with levels of detail: the level its default or given camera and render.dense_budget call
+/// for (choose_lod in cloudviewer/lod.h), said on `out`, with render.sigma_t pinned to the full
+/// resolution's extinction when it is drawn coarser. 0 for other inputs.
+uint32_t choose_input_lod(Options& o, std::ostream& out);
 
 /// A benchmark camera track (viewer/tracks/default.json): the frames, the configurations and
 /// their settings.

@@ -31,8 +31,22 @@ bool texel_from_vk(uint32_t vk, Texel* out);
 const char* vdb_compression_name(VdbCompression c);
 VdbCompression parse_vdb_compression(const std::string& name, const std::string& where = "export.vdb.compression");
 
+/// The most levels of detail `export.vdb.lod` takes (the parameter table's range).
+inline constexpr uint32_t kMaxLodLevels = 16;
+/// Levels of detail a volume with `dims` voxels can have: each halves the voxel count along every
+/// axis, and the last one is one voxel along the longest axis (ceil(log2(longest))).
+inline uint32_t max_lod_levels(const uint32_t dims[3]) {
+  uint32_t longest = 1, n = 0;
+  for (int a = 0; a < 3; ++a) longest = dims[a] > longest ? dims[a] : longest;
+  while ((uint64_t(1) << n) < longest) ++n;
+  return n;
+}
+/// InputError "export.vdb.lod: N levels ... allowed: 0 .. M" when `levels` exceeds max_lod_levels(dims).
+void check_lod_levels(uint32_t levels, const uint32_t dims[3]);
+
 struct ExportOptions {
   bool vdb_half = false;                                  ///< grids saved as 16-bit half floats
+  uint32_t vdb_lod = 0;  ///< export.vdb.lod: coarser levels NAME_level_1 .. _N beside each grid (0 = none)
   VdbCompression vdb_compression = VdbCompression::Blosc;  ///< export.vdb.compression
   bool vdb_detail = true;                                  ///< detail channels as extra grids
   char vdb_up = 'z';              ///< 'z': height on +z (Blender), 'y': as in memory (Houdini, Maya)

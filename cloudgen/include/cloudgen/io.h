@@ -42,6 +42,21 @@ void write_volume(const Volume& v, const std::string& path, Format f, const Expo
 void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o, OutputBatch& batch);
 void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o);
 Volume read_vdb(const std::string& path, uint64_t max_bytes = kDefaultReadBudget);
+/// Level of detail `level` of a .vdb (export.vdb.lod): the grids density_level_L and NAME_level_L
+/// of the detail channels, with the full-resolution density's metadata and look (render.sigma_t
+/// pinned to its extinction); level 0 is read_vdb. InputError naming the levels the file has.
+Volume read_vdb_level(const std::string& path, uint32_t level, uint64_t max_bytes = kDefaultReadBudget);
+/// How many levels of detail a .vdb holds (grids density_level_1 .. density_level_N; 0 if none).
+uint32_t vdb_lod_levels(const std::string& path);
+/// A float grid of a .vdb as stored (no cropping): what `cloudgen info` says of it.
+struct VdbGridSummary {
+  std::string name;
+  double voxel_size = 0;  ///< metres
+  uint64_t active_voxels = 0;
+  double integral = 0;  ///< sum of the active values times the voxel volume (m^3; tiles count every voxel)
+};
+/// Every float grid of a .vdb, in file order.
+std::vector<VdbGridSummary> vdb_grid_summaries(const std::string& path);
 /// NanoVDB (.nvdb): the grids and metadata of the .vdb export as NanoVDB float grids
 /// (src/io/nvdb_io.cpp; sparse access in cloudgen/nvdb.h). read_nvdb_volume densifies.
 void write_nvdb(const Volume& v, const std::string& path, const ExportOptions& o, OutputBatch& batch);

@@ -125,6 +125,7 @@ struct SceneInfo {
   std::array<uint32_t, 3> dims{{0, 0, 0}};
   double voxel_size = 1;
   char up = 'y';  ///< the file's up axis: 'y' or 'z'
+  uint32_t lod_levels = 0;  ///< .vdb levels of detail (grids density_level_1 .. _N; read_vdb_level)
   std::vector<std::pair<std::string, std::string>> metadata;
   Vec3 size() const { return {dims[0] * voxel_size, dims[1] * voxel_size, dims[2] * voxel_size}; }
 };

@@ -62,6 +62,15 @@ const TexelInfo& texel_info(Texel t) {
 }
 const char* texel_name(Texel t) { return texel_info(t).name; }
 size_t texel_bytes(Texel t) { return texel_info(t).bytes; }
+void check_lod_levels(uint32_t levels, const uint32_t dims[3]) {
+  const uint32_t most = max_lod_levels(dims);
+  if (levels > most)
+    throw InputError("export.vdb.lod (--lod): " + std::to_string(levels) + " is more levels than a " +
+                     std::to_string(dims[0]) + "x" + std::to_string(dims[1]) + "x" + std::to_string(dims[2]) +
+                     " volume has; allowed: 0 .. " + std::to_string(most) + " (level " + std::to_string(most) +
+                     " is one voxel along the longest axis)");
+}
+
 Texel parse_texel(const std::string& name, const std::string& where) {
   for (const TexelInfo& i : kTexels)
     if (name == i.name) return i.texel;

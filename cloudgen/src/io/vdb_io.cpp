@@ -5,6 +5,7 @@
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Dense.h>
 #include <openvdb/tools/Morphology.h>
+#include <openvdb/tools/MultiResGrid.h>
 #include <openvdb/tools/Prune.h>
 #include <openvdb/tools/ValueTransformer.h>
 #include <openvdb/tree/LeafManager.h>
@@ -316,6 +317,45 @@ class CheckedVdbArchive : public openvdb::io::Archive {
   }
 };
 
+/// The levels of detail of `grids` (density and the detail channels; a frame's velocity has none):
+/// NAME_level_1 .. NAME_level_N, OpenVDB's vdb_lod naming, made by its MultiResGrid. Level L's
+/// voxel c is the full-weighting average (weights (1,2,1)/4 along each axis) of the level below
+/// around voxel 2c, so every voxel of the finer level gives 1/8 of its value to the coarser one:
+/// the sum times the voxel volume (the cloud's integral) is the same at every level. The transform
+/// is the fine one scaled by 2^L in index space, so each level overlays the fine grid in world space.
+openvdb::GridPtrVec lod_grids(const Volume& v, const openvdb::GridPtrVec& grids, const ExportOptions& o) {
+  openvdb::GridPtrVec out;
+  if (o.vdb_lod == 0) return out;
+  check_lod_levels(o.vdb_lod, v.dims.data());
+  for (const auto& base : grids) {
+    auto src = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
+    if (!src) continue;
+    const std::string name = src->getName();
+    if (name != "density" && std::find(std::begin(v.detail_names), std::end(v.detail_names), name) == std::end(v.detail_names))
+      continue;
+    // The restriction reads inactive values too, and the detail grids keep values under the voxels
+    // their mask deactivated: averaged from a copy whose inactive values are 0, so a level holds
+    // exactly what the active voxels hold.
+    openvdb::FloatGrid::Ptr clean = src->deepCopy();
+    for (auto it = clean->tree().beginValueOff(); it; ++it) it.setValue(0.0f);
+    openvdb::tools::MultiResGrid<openvdb::FloatTree> levels(o.vdb_lod + 1, clean);  // takes the copy's tree
+    for (uint32_t l = 1; l <= o.vdb_lod; ++l) {
+      auto g = openvdb::FloatGrid::create(levels.treePtr(l));
+      openvdb::tools::prune(g->tree());
+      g->setName(name + "_level_" + std::to_string(l));
+      g->setGridClass(openvdb::GRID_FOG_VOLUME);
+      openvdb::math::Transform::Ptr xf = src->transform().copy();
+      xf->preScale(double(1u << l));
+      g->setTransform(xf);
+      g->setSaveFloatAsHalf(o.vdb_half);
+      g->insertMeta("lod_level", openvdb::Int32Metadata(int32_t(l)));
+      g->insertMeta("voxel_size_metres", openvdb::DoubleMetadata(v.voxel_size * double(1u << l)));
+      out.push_back(g);
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 void finish_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::string& path, const ExportOptions& o,
@@ -392,6 +432,9 @@ void finish_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::
 void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::string& path, const ExportOptions& o,
                  OutputBatch& batch, double erosion_baked) {
   finish_grids(v, grids, path, o, erosion_baked);
+  openvdb::GridPtrVec all = grids;
+  const openvdb::GridPtrVec levels = lod_grids(v, grids, o);  // after the physical scale and detail topology
+  all.insert(all.end(), levels.begin(), levels.end());
   CheckedVdbArchive archive;
   uint32_t comp = openvdb::io::COMPRESS_ACTIVE_MASK;
   switch (o.vdb_compression) {
@@ -404,10 +447,12 @@ void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::s
   archive.setCompression(comp);
   openvdb::MetaMap meta;
   meta.insertMeta("creator", openvdb::StringMetadata(std::string("cloudgen ") + CLOUDGEN_VERSION));
+  // Only when there are levels, so files without them keep their bytes.
+  if (o.vdb_lod > 0) meta.insertMeta("lod_levels", openvdb::Int32Metadata(int32_t(o.vdb_lod)));
   batch.stage(path, [&](const std::string& tmp) {
     write_file_stream(tmp, [&](std::ostream& os) {
       try {
-        archive.write_to(os, grids, meta);
+        archive.write_to(os, all, meta);
       } catch (const openvdb::Exception& e) {
         throw IoError(printable(path) + ": OpenVDB could not write the grids: " + e.what());
       }
@@ -493,7 +538,34 @@ void write_vdb(const Volume& v, const std::string& path, const ExportOptions& o,
   vdb::write_grids(v, grids, path, o, batch, erosion);
 }
 
-Volume read_vdb(const std::string& path, uint64_t max_bytes) {
+Volume read_vdb(const std::string& path, uint64_t max_bytes) { return read_vdb_level(path, 0, max_bytes); }
+
+uint32_t vdb_lod_levels(const std::string& path) {
+  const VdbFile file(path);
+  uint32_t n = 0;
+  while (n < kMaxLodLevels && file.grid("density_level_" + std::to_string(n + 1))) ++n;
+  return n;
+}
+
+namespace {
+double grid_integral(const openvdb::FloatGrid& g) {
+  double sum = 0;
+  for (auto it = g.cbeginValueOn(); it; ++it) sum += double(*it) * double(it.getVoxelCount());
+  const double vs = g.voxelSize()[0];
+  return sum * vs * vs * vs;
+}
+}  // namespace
+
+std::vector<VdbGridSummary> vdb_grid_summaries(const std::string& path) {
+  const VdbFile file(path);
+  std::vector<VdbGridSummary> out;
+  for (const auto& base : file.grids())
+    if (auto g = openvdb::gridPtrCast<openvdb::FloatGrid>(base))
+      out.push_back({g->getName(), g->voxelSize()[0], g->activeVoxelCount(), grid_integral(*g)});
+  return out;
+}
+
+Volume read_vdb_level(const std::string& path, uint32_t level, uint64_t max_bytes) {
   const VdbFile file(path);
   openvdb::GridBase::Ptr base;
   const std::vector<std::string> names = file.names();
@@ -502,9 +574,20 @@ Volume read_vdb(const std::string& path, uint64_t max_bytes) {
     for (auto& n : names) have += (have.empty() ? "" : ", ") + n;
     throw InputError(printable(path) + ": no float grid named \"density\" (grids: " + (have.empty() ? "none" : have) + ")");
   }
-  base = file.grid("density");
+  // Level L reads NAME_level_L for every channel; the look (units, extinction, view, tiling) is
+  // the full-resolution density's, which only it carries.
+  const std::string suffix = level ? "_level_" + std::to_string(level) : "";
+  auto fine = openvdb::gridPtrCast<openvdb::FloatGrid>(file.grid("density"));
+  if (!fine) throw InputError(printable(path) + ": grid \"density\" is " + printable(file.grid("density")->valueType()) + ", expected float");
+  if (level && !file.grid("density" + suffix)) {
+    uint32_t have = 0;
+    while (have < kMaxLodLevels && file.grid("density_level_" + std::to_string(have + 1))) ++have;
+    throw InputError(printable(path) + ": no level of detail " + std::to_string(level) + " (grid \"density" + suffix +
+                     "\"); the file has levels 0 .. " + std::to_string(have));
+  }
+  base = file.grid("density" + suffix);
   auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
-  if (!grid) throw InputError(printable(path) + ": grid \"density\" is " + printable(base->valueType()) + ", expected float");
+  if (!grid) throw InputError(printable(path) + ": grid \"density" + suffix + "\" is " + printable(base->valueType()) + ", expected float");
   if (grid->getGridClass() == openvdb::GRID_LEVEL_SET)
     throw InputError(printable(path) + ": grid \"density\" is a level set (signed distances to a surface), not a fog "
                      "volume of densities; convert it first (e.g. OpenVDB's sdfToFogVolume, or Houdini's VDB Convert)");
@@ -523,7 +606,7 @@ Volume read_vdb(const std::string& path, uint64_t max_bytes) {
     throw InputError(printable(path) + ": the active bounding box " + std::to_string(dim.x()) + " x " +
                      std::to_string(dim.y()) + " x " + std::to_string(dim.z()) + " is too large to load densely");
   int channels = 1;
-  for (int c = 0; c < 3; ++c) channels += std::find(names.begin(), names.end(), v.detail_names[c]) != names.end();
+  for (int c = 0; c < 3; ++c) channels += std::find(names.begin(), names.end(), v.detail_names[c] + suffix) != names.end();
   check_read_budget(count, channels, 0, max_bytes, path);
   for (int a = 0; a < 3; ++a) v.dims[a] = uint32_t(dim[a]);
   v.voxel_size = grid->voxelSize()[0];
@@ -547,16 +630,18 @@ Volume read_vdb(const std::string& path, uint64_t max_bytes) {
   };
   fill(*grid, v.density);
   for (int c = 0; c < 3; ++c)
-    if (std::find(names.begin(), names.end(), v.detail_names[c]) != names.end())
-      if (auto d = openvdb::gridPtrCast<openvdb::FloatGrid>(file.grid(v.detail_names[c])))
+    if (std::find(names.begin(), names.end(), v.detail_names[c] + suffix) != names.end())
+      if (auto d = openvdb::gridPtrCast<openvdb::FloatGrid>(file.grid(v.detail_names[c] + suffix)))
         fill(*d, v.detail[c]);
   check_finite_channels(v, path);
+  grid = fine;  // the metadata below: the full-resolution density's
   for (auto it = grid->beginMeta(); it != grid->endMeta(); ++it)
     if (it->first.rfind("file_", 0) != 0 && it->first != "class" && it->first != "name" &&
         !computed_meta().count(it->first))
       v.metadata.push_back({it->first, vdb::meta_text(*it->second)});
   // Every field cloudgen writes comes back: tiling, and normalised density from physical units.
-  if (auto t = grid->getMetadata<openvdb::BoolMetadata>("tiles_xz")) v.tiles_xz = t->value();
+  // A level is not periodic: its voxels straddle the fine box's faces and the restriction does not wrap.
+  if (auto t = grid->getMetadata<openvdb::BoolMetadata>("tiles_xz")) v.tiles_xz = t->value() && level == 0;
   auto units = grid->getMetadata<openvdb::StringMetadata>("density_units");
   auto ext = grid->getMetadata<openvdb::DoubleMetadata>("extinction_per_metre");
   if (units && units->value() == "extinction_per_metre") {
@@ -564,6 +649,19 @@ Volume read_vdb(const std::string& path, uint64_t max_bytes) {
       throw InputError(path + ": density_units is extinction_per_metre but extinction_per_metre is missing or not positive");
     const float inv = float(1.0 / ext->value());
     for (float& d : v.density) d *= inv;
+  }
+  if (level) {
+    // The extinction per metre at density 1 stays the full-resolution grid's: by default it
+    // follows the voxel size (default_extinction_per_metre), which would thin a coarse level.
+    View view = view_of_metadata(v.metadata, path);
+    bool pinned = false;
+    for (const auto& kv : view.render) pinned |= kv.first == "sigma_t";
+    if (!pinned) {
+      char buf[40];
+      std::snprintf(buf, sizeof buf, "%.17g", default_extinction_per_metre(fine->voxelSize()[0]));
+      view.render.push_back({"sigma_t", buf});
+      add_view_metadata(v.metadata, view);
+    }
   }
   build_occupancy(v);
   return v;
@@ -575,6 +673,15 @@ std::string describe_vdb(const std::string& path) {
   o << printable(path) << " (OpenVDB, compression " << openvdb::io::compressionToString(file.compression()) << ")\n";
   for (auto it = file.metadata().beginMeta(); it != file.metadata().endMeta(); ++it)
     o << "  file " << printable(it->first) << ": " << printable(it->second->str()) << "\n";
+  // Levels of detail (export.vdb.lod, OpenVDB's vdb_lod naming): each level's voxel size.
+  uint32_t levels = 0;
+  while (levels < kMaxLodLevels && file.grid("density_level_" + std::to_string(levels + 1))) ++levels;
+  if (levels > 0) {
+    o << "  levels of detail: " << levels << " (density_level_1 .. density_level_" << levels << "; voxel size";
+    for (uint32_t l = 0; l <= levels; ++l)
+      o << (l ? ", " : " ") << file.grid(l ? "density_level_" + std::to_string(l) : "density")->voxelSize()[0];
+    o << ")\n";
+  }
   for (const openvdb::GridBase::Ptr& g : file.grids()) {
     o << "  grid \"" << printable(g->getName()) << "\": " << printable(g->valueType()) << ", class "
       << openvdb::GridBase::gridClassToString(g->getGridClass()) << ", voxel size " << g->voxelSize()[0]
@@ -607,6 +714,8 @@ std::string describe_vdb(const std::string& path) {
         else lo = std::min(lo, f), hi = std::max(hi, f);
       }
       if (finite) o << "    values min " << lo << ", max " << hi << ", background " << fg->background() << "\n";
+      if (finite && !nan && !inf && fg->transform().isLinear())  // what a level of detail keeps (export.vdb.lod)
+        o << "    integral (values x voxel volume): " << grid_integral(*fg) << " m^3\n";
       if (nan || inf)
         o << "    WARNING: " << nan << " NaN and " << inf << " infinite values (not valid densities)\n";
       if (g->getGridClass() == openvdb::GRID_LEVEL_SET)
@@ -658,6 +767,7 @@ SceneInfo read_vdb_scene_info(const std::string& path) {
   for (auto it = g->beginMeta(); it != g->endMeta(); ++it)
     if (it->first.rfind("file_", 0) != 0 && it->first != "class" && it->first != "name")
       s.metadata.push_back({it->first, vdb::meta_text(*it->second)});
+  while (s.lod_levels < kMaxLodLevels && file.hasGrid("density_level_" + std::to_string(s.lod_levels + 1))) ++s.lod_levels;
   file.close();
   return s;
 }

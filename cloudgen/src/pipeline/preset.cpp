@@ -253,6 +253,12 @@ std::vector<Spec> build_table() {
 
   add("/export/vdb/half", "bool", "false", 0, 0, "Store VDB grids as half floats.",
       [](Preset& p, const json& j, const Index&) { p.export_options.vdb_half = j.get<bool>(); });
+  add("/export/vdb/lod", "integer", "0", 0, kMaxLodLevels,
+      "Levels of detail in .vdb outputs: grids density_level_1 .. density_level_N (and each detail grid's "
+      "NAME_level_N) beside the full-resolution grids (OpenVDB's vdb_lod naming), each with voxels twice as large "
+      "as the one before, averaged so every level holds the same total density (OpenVDB's MultiResGrid full "
+      "weighting). 0 = none; at most the levels until the grid is one voxel along its longest axis.",
+      [](Preset& p, const json& j, const Index&) { p.export_options.vdb_lod = j.get<uint32_t>(); });
   add("/export/vdb/compression", "string", "\"blosc\"", 0, 0, "VDB compression.",
       [](Preset& p, const json& j, const Index&) {
         p.export_options.vdb_compression = parse_vdb_compression(j.get<std::string>());

@@ -25,6 +25,8 @@ cloudgen::Volume synthetic_volume(const std::string& kind);
 /// or, when use_nanovdb says so, the NanoVDB grids (.nvdb read sparse, .vdb converted sparse,
 /// other inputs converted from their dense channels) through prepare_nano.
 /// Throws InputError / IoError as those do; never allocates what check_memory refuses.
-PreparedVolume open_input(const std::string& input, const RenderSettings& s);
+/// `lod_level` > 0: that level of detail of a .vdb (cloudgen::read_vdb_level; cloudviewer/lod.h
+/// chooses it), read dense and sent sparse when use_nanovdb says so; other inputs ignore it.
+PreparedVolume open_input(const std::string& input, const RenderSettings& s, uint32_t lod_level = 0);
 
 }  // namespace cloudviewer

@@ -117,6 +117,7 @@ struct RenderSettings {
   // volume storage (docs/nanovdb.md)
   VolumeStorage volume = VolumeStorage::Auto;  ///< auto: nanovdb when the dense texture exceeds dense_budget
   double dense_budget = 0;         ///< MiB the dense path may use (RGBA floats + occupancy); 0 = a third of the free memory
+  double lod_bias = 0;             ///< .vdb levels of detail: draw levels whose voxel is at most 2^lod_bias pixels (cloudviewer/lod.h)
   NanoLookup nanovdb_lookup = NanoLookup::Atlas;  ///< GPU: brick atlas, leaf page table or PNanoVDB accessor
   // The atmosphere model (`--set atmosphere.KEY=VALUE`; its own table in atmosphere.h).
   AtmosphereSettings atmosphere;

@@ -4,7 +4,9 @@
 #include "cloudgen/exit_codes.h"
 #include "cloudgen/help_text.h"
 
+#include <algorithm>
 #include <chrono>
+#include <filesystem>
 #include <cmath>
 #include <iostream>
 #include <memory>
@@ -19,6 +21,8 @@
 #include "cloudgen/output.h"
 #include "cloudviewer/atmosphere_luts.h"
 #include "cloudviewer/errors.h"
+#include "cloudgen/view.h"
+#include "cloudviewer/lod.h"
 #include "scene/default_view.h"
 #include "app/session.h"
 #include "internal.h"
@@ -475,7 +479,8 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   if (!o.headless) return run_window(o, out, err);
   check_headless_out(o);
   auto t0 = std::chrono::steady_clock::now();
-  Session session(o.input, o.settings);
+  const uint32_t level = choose_input_lod(o, out);
+  Session session(o.input, o.settings, level);
   report_volume(o, session.volume(), seconds_since(t0), out);
   if (!o.bench.empty()) return run_bench(o, session, out, err);
   return render_headless(o, session, out, err);
@@ -489,6 +494,40 @@ Camera resolve_camera(const Options& o, const PreparedVolume& vol, int width, in
 }
 
 Sun resolve_sun(const Options& o, const Camera& cam) { return default_view_sun(o, cam); }
+
+// render.sigma_t keeps the full-resolution grid's extinction, which by default follows the voxel size.
+uint32_t choose_input_lod(Options& o, std::ostream& out) {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+  std::string ext = std::filesystem::path(o.input).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  std::error_code ec;
+  if (ext != ".vdb" || o.settings.mode != PlaceMode::Box || !std::filesystem::is_regular_file(o.input, ec)) return 0;
+  const cloudgen::SceneInfo info = cloudgen::read_scene_info(o.input);
+  if (info.lod_levels == 0) return 0;
+  LodFile f;
+  f.box_min = glm::dvec3(info.origin[0], info.origin[1], info.origin[2]);
+  f.box_size = glm::dvec3(info.size()[0], info.size()[1], info.size()[2]);
+  f.voxel_size = info.voxel_size;
+  f.dims = info.dims;
+  f.levels = info.lod_levels;
+  Camera cam;
+  if (o.camera) {
+    cam = *o.camera;
+  } else {  // default_view_camera's framing of the same box (the density's active box)
+    const cloudgen::Framing fr =
+        cloudgen::frame_box(info.origin, info.size(), o.fov, double(o.width) / std::max(o.height, 1));
+    cam.eye = glm::dvec3(fr.eye[0], fr.eye[1], fr.eye[2]);
+    cam.fov_y_deg = o.fov;
+  }
+  const LodPick pick = choose_lod(f, cam, o.height, o.settings);
+  out << pick.describe(f, o.settings) << "\n";
+  if (pick.level > 0 && !(o.settings.sigma_t > 0)) o.settings.sigma_t = cloudgen::default_extinction_per_metre(info.voxel_size);
+  return pick.level;
+#else
+  (void)o, (void)out;
+  return 0;
+#endif
+}
 
 int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   cloudgen::InputScope inputs;  // no output of this run may replace a file it reads

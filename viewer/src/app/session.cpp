@@ -7,7 +7,8 @@
 
 namespace cloudviewer {
 
-Session::Session(const std::string& input, const RenderSettings& s) : vol_(open_input(input, s)) {}
+Session::Session(const std::string& input, const RenderSettings& s, uint32_t lod_level)
+    : vol_(open_input(input, s, lod_level)), lod_level_(lod_level) {}
 
 Session::~Session() { stop_renderer(); }
 
@@ -31,7 +32,7 @@ void Session::stop_renderer() {
 }
 
 void Session::reopen(const std::string& input, const RenderSettings& s) {
-  vol_ = open_input(input, s);
+  vol_ = open_input(input, s, lod_level_);
   if (renderer_) renderer_->set_volume(vol_), uploaded_ = &vol_;
 }
 

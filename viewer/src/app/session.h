@@ -15,7 +15,7 @@ namespace cloudviewer {
 class Session {
  public:
   /// Opens `input` (open_input): a bad input fails here, before any OpenGL.
-  Session(const std::string& input, const RenderSettings& s);
+  Session(const std::string& input, const RenderSettings& s, uint32_t lod_level = 0);
   ~Session();
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;
@@ -31,7 +31,8 @@ class Session {
   /// The renderer, or null before start_renderer (the CPU backends).
   GlRenderer* renderer() const { return renderer_.get(); }
 
-  /// Opens the input again and uploads it (the window's reload); the old volume stays on failure.
+  /// Opens the input again (at the same level of detail) and uploads it (the window's reload); the
+  /// old volume stays on failure.
   void reopen(const std::string& input, const RenderSettings& s);
   /// Uploads `v` (the volume, or a copy of it at other occupancy and field settings) unless it is
   /// the one the renderer holds.
@@ -47,6 +48,7 @@ class Session {
 
  private:
   PreparedVolume vol_;
+  uint32_t lod_level_ = 0;  // the .vdb level of detail drawn (reopen keeps it)
   std::unique_ptr<HeadlessContext> context_;  // declared first: it outlives the renderer
   std::unique_ptr<GlRenderer> renderer_;
   const PreparedVolume* uploaded_ = nullptr;  // what the renderer holds

@@ -77,7 +77,7 @@ PreparedVolume prepare_dense(const cloudgen::Volume& v, const std::string& input
 
 }  // namespace
 
-PreparedVolume open_input(const std::string& input, const RenderSettings& s) {
+PreparedVolume open_input(const std::string& input, const RenderSettings& s, uint32_t lod_level) {
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
   std::string ext = std::filesystem::path(input).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
@@ -91,6 +91,16 @@ PreparedVolume open_input(const std::string& input, const RenderSettings& s) {
     const uint64_t voxels = uint64_t(n.dims[0]) * n.dims[1] * n.dims[2];
     if (use_nanovdb(s, voxels)) return sparse(std::move(n));
     return prepare_dense(cloudgen::dense_from_nano(n, cloudgen::kDefaultReadBudget, input), input, s);
+  }
+  if (file && ext == ".vdb" && lod_level > 0) {  // a coarse level: small, read dense
+    cloudgen::Volume v = cloudgen::read_vdb_level(input, lod_level);
+    if (!use_nanovdb(s, v.voxel_count())) return prepare_dense(v, input, s);
+    cloudgen::ExportOptions o;  // every channel as a grid, y-up: the viewer's own copy
+    o.vdb_detail = true;
+    o.vdb_bake_erosion = false;
+    o.vdb_physical = false;
+    o.vdb_up = 'y';
+    return sparse(cloudgen::nano_from_volume(v, o));
   }
   if (file && ext == ".vdb") {
     // The active box from the grid's metadata first: a field beyond the budget is never densified,
@@ -114,6 +124,7 @@ PreparedVolume open_input(const std::string& input, const RenderSettings& s) {
   }
   return prepare_dense(v, input, s);
 #else
+  (void)lod_level;
   const cloudgen::Volume v = load_volume(input);
   return prepare_volume(v, occupancy_cell_for(s.occupancy_cell, v.dims[0], v.dims[1], v.dims[2]), s.occupancy_padding, &s);
 #endif
