@@ -104,11 +104,16 @@ class FdStreambuf : public std::streambuf {
 
 bool pid_alive(long pid) { return pid > 0 && (::kill(pid_t(pid), 0) == 0 || errno == EPERM); }
 
+/// NAME as it appears in a temporary's name: at most 200 bytes, so `.NAME.tmp-PID-N` fits the
+/// 255 bytes a file name may have for every legal NAME (an output of 242-255 bytes used to fail
+/// with "File name too long").
+std::string temp_stem(const std::string& name) { return name.size() <= 200 ? name : name.substr(0, 200); }
+
 /// Removes `.NAME.tmp-PID-N` / `.NAME.bak-PID-N` files that a killed earlier run left in `dir`.
 void remove_stale_temporaries(const fs::path& dir, const std::string& name) {
   std::error_code ec;
   for (const char* tag : {".tmp-", ".bak-"}) {
-    const std::string prefix = "." + name + tag;
+    const std::string prefix = "." + temp_stem(name) + tag;
     for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
       const std::string f = it->path().filename().string();
       if (f.rfind(prefix, 0) != 0) continue;
@@ -178,7 +183,7 @@ Resolved resolve_destination(const std::string& path) {
 std::atomic<unsigned> g_counter{0};
 
 std::string unique_sibling(const fs::path& dir, const std::string& name, const char* tag) {
-  return (dir / ("." + name + tag + std::to_string(::getpid()) + "-" + std::to_string(g_counter++))).string();
+  return (dir / ("." + temp_stem(name) + tag + std::to_string(::getpid()) + "-" + std::to_string(g_counter++))).string();
 }
 
 }  // namespace
