@@ -18,6 +18,7 @@
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
 #include "cloudgen/preset.h"
+#include "cloudgen/printable.h"
 #include "cloudgen/sequence.h"
 #include "cloudgen/view.h"
 #include "commands.h"
@@ -163,7 +164,7 @@ SceneInput scene_input(const BlenderArgs& a) {
     ExportOptions eo = p.export_options;
     in.vdb = fs::path(a.output).replace_extension(".vdb").string();
     write_vdb(v, in.vdb, eo);
-    if (!a.quiet) std::fprintf(stderr, "wrote %s (vdb)\n", in.vdb.c_str());
+    if (!a.quiet) std::fprintf(stderr, "wrote %s (vdb)\n", printable(in.vdb).c_str());
   } else if (!a.sets.empty()) {
     throw InputError("--set: only a preset input takes overrides; " + a.input + " is a VDB");
   }
@@ -376,9 +377,9 @@ void run_blender(const BlenderArgs& a) {
   json s = scene_description(a, in, d, lit, size);
   write_scene(a, s, blender, script, work.path);
   if (!a.quiet) {
-    std::fprintf(stderr, "wrote %s (Blender scene of %s)\n", a.output.c_str(), in.vdb.c_str());
+    std::fprintf(stderr, "wrote %s (Blender scene of %s)\n", printable(a.output).c_str(), printable(in.vdb).c_str());
     if (!a.render.empty())
-      std::fprintf(stderr, "wrote %s (Cycles, %dx%d, %d samples)\n", a.render.c_str(), size[0], size[1], a.samples);
+      std::fprintf(stderr, "wrote %s (Cycles, %dx%d, %d samples)\n", printable(a.render).c_str(), size[0], size[1], a.samples);
   }
 }
 

@@ -13,6 +13,7 @@
 #include "cloudgen/cli_parse.h"
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
+#include "cloudgen/printable.h"
 #include "cloudgen/schema.h"
 #include "commands.h"
 #include "noise3d/noise3d.h"
@@ -138,7 +139,7 @@ void run_noise(const NoiseArgs& a) {
   batch.stage(side, [&](const std::string& tmp) { write_file_bytes(tmp, text.data(), text.size()); });
   if (g_cancel) throw Cancelled();
   batch.commit();
-  std::fprintf(stderr, "%s: %u^3 %s, min %.6f max %.6f, %.3f s (%.2f ns/sample)\n", a.out.c_str(), size,
+  std::fprintf(stderr, "%s: %u^3 %s, min %.6f max %.6f, %.3f s (%.2f ns/sample)\n", printable(a.out).c_str(), size,
                kind.c_str(), mm.min, mm.max, secs, secs * 1e9 / double(r.count()));
 }
 

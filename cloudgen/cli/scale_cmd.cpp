@@ -174,7 +174,7 @@ void run_plan(const PlanArgs& a) {
     if (!o.flush()) throw IoError(a.out + ": write failed");
   });
   std::fprintf(stderr, "wrote %s: %zu tiles of %s; run each tile's \"command\", then `cloudgen merge %s -o OUT.vdb`\n",
-               a.out.c_str(), index, p.name.c_str(), a.out.c_str());
+               printable(a.out).c_str(), index, printable(p.name).c_str(), printable(a.out).c_str());
 }
 
 // ---- merge ---------------------------------------------------------------------------------------
@@ -320,7 +320,7 @@ void run_merge(const MergeArgs& a) {
     }
     out.write(a.out);
     if (!a.quiet)
-      std::fprintf(stderr, "wrote %s from %zu tiles (%llu active density voxels)\n", a.out.c_str(), tiles.size(),
+      std::fprintf(stderr, "wrote %s from %zu tiles (%llu active density voxels)\n", printable(a.out).c_str(), tiles.size(),
                    static_cast<unsigned long long>(out.active_voxels()));
     break;
   }
@@ -365,7 +365,7 @@ void run_generate_mpi(const Preset& p, const GenerateOptions& go, const std::vec
   }
   if (r.rank == 0) {
     if (!quiet)
-      for (const auto& o : outputs) std::fprintf(stderr, "wrote %s (vdb)\n", o.c_str());
+      for (const auto& o : outputs) std::fprintf(stderr, "wrote %s (vdb)\n", printable(o).c_str());
     if (!quiet || stats) {
       size_t bricks = 0;
       for (const auto& s : r.per_rank) bricks += s.gen.bricks;

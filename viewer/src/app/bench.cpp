@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cloudgen/printable.h"
 #include "cloudgen/json_checked.h"
 #include "cloudgen/schema.h"
 #include "cloudviewer/errors.h"
@@ -370,7 +371,7 @@ void print_table(const Options& o, const BenchPlan& plan, const std::vector<Summ
   double nf = double(plan.frames.size());
   out << "\n" << std::left << std::setw(18) << "configuration" << std::right << std::setw(11) << "frame ms"
       << std::setw(11) << "clouds ms";
-  for (const std::string& v : views) out << std::setw(12) << (v.substr(0, 8) + " ms");
+  for (const std::string& v : views) out << std::setw(12) << (cloudgen::printable(v.substr(0, 8)) + " ms");
   out << std::setw(9) << "speed-up" << std::setw(10) << "trips/px" << std::setw(12) << "max|diff|" << std::setw(12)
       << "RMSE base";
   if (o.bench_reference > 0) out << std::setw(12) << "RMSE ref";
@@ -378,7 +379,7 @@ void print_table(const Options& o, const BenchPlan& plan, const std::vector<Summ
   out << std::fixed;
   for (size_t c = 0; c < plan.configs.size(); ++c) {
     const Summary& s = sums[c];
-    out << std::left << std::setw(18) << plan.configs[c].name << std::right << std::setprecision(2) << std::setw(11)
+    out << std::left << std::setw(18) << cloudgen::printable(plan.configs[c].name) << std::right << std::setprecision(2) << std::setw(11)
         << s.total / nf << std::setw(11) << s.cloud / nf;
     for (const std::string& v : views) {
       auto it = s.by_view.find(v);
@@ -410,7 +411,7 @@ void write_csv(const std::string& path, const std::string& csv_text, std::ostrea
   f << csv_text;
   if (!f.flush()) throw IoError("--csv " + path + ": write failed");
 #endif
-  out << "wrote " << path << "\n";
+  out << "wrote " << cloudgen::printable(path) << "\n";
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include <epoxy/gl.h>
 #include <GLFW/glfw3.h>
 
+#include "cloudgen/printable.h"
 #include "cloudviewer/controls.h"
 #include "cloudviewer/errors.h"
 #include "internal.h"
@@ -291,7 +292,7 @@ void save_frame(const Options& o, GLFWwindow* window, GlRenderer& renderer, bool
   std::string base = auto_save ? o.out : "cloudviewer_" + std::to_string(saved++);
   if (auto_save) {
     write_image(o.out, img.display, img.linear);
-    out << "wrote " << o.out << " (frame " << frame << ", GPU " << t.total_ms << " ms)\n";
+    out << "wrote " << cloudgen::printable(o.out) << " (frame " << frame << ", GPU " << t.total_ms << " ms)\n";
     glfwSetWindowShouldClose(window, 1);
   } else {
     write_png(base + ".png", img.display);
@@ -374,7 +375,7 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
     if (auto_frames > 0 && frame + 1 == auto_frames) {  // what the window shows, read from its back buffer before the swap
       std::string shot = fs::path(o.out).replace_extension("").string() + ".window.png";
       write_png(shot, renderer.read_window(fw, fh));
-      out << "wrote " << shot << " (window back buffer " << fw << "x" << fh << ")\n";
+      out << "wrote " << cloudgen::printable(shot) << " (window back buffer " << fw << "x" << fh << ")\n";
     }
     glfwSwapBuffers(window);
     gpu_ms_avg = frame == 0 ? t.total_ms : gpu_ms_avg * 0.9 + t.total_ms * 0.1;
