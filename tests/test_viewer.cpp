@@ -1111,6 +1111,26 @@ TEST(ViewerCli, NoOutputReplacesTheInput) {
   EXPECT_EQ(run({dir / "x.json", "--lighting-json", dir / "light.json"}, &err), 0) << err;
 }
 
+// Issue 47, D13: a frame sequence is all or nothing, like `cloudgen generate`'s outputs. Frame 2's
+// name is a folder: the run fails (exit 1) and frame 0's old file and frame 1's absence stay.
+TEST(ViewerCli, AFrameSequenceIsAllOrNothing) {
+  testutil::TempDir dir;
+  testutil::write_text(dir / "r_0.png", "OLD");
+  fs::create_directory(dir / "r_2.png");
+  std::string err;
+  const std::vector<std::string> args = {"synthetic:sphere", "--headless", "--size", "16x9", "--set", "render.steps=16",
+                                         "--frames", "3", "--out", dir / "r_%d.png"};
+  EXPECT_EQ(run(args, &err), 1) << err;
+  EXPECT_EQ(testutil::read_text(dir / "r_0.png"), "OLD");
+  EXPECT_EQ(testutil::list_dir(dir.path), (std::vector<std::string>{"r_0.png", "r_2.png"}));
+  fs::remove(dir / "r_2.png");
+  std::string out;
+  ASSERT_EQ(run(args, &err, &out), 0) << err;
+  EXPECT_EQ(testutil::list_dir(dir.path), (std::vector<std::string>{"r_0.png", "r_1.png", "r_2.png"}));
+  EXPECT_NE(testutil::read_text(dir / "r_0.png"), "OLD");
+  EXPECT_NE(out.find("wrote " + dir / "r_2.png"), std::string::npos) << out;
+}
+
 TEST(ViewerCli, FailedWriteLeavesTheExistingPngByteForByte) {
   fs::path p = output_dir() / "keep.png";
   std::string err;

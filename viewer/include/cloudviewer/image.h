@@ -1,6 +1,7 @@
 // Float RGBA images, PNG/EXR output and comparison metrics. Rows are stored bottom-up (OpenGL
 // window order); the writers flip.
 #pragma once
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,23 @@ struct ImageFile {
   const Image* linear;
 };
 void write_images(const std::vector<ImageFile>& files);
+
+/// Images of several results (the frames of a sequence) staged one after another and published
+/// together by commit(): all or none, as `cloudgen generate` publishes its outputs. Each image is
+/// encoded into its temporary when staged, so the batch holds no pixels.
+class ImageBatch {
+ public:
+  ImageBatch();
+  ~ImageBatch();
+  ImageBatch(const ImageBatch&) = delete;
+  ImageBatch& operator=(const ImageBatch&) = delete;
+  void stage(const std::vector<ImageFile>& files);
+  void commit();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 struct ImageStats {
   int nonfinite = 0;      ///< NaN or inf values

@@ -1,6 +1,7 @@
 #include "cloudviewer/controls.h"
 #include "cloudviewer/app.h"
 
+#include "cloudgen/printable.h"
 #include "cloudgen/exit_codes.h"
 #include "cloudgen/help_text.h"
 
@@ -189,7 +190,7 @@ int write_lighting_json(const Options& o, const std::string& path, std::ostream&
   cloudgen::atomic_write(path, [&](const std::string& tmp) {
     cloudgen::write_file_stream(tmp, [&](std::ostream& os) { os << j.dump(2) << "\n"; });
   });
-  out << "wrote " << path << "\n";
+  out << "wrote " << cloudgen::printable(path) << "\n";
   return 0;
 }
 
@@ -212,7 +213,7 @@ int dump_atmosphere_lut(const Options& o, std::ostream& out) {
         << " in " << ms << " ms\n";
   }
   write_transmittance_csv(o.out, o.settings.atmosphere, values);
-  out << "wrote " << o.out << "\n";
+  out << "wrote " << cloudgen::printable(o.out) << "\n";
   return 0;
 }
 
@@ -405,19 +406,21 @@ FrameImages render_frame(const Options& o, Session& session, const FrameSetup& f
   return img;
 }
 
-void write_frame(const Options& o, int i, const FrameImages& img, const Image& standard_error, std::ostream& out,
-                 std::ostream& err) {
+// Stages frame i's image (and, with the path tracer, its standard error beside it) into `batch`;
+// returns the "wrote" lines to print once the batch is published.
+std::string stage_frame(const Options& o, int i, const FrameImages& img, const Image& standard_error,
+                        ImageBatch& batch, std::ostream& err) {
   ImageStats st = image_stats(img.linear);
   if (st.nonfinite) err << "warning: " << st.nonfinite << " non-finite values in the image\n";
   std::string path = frame_file_name(o.out, i);
   if (o.backend == "pathtrace") {  // beside it, both or neither: the per-pixel standard error, linear
     const std::string se_path = path.substr(0, path.size() - 4) + ".stderr.exr";
-    write_images({{path, &img.display, &img.linear}, {se_path, &standard_error, &standard_error}});
-    out << "wrote " << path << "\nwrote " << se_path << " (per-pixel standard error of the linear radiance before bloom)\n";
-  } else {
-    write_image(path, img.display, img.linear);
-    out << "wrote " << path << "\n";
+    batch.stage({{path, &img.display, &img.linear}, {se_path, &standard_error, &standard_error}});
+    return "wrote " + cloudgen::printable(path) + "\nwrote " + cloudgen::printable(se_path) +
+           " (per-pixel standard error of the linear radiance before bloom)\n";
   }
+  batch.stage({{path, &img.display, &img.linear}});
+  return "wrote " + cloudgen::printable(path) + "\n";
 }
 
 // --headless --out: --frames frames, each written (a pattern) or only the last (a plain name).
@@ -428,6 +431,8 @@ int render_headless(const Options& o, Session& session, std::ostream& out, std::
   if (o.backend == "gl") out << session.start_headless(o.shader_dir) << "\n";
   RenderSettings s = o.settings;
   HeadlessState state;
+  ImageBatch batch;  // every frame staged, then all published or none (docs/robustness.md)
+  std::string wrote;
   for (int i = 0; i < o.frames; ++i) {
     // Frame i: the clouds' time advances 1/fps per frame, the jitter (and temporal) pattern by one.
     s.time = o.settings.time + (o.fps > 0 ? double(i) / o.fps : 0.0);
@@ -445,8 +450,10 @@ int render_headless(const Options& o, Session& session, std::ostream& out, std::
           << " ms (double; once per atmosphere, for the ambient light and the CPU reference)\n";
     }
     if (!pattern && i + 1 < o.frames) continue;  // a plain --out keeps only the last frame
-    write_frame(o, i, img, state.standard_error, out, err);
+    wrote += stage_frame(o, i, img, state.standard_error, batch, err);
   }
+  batch.commit();
+  out << wrote;
   return 0;
 }
 

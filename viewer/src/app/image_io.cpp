@@ -165,14 +165,30 @@ void write_image(const std::string& path, const Image& display, const Image& lin
   write_atomically(path, image_filler(path, display, linear));
 }
 
-void write_images(const std::vector<ImageFile>& files) {
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
-  cloudgen::OutputBatch batch;  // every file staged, then all published or none
-  for (const ImageFile& f : files) batch.stage(f.path, image_filler(f.path, *f.display, *f.linear));
-  batch.commit();
+struct ImageBatch::Impl {
+  cloudgen::OutputBatch batch;
+};
+ImageBatch::ImageBatch() : impl_(std::make_unique<Impl>()) {}
+ImageBatch::~ImageBatch() = default;
+void ImageBatch::stage(const std::vector<ImageFile>& files) {
+  for (const ImageFile& f : files) impl_->batch.stage(f.path, image_filler(f.path, *f.display, *f.linear));
+}
+void ImageBatch::commit() { impl_->batch.commit(); }
 #else
+struct ImageBatch::Impl {};  // without cloudgen's output batch: each image written when staged
+ImageBatch::ImageBatch() = default;
+ImageBatch::~ImageBatch() = default;
+void ImageBatch::stage(const std::vector<ImageFile>& files) {
   for (const ImageFile& f : files) write_image(f.path, *f.display, *f.linear);
+}
+void ImageBatch::commit() {}
 #endif
+
+void write_images(const std::vector<ImageFile>& files) {
+  ImageBatch batch;  // every file staged, then all published or none
+  batch.stage(files);
+  batch.commit();
 }
 
 ImageStats image_stats(const Image& img) {
