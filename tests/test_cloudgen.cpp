@@ -301,7 +301,9 @@ TEST(Scale, BalanceCoversEveryBrickOnceWithinTheGreedyBound) {
   EXPECT_THROW(balance_bricks(plan, 0), InputError);
 }
 
-// Tile checksums ignore only the random UUID OpenVDB writes into every file.
+// Two writes of one volume are the same bytes: the file UUID is derived from the content, not
+// OpenVDB's random one (issue 47, item 8), and another volume gets another UUID. Tile checksums
+// still skip the UUID (tiles of other writers carry random ones) and see one flipped bit.
 TEST(Scale, TileChecksumIsTheSameForTheSameVolumeAndSeesDamage) {
   TempDir dir;
   Preset p = preset("tiny");
@@ -311,7 +313,14 @@ TEST(Scale, TileChecksumIsTheSameForTheSameVolumeAndSeesDamage) {
   std::ifstream fa(dir / "a.vdb", std::ios::binary), fb(dir / "b.vdb", std::ios::binary);
   std::string ba((std::istreambuf_iterator<char>(fa)), {}), bb((std::istreambuf_iterator<char>(fb)), {});
   ASSERT_EQ(ba.size(), bb.size());
-  EXPECT_NE(ba, bb) << "OpenVDB's per-file UUID should differ";
+  EXPECT_EQ(ba, bb) << "the same volume must give the same bytes, UUID included";
+  Preset q = p;
+  q.seed = 4;
+  write_vdb(generate(q), dir / "other.vdb", {});
+  const std::string other = read_text(dir / "other.vdb");
+  ASSERT_GT(other.size(), 57u);
+  EXPECT_NE(other.substr(21, 36), ba.substr(21, 36)) << "another volume, another UUID";
+  EXPECT_EQ(ba[21 + 14], '5') << "a name-based (version 5) UUID: " << ba.substr(21, 36);
   EXPECT_EQ(file_checksum(dir / "a.vdb"), file_checksum(dir / "b.vdb"));
   ba[ba.size() / 2] ^= 1;
   std::ofstream(dir / "c.vdb", std::ios::binary) << ba;

@@ -243,6 +243,17 @@ TEST(Words, StdoutIsCheckedAndValuesAreRefusedAsTyped) {
   EXPECT_TRUE(list_dir(dir.path).empty());
 }
 
+// Issue 47, D15: every legal output name can be written, up to 255 bytes, replacing an old file
+// too (the temporary and the backup link have names of their own that must fit).
+TEST(OutputSafety, TheLongestLegalNamesAreWritten) {
+  TempDir dir;
+  const std::string name = std::string(251, 'a') + ".vdb";  // 255 bytes
+  ASSERT_EQ(cli({"generate", "tiny", "-q", "-o", dir / name}).run().code, 0);
+  const auto r = cli({"generate", "tiny", "-q", "--seed", "4", "-o", dir / name}).run();
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(list_dir(dir.path), std::vector<std::string>{name});
+}
+
 TEST(OutputSafety, SymlinkTargetIsReplacedAndTheLinkStays) {
   TempDir dir;
   fs::create_directory(dir / "real");
@@ -430,6 +441,47 @@ TEST(HostileInputs, TruncatedAndTinyVdbFilesGiveOneClearLine) {
     }
     EXPECT_EQ(error_of([&] { read_volume(dir / "t.vdb"); }).rfind("input: ", 0), 0u);
   }
+}
+
+// Issue 47, D4 and D5 (item 3): a VDB cloudgen wrote carries a seal (its UUID, from its bytes), so a
+// changed byte anywhere is refused before OpenVDB reads it; any other VDB is read first in a child
+// process under a memory limit, so a file that crashes OpenVDB's reader (D4: one byte made `info`
+// abort with "malloc(): corrupted top size") or asks it for gigabytes (D5: a length of 0x7f7f7f7f
+// took 2.1 GB) is refused with exit 1. The sweep damages the file at offsets across it.
+TEST(HostileInputs, DamagedVdbsAreRefusedNotCrashedOn) {
+  TempDir dir;
+  ASSERT_EQ(cli({"generate", "tiny", "-q", "-o", dir / "r.vdb"}).run().code, 0);
+  const std::string good = read_text(dir / "r.vdb");
+  ASSERT_GT(good.size(), 10300u);
+  ASSERT_EQ(good[21 + 14], '5') << "a sealed file";
+  auto damaged = [&](size_t at, const std::string& bytes, bool unseal) {
+    std::string d = good;
+    d.replace(at, bytes.size(), bytes);
+    if (unseal) d[21 + 14] = '4';  // as if another writer's random UUID: no seal to check
+    write_text(dir / "d.vdb", d);
+    return cli({"info", dir / "d.vdb"}).run();
+  };
+  auto r = damaged(10217, "\x04", true);  // D4
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("d.vdb: "), std::string::npos) << r.out;
+  r = damaged(238, "\x7f\x7f\x7f\x7f", true);  // D5
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_EQ(r.out.find("internal error"), std::string::npos) << r.out;
+  for (size_t at = 64; at + 4 < good.size(); at += good.size() / 17) {
+    for (const std::string& bytes : {std::string("\x04"), std::string("\x7f\x7f\x7f\x7f")}) {
+      r = damaged(at, bytes, false);
+      if (good.compare(at, bytes.size(), bytes) == 0) continue;
+      EXPECT_EQ(r.code, 1) << "sealed, byte " << at << ": " << r.out;
+      EXPECT_TRUE(r.out.find("no longer match the seal") != std::string::npos ||
+                  r.out.find("not a valid OpenVDB file") != std::string::npos)  // the layout walk, first
+          << r.out;
+      r = damaged(at, bytes, true);
+      EXPECT_TRUE(r.code == 0 || r.code == 1) << "unsealed, byte " << at << ": " << r.code << " " << r.out;
+      EXPECT_EQ(r.term_signal, 0) << r.out;
+    }
+  }
+  write_text(dir / "d.vdb", good);
+  EXPECT_EQ(cli({"info", dir / "d.vdb"}).run().code, 0);
 }
 
 TEST(HostileInputs, LevelSetsNonFiniteValuesAndEmptyGridsAreNamed) {

@@ -44,6 +44,11 @@ openvdb::GridPtrVec export_grids(const Volume& v, const std::string& path, const
                                  double* erosion_baked);
 /// Every grid of a .vdb file through the checked reader read_vdb uses (InputError when damaged).
 openvdb::GridPtrVec read_grids(const std::string& path);
+/// The seal cloudgen writes as a .vdb's file UUID, from the file's other bytes (vdb_io.cpp).
+std::string file_seal(const std::string& path);
+/// Before OpenVDB reads a .vdb's grids: its layout walked, then the seal checked, or the file read
+/// once in a child process under a memory limit; InputError if it is damaged (vdb_io.cpp).
+void vet_vdb(const std::string& path);
 /// Linear transform with cubic voxels.
 bool cubic_voxels(const openvdb::GridBase& g);
 /// Metadata keys write_grids computes (never copied from Volume::metadata).

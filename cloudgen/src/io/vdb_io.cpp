@@ -1,5 +1,11 @@
 // OpenVDB export and import: the only translation unit that includes OpenVDB (its headers take
 // 15-25 s to compile).
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <openvdb/io/File.h>
 #include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
@@ -14,8 +20,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
+#include <functional>
 #include <mutex>
 #include <set>
 #include <sstream>
@@ -26,6 +35,16 @@
 #include "cloudgen/view.h"
 #include "io/vdb_internal.h"
 #include "cloudgen/input_scope.h"
+#include "cloudgen/interrupt.h"
+
+// Under AddressSanitizer the address space is reserved in terabytes up front: no RLIMIT_AS then.
+#if defined(__SANITIZE_ADDRESS__)
+#define CLOUD_UNDER_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define CLOUD_UNDER_ASAN 1
+#endif
+#endif
 
 namespace cloudgen {
 namespace vdb {
@@ -182,6 +201,61 @@ std::string short_what(const std::exception& e) {
   return printable(w);
 }
 
+/// Where OpenVDB writes the 36-character file UUID: after the 8-byte magic, three 4-byte version
+/// words and the one-byte "has grid offsets" flag.
+constexpr std::streamoff kVdbUuidAt = 21;
+constexpr size_t kVdbUuidLen = 36;
+
+}  // namespace
+
+/// The seal of a .vdb file: a name-based (version 5 layout) UUID made from two 64-bit hashes of
+/// every byte of the file, the UUID's own 36 bytes read as zeros. cloudgen writes it in place of
+/// OpenVDB's random UUID, so the same volume gives the same bytes (README), and a reader can tell
+/// a file cloudgen wrote and nothing changed since (vet_vdb).
+std::string file_seal(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw IoError(printable(path) + ": cannot read back: " + std::strerror(errno));
+  uint64_t a = 0x9e3779b97f4a7c15ull, b = 0xc2b2ae3d27d4eb4full, total = 0;
+  auto rotl = [](uint64_t x, int r) { return (x << r) | (x >> (64 - r)); };
+  std::vector<unsigned char> buf(1 << 20);
+  for (;;) {
+    const ssize_t n = ::read(fd, buf.data(), buf.size());
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const int e = errno;
+      ::close(fd);
+      throw IoError(printable(path) + ": cannot read back: " + std::strerror(e));
+    }
+    if (n == 0) break;
+    for (uint64_t k = uint64_t(kVdbUuidAt); k < uint64_t(kVdbUuidAt) + kVdbUuidLen; ++k)
+      if (k >= total && k < total + uint64_t(n)) buf[size_t(k - total)] = 0;
+    size_t i = 0;
+    for (; i + 8 <= size_t(n); i += 8) {
+      uint64_t w;
+      std::memcpy(&w, &buf[i], 8);
+      a = rotl(a ^ w, 31) * 0x9e3779b97f4a7c15ull;
+      b = rotl(b ^ w, 27) * 0xc2b2ae3d27d4eb4full;
+    }
+    // A read that ends off a multiple of 8 (the last one): its tail, byte by byte.
+    for (; i < size_t(n); ++i) {
+      a = (a ^ buf[i]) * 0x100000001b3ull;
+      b = (b ^ buf[i]) * 0x100000001b3ull;
+    }
+    total += uint64_t(n);
+  }
+  ::close(fd);
+  a ^= total, b ^= rotl(total, 17);
+  a = (a ^ (a >> 33)) * 0xff51afd7ed558ccdull, a ^= a >> 33;
+  b = (b ^ (b >> 33)) * 0xc4ceb9fe1a85ec53ull, b ^= b >> 33;
+  char out[40];
+  std::snprintf(out, sizeof out, "%08llx-%04llx-5%03llx-%04llx-%012llx", (unsigned long long)(a >> 32),
+                (unsigned long long)((a >> 16) & 0xffff), (unsigned long long)(a & 0xfff),
+                (unsigned long long)(0x8000 | ((b >> 48) & 0x3fff)), (unsigned long long)(b & 0xffffffffffffull));
+  return out;
+}
+
+namespace {
+
 /// Walks the parts of a .vdb file that OpenVDB reads before any grid (header, file metadata,
 /// grid descriptors) with every length and offset checked against the file's size. OpenVDB
 /// trusts them: a truncated or damaged file made it allocate and print gigabytes.
@@ -251,6 +325,85 @@ void check_vdb_layout(const std::string& path) {
   }
 }
 
+}  // namespace
+
+/// Reads the whole file with OpenVDB in a child process under an address-space limit, so that a
+/// damaged file that crashes OpenVDB's reader (a heap overflow in its leaf decompression, which no
+/// check of ours can reach) or asks it for gigabytes ends the child, not us: InputError, exit 1.
+void read_in_child(const std::string& path, uint64_t file_size) {
+  const uint64_t budget = (uint64_t(1) << 30) + 32 * file_size;  // docs/robustness.md, "VDB"
+  uint64_t vm_pages = 0;
+  if (FILE* f = std::fopen("/proc/self/statm", "r")) {
+    unsigned long long pages = 0;
+    if (std::fscanf(f, "%llu", &pages) == 1) vm_pages = pages;
+    std::fclose(f);
+  }
+  const uint64_t limit = vm_pages * uint64_t(::sysconf(_SC_PAGESIZE)) + budget;
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) return;  // no child to spare: the reader runs in this process, as before
+  if (pid == 0) {
+    const int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);  // glibc's abort message: ours says it
+    if (null >= 0) ::dup2(null, STDERR_FILENO);
+#if !defined(CLOUD_UNDER_ASAN)
+    struct rlimit rl{rlim_t(limit), rlim_t(limit)};
+    ::setrlimit(RLIMIT_AS, &rl);
+#endif
+    int code = 0;
+    try {
+      std::ifstream in(path, std::ios::binary);
+      in.exceptions(std::ios::failbit | std::ios::badbit);
+      openvdb::io::Stream st(in, /*delayLoad=*/false);
+      st.getGrids();
+    } catch (const std::bad_alloc&) {
+      code = 10;
+    } catch (...) {
+      code = 0;  // a refusal the parent's own read reports with its message
+    }
+    ::_exit(code);
+  }
+  int status = 0;
+  for (;;) {
+    const pid_t r = ::waitpid(pid, &status, WNOHANG);
+    if (r == pid) break;
+    if (r < 0 && errno != EINTR) return;
+    if (g_interrupted.load()) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+      throw Cancelled();
+    }
+    ::usleep(1000);
+  }
+  if (WIFSIGNALED(status))
+    throw InputError(printable(path) + ": damaged: OpenVDB's reader crashed on it (" + strsignal(WTERMSIG(status)) +
+                     ", in a separate process: nothing here was harmed)");
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 10)
+    throw InputError(printable(path) + ": reading it takes more than " + std::to_string(budget >> 20) +
+                     " MiB of memory (1 GiB + 32 x its " + std::to_string(file_size) +
+                     " bytes): damaged, or too large for this reader");
+}
+
+/// What every reader of a .vdb does before OpenVDB reads grids: the layout walk
+/// (check_vdb_layout), then either the seal (a file cloudgen wrote, unchanged since: trusted) or,
+/// for any other file, the read in a child process (read_in_child). A file with a cloudgen seal
+/// that no longer matches its bytes was changed or damaged after writing and is refused.
+void vet_vdb(const std::string& path) {
+  check_vdb_layout(path);
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  const uint64_t size = uint64_t(in.tellg());
+  char uuid[kVdbUuidLen] = {};
+  in.seekg(kVdbUuidAt);
+  const bool sealed = in.read(uuid, kVdbUuidLen) && uuid[14] == '5' && uuid[8] == '-';
+  if (sealed) {
+    if (file_seal(path) == std::string(uuid, kVdbUuidLen)) return;
+    throw InputError(printable(path) + ": damaged: its bytes no longer match the seal cloudgen wrote into its UUID "
+                     "(changed or corrupted after writing; generate it again)");
+  }
+  read_in_child(path, size);
+}
+
+namespace {
+
 /// A .vdb file read whole through io::Stream on a stream that throws on any failed read: OpenVDB
 /// does not check its reads, and past the end of a damaged file it used values it never read
 /// (a "compressed size" of 140 TB, found by fuzzing). io::File opens its own unchecked stream.
@@ -259,7 +412,7 @@ class VdbFile {
   explicit VdbFile(const std::string& path) : path_(path) {
     protect_input(path, "the input " + printable(path));
     init();
-    check_vdb_layout(path);
+    vet_vdb(path);  // layout, then the seal or a read in a child process
     std::ifstream in(path, std::ios::binary);
     if (!in) throw InputError(printable(path) + ": cannot open file");
     in.exceptions(std::ios::failbit | std::ios::badbit);
@@ -453,6 +606,14 @@ void write_grids(const Volume& v, const openvdb::GridPtrVec& grids, const std::s
     write_file_stream(tmp, [&](std::ostream& os) {
       try {
         archive.write_to(os, all, meta);
+        // Deterministic bytes, and a seal a reader checks: OpenVDB's random UUID replaced by one
+        // made from the file's other bytes (file_seal).
+        // A failed flush (a full disk) is left to write_file_stream, which reports the system's reason.
+        if (os.flush()) {
+          const std::string uuid = file_seal(tmp);
+          os.seekp(kVdbUuidAt);
+          os.write(uuid.data(), std::streamsize(uuid.size()));
+        }
       } catch (const openvdb::Exception& e) {
         throw IoError(printable(path) + ": OpenVDB could not write the grids: " + e.what());
       }

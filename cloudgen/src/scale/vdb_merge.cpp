@@ -102,6 +102,7 @@ namespace {
 openvdb::io::File& open_file(openvdb::io::File& f, const std::string& path) {
   protect_input(path, "the tile " + path);
   vdb::init();
+  vdb::vet_vdb(path);
   try {
     f.open();
   } catch (const openvdb::Exception& e) {
