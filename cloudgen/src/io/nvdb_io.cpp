@@ -381,7 +381,9 @@ NanoVolume nano_of_export(const Volume& v, const std::string& path, const Export
 /// nanovdb::io::writeGrids writes uncompressed.
 std::string nvdb_file_bytes(const std::vector<std::pair<std::string, const uint8_t*>>& grids) {
   nanovdb::io::Segment seg(nanovdb::io::Codec::NONE);
-  for (const auto& [name, p] : grids) {
+  for (const auto& grid : grids) {
+    const uint8_t* p = grid.second;  // not a structured binding: clang 14 cannot capture one
+    const std::string& name = grid.first;
     const auto* gd = reinterpret_cast<const nanovdb::GridData*>(p);
     const bool known = with_build_type(gd->mGridType, [&](auto tag) {
       using B = decltype(tag);
