@@ -112,7 +112,11 @@ std::vector<NanoVolume::Block> convert(const openvdb::FloatGrid& g) { return con
 template <class B>
 std::vector<NanoVolume::Block> decode(const std::vector<NanoVolume::Block>& q) {
   const auto& grid = *reinterpret_cast<const nanovdb::NanoGrid<B>*>(q.data());
-  std::vector<NanoVolume::Block> out = convert(*nanovdb::nanoToOpenVDB(grid));
+  const openvdb::FloatGrid::Ptr f = nanovdb::nanoToOpenVDB(grid);
+  // No active value (a damaged file's tree, or an empty grid): no tree, as the float path would
+  // have it, rather than inactive tiles, which NanoVDB's statistics pass reports on stderr.
+  if (f->tree().activeVoxelCount() == 0) f->tree().clear();
+  std::vector<NanoVolume::Block> out = convert(*f);
   // The transform as the file has it: NanoToOpenVDB (NanoVDB 32.4) transposes the rotation of a
   // rotated map (export.vdb.up = z), so the round trip through OpenVDB is not trusted with it.
   auto* to = reinterpret_cast<nanovdb::GridData*>(bytes(out));
@@ -481,8 +485,14 @@ void check_tree(const uint8_t* p, uint64_t size, const Checker& c) {
       const uint64_t at = first[level] + i * node_size[level];
       const auto* node = reinterpret_cast<const Node*>(p + at);
       for (auto it = node->data()->mChildMask.beginOn(); it; ++it) {
-        if (level == 1) leaf_link(at, node->data()->mTable[*it].child);
-        else c.link(at, node->data()->mTable[*it].child, first[level - 1], counts[level - 1], node_size[level - 1],
+        if (level == 1) {
+          leaf_link(at, node->data()->mTable[*it].child);
+          // A leaf sits where its parent's slot says: the decoder (and the bounding box it
+          // computes) goes by the leaf's own origin. (Internal nodes keep theirs in an active-value
+          // bounding box, unset when inactive, so they are not compared.)
+          const auto* leaf = reinterpret_cast<const Leaf*>(p + at + node->data()->mTable[*it].child);
+          if (!(leaf->origin() == node->offsetToGlobalCoord(*it))) c.bad("a leaf's origin is not where its parent puts it");
+        } else c.link(at, node->data()->mTable[*it].child, first[level - 1], counts[level - 1], node_size[level - 1],
                     names[level - 1]);
       }
     }
