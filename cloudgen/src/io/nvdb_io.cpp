@@ -10,12 +10,11 @@
 //
 // export.nvdb.precision writes the grids with NanoVDB's quantised leaves (Fp16, Fp8, Fp4, FpN)
 // instead of float. The reader takes every one of them and decodes it to a float grid of the same
-// tree on reading (NanoToOpenVDB then the float conversion), so everything after parse_nvdb (the
+// tree on reading (through an OpenVDB tree, then the float conversion), so everything after parse_nvdb (the
 // viewer's shaders, the page table, the dense copy) sees float grids only.
 #include <nanovdb/NanoVDB.h>
 #include <nanovdb/util/GridChecksum.h>
 #include <nanovdb/util/IO.h>
-#include <nanovdb/util/NanoToOpenVDB.h>
 #include <nanovdb/util/OpenToNanoVDB.h>
 
 #include <algorithm>
@@ -109,16 +108,49 @@ std::vector<NanoVolume::Block> convert_as(const openvdb::FloatGrid& g, float tol
 std::vector<NanoVolume::Block> convert(const openvdb::FloatGrid& g) { return convert_as<float>(g, 0.0f); }
 
 /// A checked quantised grid (build type B) decoded to a float grid of the same tree and transform.
+/// Every node's origin comes from its root tile's key and its slots (not from the node, whose
+/// stored origin check_tree compares for leaves only); inactive values stay 0 (zero_inactive's rule).
 template <class B>
 std::vector<NanoVolume::Block> decode(const std::vector<NanoVolume::Block>& q) {
+  using Upper = nanovdb::NanoUpper<B>;
+  using Lower = nanovdb::NanoLower<B>;
+  using Leaf = nanovdb::NanoLeaf<B>;
   const auto& grid = *reinterpret_cast<const nanovdb::NanoGrid<B>*>(q.data());
-  const openvdb::FloatGrid::Ptr f = nanovdb::nanoToOpenVDB(grid);
-  // No active value (a damaged file's tree, or an empty grid): no tree, as the float path would
-  // have it, rather than inactive tiles, which NanoVDB's statistics pass reports on stderr.
-  if (f->tree().activeVoxelCount() == 0) f->tree().clear();
+  const openvdb::FloatGrid::Ptr f = openvdb::FloatGrid::create(0.0f);
+  f->setName(grid.shortGridName());
+  f->setGridClass(grid.gridClass() == nanovdb::GridClass::LevelSet ? openvdb::GRID_LEVEL_SET : openvdb::GRID_FOG_VOLUME);
+  openvdb::FloatTree& tree = f->tree();
+  auto ov = [](const nanovdb::Coord& c) { return openvdb::Coord(c[0], c[1], c[2]); };
+  const auto* root = grid.tree().root().data();
+  for (uint32_t i = 0; i < root->mTableSize; ++i) {
+    const auto* t = root->tile(i);
+    if (!t->isChild()) {
+      if (t->state) tree.addTile(3, ov(t->origin()), t->value, true);
+      continue;
+    }
+    const auto* up = root->getChild(t)->data();
+    for (uint32_t n = 0; n < Upper::SIZE; ++n) {
+      const nanovdb::Coord lo = t->origin() + (Upper::OffsetToLocalCoord(n) << Lower::TOTAL);
+      if (!up->mChildMask.isOn(n)) {
+        if (up->mValueMask.isOn(n)) tree.addTile(2, ov(lo), up->mTable[n].value, true);
+        continue;
+      }
+      const auto* low = up->getChild(n)->data();
+      for (uint32_t m = 0; m < Lower::SIZE; ++m) {
+        const nanovdb::Coord lf = lo + (Lower::OffsetToLocalCoord(m) << Leaf::TOTAL);
+        if (!low->mChildMask.isOn(m)) {
+          if (low->mValueMask.isOn(m)) tree.addTile(1, ov(lf), low->mTable[m].value, true);
+          continue;
+        }
+        const Leaf& leaf = *low->getChild(m);
+        if (leaf.valueMask().isOff()) continue;
+        openvdb::FloatTree::LeafNodeType* out = tree.touchLeaf(ov(lf));
+        for (auto it = leaf.valueMask().beginOn(); it; ++it) out->setValueOn(*it, leaf.getValue(*it));
+      }
+    }
+  }
   std::vector<NanoVolume::Block> out = convert(*f);
-  // The transform as the file has it: NanoToOpenVDB (NanoVDB 32.4) transposes the rotation of a
-  // rotated map (export.vdb.up = z), so the round trip through OpenVDB is not trusted with it.
+  // The transform as the file has it (the OpenVDB grid above has none).
   auto* to = reinterpret_cast<nanovdb::GridData*>(bytes(out));
   const auto* from = reinterpret_cast<const nanovdb::GridData*>(q.data());
   to->mMap = from->mMap;
@@ -485,14 +517,8 @@ void check_tree(const uint8_t* p, uint64_t size, const Checker& c) {
       const uint64_t at = first[level] + i * node_size[level];
       const auto* node = reinterpret_cast<const Node*>(p + at);
       for (auto it = node->data()->mChildMask.beginOn(); it; ++it) {
-        if (level == 1) {
-          leaf_link(at, node->data()->mTable[*it].child);
-          // A leaf sits where its parent's slot says: the decoder (and the bounding box it
-          // computes) goes by the leaf's own origin. (Internal nodes keep theirs in an active-value
-          // bounding box, unset when inactive, so they are not compared.)
-          const auto* leaf = reinterpret_cast<const Leaf*>(p + at + node->data()->mTable[*it].child);
-          if (!(leaf->origin() == node->offsetToGlobalCoord(*it))) c.bad("a leaf's origin is not where its parent puts it");
-        } else c.link(at, node->data()->mTable[*it].child, first[level - 1], counts[level - 1], node_size[level - 1],
+        if (level == 1) leaf_link(at, node->data()->mTable[*it].child);
+        else c.link(at, node->data()->mTable[*it].child, first[level - 1], counts[level - 1], node_size[level - 1],
                     names[level - 1]);
       }
     }
@@ -506,6 +532,9 @@ void check_tree(const uint8_t* p, uint64_t size, const Checker& c) {
     reached[level] += n;
     if (reached[level] > counts[level]) c.bad(std::string("more ") + names[level] + " nodes are linked than the tree counts");
   };
+  // On the way, every leaf's own origin must be the one its slots give (from the root tile's key
+  // down): the decoder and OpenVDB go by it. Internal nodes are not compared: theirs is the
+  // minimum of their active values' box, unset when they have none.
   for (uint64_t i = 0; i < tiles; ++i) {
     const Tile* t = reinterpret_cast<const Tile*>(p + root_at + sizeof(*root)) + i;
     if (!t->child) continue;
@@ -515,6 +544,12 @@ void check_tree(const uint8_t* p, uint64_t size, const Checker& c) {
       reach(1, 1);
       const auto* low = reinterpret_cast<const Lower*>(reinterpret_cast<const uint8_t*>(up) + up->data()->mTable[*it].child);
       reach(0, low->data()->mChildMask.countOn());
+      const nanovdb::Coord low_origin = t->origin() + (Upper::OffsetToLocalCoord(*it) << Lower::TOTAL);
+      for (auto jt = low->data()->mChildMask.beginOn(); jt; ++jt) {
+        const auto* leaf = reinterpret_cast<const Leaf*>(reinterpret_cast<const uint8_t*>(low) + low->data()->mTable[*jt].child);
+        if (!(leaf->origin() == low_origin + (Lower::OffsetToLocalCoord(*jt) << Leaf::TOTAL)))
+          c.bad("a leaf's origin is not where its parent puts it");
+      }
     }
   }
   for (int l = 0; l < 3; ++l)
