@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Scale-out: MPI ranks and farm tiles write the one-process VDB (compared through OpenVDB by
 # tests/vdb_equal.py: same grids, transforms, metadata, active voxels and values), missing or
-# damaged tiles are named and --resume regenerates exactly those, and a rank that dies leaves no
-# output. Usage: scale_out.sh BIN_DIR SOURCE_DIR [mpi|tiles]
+# damaged tiles are named and --resume regenerates exactly those, `cloudgen tile --index` runs a
+# plan's tiles as an indexed job would, and a rank that dies leaves no output. Usage: scale_out.sh BIN_DIR SOURCE_DIR [mpi|tiles]
 set -uo pipefail
 bin="$1"; src="$2"; part="${3:-all}"
 cg="$bin/cloudgen"
@@ -134,6 +134,45 @@ PY
   if $cg merge "$t/plan.json" -o "$tmp/m6.vdb" --resume 2> "$tmp/log" | true; grep -q "tile 0 .*inconsistent: preset_hash" "$tmp/log"; then
     ok "a tile of another seed is found inconsistent (and regenerated with --resume)"
   else fail "seed mismatch not reported: $(cat "$tmp/log")"; fi
+  # `cloudgen tile PLAN --index I` (the indexed-job form) for every I, the last one through
+  # JOB_COMPLETION_INDEX as a Kubernetes Indexed Job sets it, then merge: the one-process VDB.
+  i=1; t="$tmp/indexed"
+  # shellcheck disable=SC2086
+  $cg plan ${presets[$i]} --tiles 3,1,2 -o "$t/plan.json" 2> "$tmp/log" || fail "plan: $(cat "$tmp/log")"
+  for k in 0 1 2 3 4; do $cg tile "$t/plan.json" --index $k -q || fail "tile --index $k"; done
+  JOB_COMPLETION_INDEX=5 $cg tile "$t/plan.json" 2> "$tmp/log" || fail "tile with JOB_COMPLETION_INDEX=5: $(cat "$tmp/log")"
+  grep -q "tile_0005.vdb (tile 5 of 6" "$tmp/log" || fail "tile does not say which tile it wrote: $(cat "$tmp/log")"
+  if $cg merge "$t/plan.json" -o "$tmp/indexed.vdb" -q && $eq "$tmp/ref$i.vdb" "$tmp/indexed.vdb"; then
+    ok "plan + tile --index 0..5 + merge equals the one-process VDB"
+  else fail "tile --index + merge differs from the one-process VDB"; fi
+  # The same bytes as the tile's own command (the tile checksums merge recorded in the plan).
+  if /usr/bin/python3 - "$t/plan.json" "$tmp/tiles/plan.json" <<'PY'
+import json, sys
+a, b = (json.load(open(f))["tiles"] for f in sys.argv[1:3])
+sys.exit(0 if [x["checksum"] for x in a] == [x["checksum"] for x in b] else 1)
+PY
+  then ok "tile --index writes the bytes of the tile's command"; else fail "tile --index bytes differ from the command's"; fi
+  # Bad index, no index, a plan from another version: exit 1, the reason, no tile written.
+  rm -f "$t"/tile_*.vdb
+  bad_tile() {  # WHAT EXPECTED_TEXT ARGS...
+    local what="$1" want="$2"; shift 2
+    "$@" 2> "$tmp/log"; local code=$?
+    if [[ $code != 1 ]]; then fail "$what: exit $code, not 1: $(cat "$tmp/log")"
+    elif ! grep -qF -- "$want" "$tmp/log"; then fail "$what: no \"$want\" in: $(cat "$tmp/log")"
+    elif compgen -G "$t/tile_*" > /dev/null; then fail "$what: wrote $(ls "$t")"
+    else ok "$what: exit 1, nothing written"; fi
+  }
+  bad_tile "tile --index 6 of 6" '--index: "6" is out of range; allowed: integer in [0, 5]' $cg tile "$t/plan.json" --index 6
+  bad_tile "tile --index -1" '"-1" is out of range' $cg tile "$t/plan.json" --index -1
+  bad_tile "JOB_COMPLETION_INDEX=x" 'JOB_COMPLETION_INDEX: "x" is out of range' env JOB_COMPLETION_INDEX=x $cg tile "$t/plan.json"
+  bad_tile "tile without an index" 'set JOB_COMPLETION_INDEX' env -u JOB_COMPLETION_INDEX $cg tile "$t/plan.json"
+  /usr/bin/python3 - "$t/plan.json" "$t/old.json" <<'PY'
+import json, sys
+p = json.load(open(sys.argv[1]))
+p["generator"] = "cloudgen 0.0.1"
+json.dump(p, open(sys.argv[2], "w"))
+PY
+  bad_tile "a plan from another version" 'made by cloudgen 0.0.1' $cg tile "$t/old.json" --index 0
   # Baked tiles (cumulus: the default export bakes its erosion into each tile's density) merge to
   # the one-process VDB too.
   i=2; t="$tmp/baked"

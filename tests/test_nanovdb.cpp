@@ -1,7 +1,8 @@
 // Tests of the NanoVDB path (issue 13, "Sparse VDBs"): cloudgen's .nvdb export against its .vdb
 // export voxel for voxel, deterministic bytes, the viewer's render.volume=nanovdb (GL through
 // PNanoVDB.h's GLSL mode, the CPU reference through its C mode) against the dense path, the
-// dense budget's automatic switch, and damaged .nvdb files.
+// dense budget's automatic switch, damaged .nvdb files, and the quantised precisions
+// (export.nvdb.precision: fp16, fp8, fp4, fpn; issue 46 item 2).
 #include <tbb/global_control.h>
 
 #include <algorithm>
@@ -524,4 +525,202 @@ TEST(NanoVdb, DamagedFilesGiveClearErrors) {
   // The viewer passes the reader's message on.
   testutil::write_text(bad, good.substr(0, good.size() / 3));
   EXPECT_THROW(open_input(bad.string(), RenderSettings{}), cloudgen::InputError);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Quantised grids (export.nvdb.precision). NanoVDB stores each 8^3 leaf as min + code * q, with
+// q = (max - min) / (2^bits - 1) over the leaf's values, rounding to the nearest code: a voxel is
+// off by at most q / 2, so by at most (channel range) / (2 (2^bits - 1)) (FpN: the tolerance).
+
+namespace {
+
+cloudgen::ExportOptions quantised(cloudgen::NvdbPrecision p, double tolerance = 0.01) {
+  cloudgen::ExportOptions o = all_grids();
+  o.nvdb_precision = p;
+  o.nvdb_tolerance = tolerance;
+  return o;
+}
+
+std::string meta(const cloudgen::Volume& v, const std::string& key) {
+  for (const auto& [k, val] : v.metadata)
+    if (k == key) return val;
+  return "";
+}
+
+}  // namespace
+
+// Every precision reads back (decoded to float) on the float file's box and transform, every
+// channel within its bound, and quantised for real (the largest error is a good part of the bound).
+TEST(NanoVdb, QuantisedGridsReadBackWithinTheirBounds) {
+  using P = cloudgen::NvdbPrecision;
+  struct Case {
+    P p;
+    int bits;  // 0: fpn
+    double tolerance;
+  };
+  for (const char* up : {"z", "y"}) {
+    cloudgen::ExportOptions fo = all_grids();
+    fo.vdb_up = up[0];
+    const cloudgen::Volume exact = cloudgen::read_volume(written(std::string("exact_") + up + ".nvdb", cloudgen::Format::Nvdb, fo).string());
+    ASSERT_FALSE(exact.detail[0].empty());
+    for (const Case c : {Case{P::Fp16, 16, 0}, Case{P::Fp8, 8, 0}, Case{P::Fp4, 4, 0}, Case{P::FpN, 0, 0.01},
+                         Case{P::FpN, 0, 0.002}}) {
+      const std::string name = cloudgen::nvdb_precision_name(c.p);
+      SCOPED_TRACE(name + ", tolerance " + std::to_string(c.tolerance) + ", up " + up);
+      cloudgen::ExportOptions o = quantised(c.p, c.tolerance);
+      o.vdb_up = up[0];
+      const fs::path path = written("q_" + name + "_" + up + ".nvdb", cloudgen::Format::Nvdb, o);
+      const cloudgen::NanoVolume n = cloudgen::read_nvdb(path.string());
+      for (const auto& g : n.grids) EXPECT_EQ(g.precision, name) << g.name;
+      const cloudgen::Volume v = cloudgen::read_volume(path.string());
+      ASSERT_EQ(v.dims, exact.dims);
+      EXPECT_DOUBLE_EQ(v.voxel_size, exact.voxel_size);
+      for (int a = 0; a < 3; ++a) EXPECT_NEAR(v.origin[size_t(a)], exact.origin[size_t(a)], 1e-9);
+      EXPECT_EQ(meta(v, "nvdb_precision"), name);
+      ASSERT_FALSE(v.detail[0].empty());
+      for (int ch = 0; ch < 4; ++ch) {
+        const std::vector<float>& a = ch == 0 ? exact.density : exact.detail[size_t(ch - 1)];
+        const std::vector<float>& b = ch == 0 ? v.density : v.detail[size_t(ch - 1)];
+        ASSERT_EQ(a.size(), b.size());
+        const auto [lo, hi] = std::minmax_element(a.begin(), a.end());
+        const double range = double(*hi) - std::min(0.0, double(*lo));
+        const double bound = c.bits ? range / (2.0 * ((1 << c.bits) - 1)) * 1.0001 + 1e-6 : c.tolerance + 1e-6;
+        double worst = 0;
+        for (size_t i = 0; i < a.size(); ++i) worst = std::max(worst, std::abs(double(a[i]) - b[i]));
+        std::cout << name << " up " << up << " channel " << ch << ": max |error| " << worst << " (bound " << bound
+                  << ", range " << range << ")\n";
+        EXPECT_LE(worst, bound) << "channel " << ch;
+        if (c.bits && c.bits <= 8) {
+          EXPECT_GT(worst, 0.1 * bound) << "channel " << ch << ": not quantised?";
+        }
+      }
+    }
+  }
+}
+
+// Fewer bits, fewer bytes: float > fp16 > fp8 > fp4, and fpn shrinks as its tolerance grows.
+TEST(NanoVdb, QuantisedFilesAreSmallerByPrecision) {
+  using P = cloudgen::NvdbPrecision;
+  auto size_of = [](const std::string& name, const cloudgen::ExportOptions& o) {
+    return fs::file_size(written(name, cloudgen::Format::Nvdb, o));
+  };
+  const auto f = size_of("s_float.nvdb", all_grids()), h = size_of("s_fp16.nvdb", quantised(P::Fp16)),
+             e = size_of("s_fp8.nvdb", quantised(P::Fp8)), q = size_of("s_fp4.nvdb", quantised(P::Fp4)),
+             n_fine = size_of("s_fpn_fine.nvdb", quantised(P::FpN, 0.0005)),
+             n_coarse = size_of("s_fpn_coarse.nvdb", quantised(P::FpN, 0.05));
+  std::cout << "bytes: float " << f << ", fp16 " << h << ", fp8 " << e << ", fp4 " << q << ", fpn 0.0005 " << n_fine
+            << ", fpn 0.05 " << n_coarse << "\n";
+  EXPECT_GT(f, h);
+  EXPECT_GT(h, e);
+  EXPECT_GT(e, q);
+  EXPECT_GT(f, n_fine);
+  EXPECT_GT(n_fine, n_coarse);
+}
+
+// An fpn tolerance of 0 or below is refused before anything is written: from a preset key (exit
+// 1, the key, the value and the range in the message) and from ExportOptions set by code.
+TEST(NanoVdb, FpnToleranceOutOfRangeIsRefused) {
+  for (const char* t : {"0", "-0.01"}) {
+    const fs::path out = dir() / (std::string("tol_") + t + ".nvdb");
+    std::string text;
+    const int code = testutil::run_cli("generate tiny -q -o " + out.string() +
+                                           " --set export.nvdb.precision=fpn --set export.nvdb.tolerance=" + t,
+                                       &text);
+    EXPECT_EQ(code, 1) << text;
+    EXPECT_NE(text.find("/export/nvdb/tolerance"), std::string::npos) << text;
+    EXPECT_NE(text.find("allowed: number in [1e-06, 1000]"), std::string::npos) << text;
+    EXPECT_FALSE(fs::exists(out)) << t;
+    cloudgen::ExportOptions o = quantised(cloudgen::NvdbPrecision::FpN, std::stod(t));
+    EXPECT_THROW(cloudgen::write_volume(blob(), out.string(), cloudgen::Format::Nvdb, o), cloudgen::InputError);
+    EXPECT_FALSE(fs::exists(out)) << t;
+  }
+  std::string text;
+  EXPECT_EQ(testutil::run_cli("generate tiny -q -o " + (dir() / "p.nvdb").string() + " --set export.nvdb.precision=fp12",
+                              &text),
+            1);
+  EXPECT_NE(text.find("float | fp16 | fp8 | fp4 | fpn"), std::string::npos) << text;
+}
+
+// The viewer opens every precision (dense and nanovdb paths: the reader decodes), and the image
+// is the float file's within what the precision allows (CPU reference, linear PSNR).
+TEST(NanoVdb, QuantisedFilesRenderCloseToTheFloatFile) {
+  using P = cloudgen::NvdbPrecision;
+  const fs::path fp = written("r_float.nvdb", cloudgen::Format::Nvdb);
+  const PreparedVolume ref = open_input(fp.string(), with({"render.volume=nanovdb"}));
+  RenderSettings s = with({"render.steps=96"});
+  const FrameSetup f = frame_for(ref, s, 96, 54);
+  const FrameImages base = render_cpu(ref, f);
+  double last = 1e9;
+  for (const P p : {P::Fp16, P::Fp8, P::Fp4}) {
+    const std::string name = cloudgen::nvdb_precision_name(p);
+    const fs::path qp = written("r_" + name + ".nvdb", cloudgen::Format::Nvdb, quantised(p));
+    const PreparedVolume nano = open_input(qp.string(), with({"render.volume=nanovdb"}));
+    const PreparedVolume dense = open_input(qp.string(), with({"render.volume=dense"}));
+    ASSERT_TRUE(nano.nano);
+    ASSERT_FALSE(dense.nano);
+    const FrameImages a = render_cpu(nano, f), b = render_cpu(dense, f);
+    EXPECT_EQ(max_abs_diff(a.linear, b.linear), 0.0) << name;  // one decoded grid, two paths
+    const double db = psnr(base.linear, a.linear, 1.0);
+    std::cout << name << ": PSNR against float " << db << " dB\n";
+    EXPECT_GT(db, 30.0) << name;
+    EXPECT_LT(db, last) << name << ": fewer bits, no closer";
+    last = db;
+  }
+}
+
+// Damaged quantised files: truncations, flips with and without the checksum, and an FpN leaf
+// claiming a bit width beyond 16 give InputError naming the file, never a crash.
+TEST(NanoVdb, DamagedQuantisedFilesGiveClearErrors) {
+  const fs::path bad = dir() / "bad_q.nvdb";
+  // The file layout (nanovdb::io, as fuzz_nvdb reads it): a 16-byte header (grid count at byte 12),
+  // per grid a 176-byte descriptor (grid size at 0, name size at 136) and its name, then the
+  // grids. In a grid: the checksum at bytes 8..15 (all ones: none), the tree after the 672-byte
+  // grid header, starting with the leaves' offset from the tree; a leaf's flags at its byte 15.
+  auto first_grid = [](const std::string& f) {
+    uint32_t name_size = 0;
+    std::memcpy(&name_size, f.data() + 16 + 136, 4);
+    uint16_t count = 0;
+    std::memcpy(&count, f.data() + 12, 2);
+    EXPECT_EQ(count, 1);  // density only: the default bakes the erosion
+    return size_t(16 + 176 + name_size);
+  };
+  auto try_read = [&](const std::string& b, const char* needle = nullptr) {
+    testutil::write_text(bad, b);
+    try {
+      (void)cloudgen::read_volume(bad.string());
+      if (needle) ADD_FAILURE() << "accepted; expected " << needle;
+    } catch (const cloudgen::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(bad.string()), std::string::npos) << e.what();
+      if (needle) {
+        EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+      }
+    }
+  };
+  for (const auto p : {cloudgen::NvdbPrecision::Fp4, cloudgen::NvdbPrecision::FpN}) {
+    const std::string good =
+        testutil::read_text(written(std::string("good_") + cloudgen::nvdb_precision_name(p) + ".nvdb",
+                                    cloudgen::Format::Nvdb, quantised(p, 0.01) /* all_grids: 4 grids */));
+    cloudgen::ExportOptions dens = quantised(p, 0.01);
+    dens.vdb_bake_erosion = true;
+    const std::string one = testutil::read_text(written("good_density.nvdb", cloudgen::Format::Nvdb, dens));
+    for (size_t n : {size_t(100), good.size() / 2, good.size() - 32}) try_read(good.substr(0, n), "");
+    const size_t g = first_grid(one);
+    std::string open = one;
+    std::memset(&open[g + 8], 0xff, 8);
+    try_read(open);  // no checksum: reads
+    EXPECT_NO_THROW(cloudgen::read_volume(bad.string()));
+    for (const std::string* base : std::vector<const std::string*>{&good, &open})
+      for (size_t at = 300; at < base->size(); at += base->size() / 53) {
+        std::string b = *base;
+        b[at] = char(b[at] ^ 0xe0);  // the FpN bit-width bits among others
+        try_read(b);
+      }
+    if (p == cloudgen::NvdbPrecision::FpN) {
+      uint64_t leaves = 0;
+      std::memcpy(&leaves, open.data() + g + 672, 8);
+      std::string b = open;
+      b[g + 672 + leaves + 15] = char(0xe0);  // log2 of the bit width: 7, 128 bits a value
+      try_read(b, "bits a value");
+    }
+  }
 }

@@ -1,7 +1,9 @@
 // Scale-out commands: `generate` over MPI ranks (the hook run_generate calls), and farm tiles:
 // `cloudgen plan` writes a manifest of tiles, each an ordinary `cloudgen generate --region` job,
-// and `cloudgen merge` checks the tiles and writes the one-process VDB (`--resume` regenerates
-// exactly the missing or damaged ones).
+// `cloudgen tile PLAN --index I` runs tile I of it (the indexed-job form: a Kubernetes Indexed
+// Job's JOB_COMPLETION_INDEX, a Deadline or OpenCue frame number), and `cloudgen merge` checks
+// the tiles and writes the one-process VDB (`--resume` regenerates exactly the missing or
+// damaged ones).
 #include <sys/resource.h>
 #include <sys/stat.h>
 
@@ -241,21 +243,30 @@ void regenerate_tile(const Preset& p, const json& tile, const std::string& file,
   write_vdb(generate(p, go), file, eo);  // what `cloudgen generate --region ... -o file` writes
 }
 
+/// The preset of a plan, as the plan made it: refused when another cloudgen version made the plan
+/// or the preset changed since (tiles and merge must generate what the plan planned).
+Preset plan_preset(const json& plan, const std::string& path) {
+  const std::string version = "cloudgen " CLOUDGEN_VERSION;
+  if (plan["generator"] != version)
+    throw InputError(path + ": made by " +
+                     (plan["generator"].is_string() ? plan["generator"].get<std::string>() : plan["generator"].dump()) +
+                     ", this is " + version +
+                     " (outputs could differ: make a new plan)");
+  const Preset p = load_with_args(plan["preset"].get<std::string>(), plan["args"].get<std::vector<std::string>>(), path);
+  if (preset_hash(p) != plan["preset_hash"].get<std::string>())
+    throw InputError(path + ": preset " + plan["preset"].get<std::string>() + " changed since the plan was made (hash " +
+                     preset_hash(p) + ", plan " + plan["preset_hash"].get<std::string>() + "): make a new plan");
+  if (plan["resolution"] != json(p.resolution))
+    throw InputError(path + ": \"resolution\" " + json_excerpt(plan["resolution"]) + " is not the preset's " +
+                     json(p.resolution).dump() + " (the plan was edited): make a new plan");
+  return p;
+}
+
 void run_merge(const MergeArgs& a) {
   if (a.out.empty()) throw InputError("-o/--output: give the merged .vdb to write");
   if (format_from_path(a.out) != Format::Vdb) throw InputError("-o " + a.out + ": merge writes OpenVDB (.vdb) only");
   json plan = read_plan(a.plan);
-  const std::string version = "cloudgen " CLOUDGEN_VERSION;
-  if (plan["generator"] != version)
-    throw InputError(a.plan + ": made by " + plan["generator"].get<std::string>() + ", this is " + version +
-                     " (outputs could differ: make a new plan)");
-  const Preset p = load_with_args(plan["preset"].get<std::string>(), plan["args"].get<std::vector<std::string>>(), a.plan);
-  if (preset_hash(p) != plan["preset_hash"].get<std::string>())
-    throw InputError(a.plan + ": preset " + plan["preset"].get<std::string>() + " changed since the plan was made (hash " +
-                     preset_hash(p) + ", plan " + plan["preset_hash"].get<std::string>() + "): make a new plan");
-  if (plan["resolution"] != json(p.resolution))
-    throw InputError(a.plan + ": \"resolution\" " + json_excerpt(plan["resolution"]) + " is not the preset's " +
-                     json(p.resolution).dump() + " (the plan was edited): make a new plan");
+  const Preset p = plan_preset(plan, a.plan);
   const fs::path dir = fs::path(a.plan).parent_path();
   json& tiles = plan["tiles"];
   auto file_of = [&](const json& t) { return (dir / t["file"].get<std::string>()).string(); };
@@ -332,6 +343,47 @@ void run_merge(const MergeArgs& a) {
     o << plan.dump(2) << "\n";
     if (!o.flush()) throw IoError(a.plan + ": write failed");
   });
+}
+
+// ---- tile ----------------------------------------------------------------------------------------
+
+struct TileArgs {
+  std::string plan, index;  // index as text: parsed here, with the plan's range in the message
+  bool quiet = false;
+  int threads = 0;
+};
+
+/// The tile to run: --index, else $JOB_COMPLETION_INDEX (set by a Kubernetes Indexed Job), an
+/// integer in [0, count).
+size_t tile_index(const TileArgs& a, size_t count, const std::string& plan) {
+  const std::string allowed = "allowed: integer in [0, " + std::to_string(count - 1) + "] (" + plan + " has " +
+                              std::to_string(count) + " tiles)";
+  std::string text, where = "--index";
+  if (!a.index.empty()) {
+    text = a.index;
+  } else if (const char* e = std::getenv("JOB_COMPLETION_INDEX")) {
+    text = e, where = "JOB_COMPLETION_INDEX";
+  } else {
+    throw InputError("--index: give the tile to run, or set JOB_COMPLETION_INDEX (a Kubernetes Indexed Job sets it); " +
+                     allowed);
+  }
+  const bool digits = !text.empty() && text.size() <= 18 && text.find_first_not_of("0123456789") == std::string::npos;
+  if (!digits || std::stoull(text) >= count)
+    throw InputError(where + ": \"" + printable(text) + "\" is out of range; " + allowed);
+  return size_t(std::stoull(text));
+}
+
+void run_tile(const TileArgs& a) {
+  const json plan = read_plan(a.plan);  // version, tiles and plain file names checked (cloudgen/plan.h)
+  const Preset p = plan_preset(plan, a.plan);
+  const json& tiles = plan["tiles"];
+  const size_t i = tile_index(a, tiles.size(), a.plan);
+  const json& tile = tiles[i];
+  const std::string file = (fs::path(a.plan).parent_path() / tile["file"].get<std::string>()).string();
+  regenerate_tile(p, tile, file, a.threads);  // merge --resume's, i.e. the tile's own command
+  if (!a.quiet)
+    std::fprintf(stderr, "wrote %s (tile %zu of %zu, region %s)\n", printable(file).c_str(), i, tiles.size(),
+                 tile["region"].get<std::string>().c_str());
 }
 
 }  // namespace
@@ -417,6 +469,18 @@ void add_scale_commands(CLI::App& app, std::function<void()>& run) {
   plan->footer("Each tile is an ordinary `cloudgen generate PRESET --region ... -o tile_NNNN.vdb`; run them on any\n"
                "machines, then `cloudgen merge plan.json -o OUT.vdb` writes the one-process VDB.");
   plan->callback([pa, &run] { run = [pa] { run_plan(*pa); }; });
+
+  auto ta = std::make_shared<TileArgs>();
+  CLI::App* tile = app.add_subcommand("tile", "Run tile I of a plan: the command an indexed farm job gives each task.");
+  tile->add_option("plan", ta->plan, "Manifest written by `cloudgen plan`")->required();
+  tile->add_option("--index", ta->index,
+                   "Tile to run, 0 to the plan's tile count - 1 (default: $JOB_COMPLETION_INDEX, which a Kubernetes "
+                   "Indexed Job sets)");
+  tile->add_option("--threads", ta->threads, "Threads (0 = all cores)");
+  tile->add_flag("-q,--quiet", ta->quiet, "No messages");
+  tile->footer("Writes the tile's file beside the plan, the same bytes as its \"command\"; then\n"
+               "`cloudgen merge PLAN -o OUT.vdb` (docs/scale-out.md has a Kubernetes Indexed Job manifest).");
+  tile->callback([ta, &run] { run = [ta] { run_tile(*ta); }; });
 
   auto ma = std::make_shared<MergeArgs>();
   CLI::App* merge = app.add_subcommand("merge", "Check a plan's tiles and merge them into the one-process VDB.");

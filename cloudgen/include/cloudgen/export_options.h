@@ -12,6 +12,10 @@ namespace cloudgen {
 enum class Texel { Rgba8, Rgba16f, Rgba32f };
 /// Compression of OpenVDB grids.
 enum class VdbCompression { Blosc, Zip, None };
+/// Value type of the grids in a .nvdb file: NanoVDB float, or one of its quantised leaf encodings
+/// (per 8^3 leaf, value = min + code * (max - min) / (2^bits - 1)): 16, 8 or 4 bits a voxel, or
+/// FpN, the fewest of 1, 2, 4, 8, 16 bits that keep every voxel of the leaf within a tolerance.
+enum class NvdbPrecision { Float, Fp16, Fp8, Fp4, FpN };
 
 struct TexelInfo {
   Texel texel;
@@ -30,6 +34,9 @@ bool texel_from_vk(uint32_t vk, Texel* out);
 
 const char* vdb_compression_name(VdbCompression c);
 VdbCompression parse_vdb_compression(const std::string& name, const std::string& where = "export.vdb.compression");
+/// "float" | "fp16" | "fp8" | "fp4" | "fpn": NanoVDB's own names for the grid types, lower-case.
+const char* nvdb_precision_name(NvdbPrecision p);
+NvdbPrecision parse_nvdb_precision(const std::string& name, const std::string& where = "export.nvdb.precision");
 
 /// The most levels of detail `export.vdb.lod` takes (the parameter table's range).
 inline constexpr uint32_t kMaxLodLevels = 16;
@@ -53,6 +60,10 @@ struct ExportOptions {
   bool vdb_physical = false;      ///< density grid holds extinction per metre, not [0, 1]
   bool vdb_bake_erosion = true;   ///< density = the viewer's eroded density, no detail grids
   Texel texel = Texel::Rgba8;                              ///< raw / KTX2 texel format
+  NvdbPrecision nvdb_precision = NvdbPrecision::Float;     ///< export.nvdb.precision
+  /// export.nvdb.tolerance: fpn's largest absolute error per voxel, in the density grid's stored
+  /// units (normalised [0, 1], or extinction per metre with export.vdb.units = physical); > 0.
+  double nvdb_tolerance = 0.01;
 };
 
 }  // namespace cloudgen

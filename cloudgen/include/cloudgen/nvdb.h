@@ -25,6 +25,9 @@ struct NanoVolume {
     uint64_t bytes = 0;
     uint64_t active_voxels = 0;
     uint32_t leaves = 0, lower = 0, upper = 0;  ///< node counts
+    /// How the file stored it (export.nvdb.precision's names): "float", or "fp16", "fp8", "fp4",
+    /// "fpn" for NanoVDB's quantised leaves, decoded to float on reading.
+    std::string precision = "float";
   };
   struct alignas(32) Block {
     uint8_t b[32];
@@ -71,7 +74,8 @@ NanoVolume nano_from_volume(const Volume& v, const ExportOptions& o = ExportOpti
 /// A .vdb file's density and detail grids converted to NanoVDB without a dense copy (the same
 /// checked reader and refusals as read_vdb; physical densities scaled back to normalised).
 NanoVolume nano_from_vdb(const std::string& path);
-/// Reads a .nvdb file (uncompressed NanoVDB float grids with a "density" grid): every size,
+/// Reads a .nvdb file (uncompressed NanoVDB float, Fp16, Fp8, Fp4 or FpN grids with a "density"
+/// grid; quantised grids decoded to float, their precision in Grid::precision): every size,
 /// offset and node link checked against the file, so a damaged file gives InputError naming the
 /// file and what is wrong, never a crash. Physical densities are scaled back to normalised.
 NanoVolume read_nvdb(const std::string& path);

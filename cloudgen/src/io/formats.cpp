@@ -34,6 +34,16 @@ struct CompressionName {
 constexpr CompressionName kCompressions[] = {
     {VdbCompression::Blosc, "blosc"}, {VdbCompression::Zip, "zip"}, {VdbCompression::None, "none"}};
 
+struct PrecisionName {
+  NvdbPrecision p;
+  const char* name;
+};
+constexpr PrecisionName kPrecisions[] = {{NvdbPrecision::Float, "float"},
+                                         {NvdbPrecision::Fp16, "fp16"},
+                                         {NvdbPrecision::Fp8, "fp8"},
+                                         {NvdbPrecision::Fp4, "fp4"},
+                                         {NvdbPrecision::FpN, "fpn"}};
+
 struct FormatName {
   Format f;
   const char* name;
@@ -93,6 +103,18 @@ VdbCompression parse_vdb_compression(const std::string& name, const std::string&
     if (name == e.name) return e.c;
   throw InputError(where + ": \"" + printable(name) + "\" is not a compression; expected one of " +
                    choices(kCompressions, [](const CompressionName& e) { return e.name; }));
+}
+
+const char* nvdb_precision_name(NvdbPrecision p) {
+  for (const auto& e : kPrecisions)
+    if (e.p == p) return e.name;
+  return "?";
+}
+NvdbPrecision parse_nvdb_precision(const std::string& name, const std::string& where) {
+  for (const auto& e : kPrecisions)
+    if (name == e.name) return e.p;
+  throw InputError(where + ": \"" + printable(name) + "\" is not a NanoVDB precision; expected one of " +
+                   choices(kPrecisions, [](const PrecisionName& e) { return e.name; }));
 }
 
 Format parse_format(const std::string& s) {

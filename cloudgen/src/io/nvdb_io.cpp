@@ -7,6 +7,11 @@
 // make the bytes differ run to run). NanoVDB grids carry name, class, transform and bounding box
 // but no key/value metadata, so the density grid gets one blind-data block, "cloudgen_metadata",
 // holding the .vdb export's metadata as JSON (other readers skip blind data they do not know).
+//
+// export.nvdb.precision writes the grids with NanoVDB's quantised leaves (Fp16, Fp8, Fp4, FpN)
+// instead of float. The reader takes every one of them and decodes it to a float grid of the same
+// tree on reading (through an OpenVDB tree, then the float conversion), so everything after parse_nvdb (the
+// viewer's shaders, the page table, the dense copy) sees float grids only.
 #include <nanovdb/NanoVDB.h>
 #include <nanovdb/util/GridChecksum.h>
 #include <nanovdb/util/IO.h>
@@ -20,6 +25,7 @@
 
 #include "cloudgen/io.h"
 #include "cloudgen/nvdb.h"
+#include "cloudgen/schema.h"
 #include "io/format_internal.h"
 #include "io/vdb_internal.h"
 
@@ -39,6 +45,7 @@ using NanoUpper = nanovdb::NanoUpper<float>;
 using NanoLower = nanovdb::NanoLower<float>;
 using NanoLeaf = nanovdb::NanoLeaf<float>;
 constexpr const char* kMetaBlind = "cloudgen_metadata";
+constexpr const char* kPrecisionKey = "nvdb_precision";  ///< metadata of quantised files: fp16, fp8, fp4, fpn
 constexpr size_t kMaxGrids = 64;
 
 uint64_t round32(uint64_t n) { return (n + 31) / 32 * 32; }
@@ -49,18 +56,106 @@ uint8_t* bytes(std::vector<NanoVolume::Block>& v) { return reinterpret_cast<uint
 
 void zero_inactive(NanoGrid& grid);
 
-/// One OpenVDB float grid as NanoVDB bytes (bounding box and min/max computed, no checksum yet).
-std::vector<NanoVolume::Block> convert(const openvdb::FloatGrid& g) {
-  using Converter = nanovdb::OpenToNanoVDB<float, float, nanovdb::AbsDiff, nanovdb::HostBuffer>;
-  const uint64_t size = Converter()(g, nanovdb::StatsMode::All, nanovdb::ChecksumMode::Disable, 0).size();
+/// Calls f with a value of the build type of NanoVDB grid type t (float or a quantised leaf type;
+/// anything else is not a cloudgen grid and returns false).
+template <class F>
+bool with_build_type(nanovdb::GridType t, F f) {
+  switch (t) {
+    case nanovdb::GridType::Float: return f(float{}), true;
+    case nanovdb::GridType::Fp16: return f(nanovdb::Fp16{}), true;
+    case nanovdb::GridType::Fp8: return f(nanovdb::Fp8{}), true;
+    case nanovdb::GridType::Fp4: return f(nanovdb::Fp4{}), true;
+    case nanovdb::GridType::FpN: return f(nanovdb::FpN{}), true;
+    default: return false;
+  }
+}
+
+/// The precision's name (export.nvdb.precision) of a grid type with_build_type accepts.
+const char* precision_of(nanovdb::GridType t) {
+  switch (t) {
+    case nanovdb::GridType::Fp16: return nvdb_precision_name(NvdbPrecision::Fp16);
+    case nanovdb::GridType::Fp8: return nvdb_precision_name(NvdbPrecision::Fp8);
+    case nanovdb::GridType::Fp4: return nvdb_precision_name(NvdbPrecision::Fp4);
+    case nanovdb::GridType::FpN: return nvdb_precision_name(NvdbPrecision::FpN);
+    default: return nvdb_precision_name(NvdbPrecision::Float);
+  }
+}
+
+/// One OpenVDB float grid as NanoVDB bytes of build type B (bounding box and min/max computed, no
+/// checksum yet). B = float: inactive values zeroed (zero_inactive). A quantised B maps each leaf's
+/// 512 values, inactive ones included, onto [min, max] of the leaf, rounding to the nearest code
+/// (dithering off); FpN picks per leaf the fewest bits whose every value is within `tolerance`.
+template <class B>
+std::vector<NanoVolume::Block> convert_as(const openvdb::FloatGrid& g, float tolerance) {
+  using Converter = nanovdb::OpenToNanoVDB<float, B, nanovdb::AbsDiff, nanovdb::HostBuffer>;
+  auto converter = [tolerance] {
+    Converter c;
+    c.oracle().setTolerance(tolerance);  // read by FpN only
+    c.enableDithering(false);
+    return c;
+  };
+  const uint64_t size = converter()(g, nanovdb::StatsMode::All, nanovdb::ChecksumMode::Disable, 0).size();
   std::vector<NanoVolume::Block> out(round32(size) / 32 + 1);
   std::memset(out.data(), 0, out.size() * 32);
   nanovdb::HostBuffer pool = nanovdb::HostBuffer::createPool(out.size() * 32, out.data());
-  auto handle = Converter()(g, nanovdb::StatsMode::All, nanovdb::ChecksumMode::Disable, 0, pool);
+  auto handle = converter()(g, nanovdb::StatsMode::All, nanovdb::ChecksumMode::Disable, 0, pool);
   if (handle.size() != size || handle.data() != bytes(out))
     throw Error("NanoVDB conversion of grid \"" + g.getName() + "\" did not land in its buffer");
   out.resize(round32(size) / 32);
-  zero_inactive(*reinterpret_cast<NanoGrid*>(bytes(out)));
+  if (std::is_same<B, float>::value) zero_inactive(*reinterpret_cast<NanoGrid*>(bytes(out)));
+  return out;
+}
+std::vector<NanoVolume::Block> convert(const openvdb::FloatGrid& g) { return convert_as<float>(g, 0.0f); }
+
+/// A checked quantised grid (build type B) decoded to a float grid of the same tree and transform.
+/// Every node's origin comes from its root tile's key and its slots (not from the node, whose
+/// stored origin check_tree compares for leaves only); inactive values stay 0 (zero_inactive's rule).
+template <class B>
+std::vector<NanoVolume::Block> decode(const std::vector<NanoVolume::Block>& q) {
+  using Upper = nanovdb::NanoUpper<B>;
+  using Lower = nanovdb::NanoLower<B>;
+  using Leaf = nanovdb::NanoLeaf<B>;
+  const auto& grid = *reinterpret_cast<const nanovdb::NanoGrid<B>*>(q.data());
+  const openvdb::FloatGrid::Ptr f = openvdb::FloatGrid::create(0.0f);
+  f->setName(grid.shortGridName());
+  f->setGridClass(grid.gridClass() == nanovdb::GridClass::LevelSet ? openvdb::GRID_LEVEL_SET : openvdb::GRID_FOG_VOLUME);
+  openvdb::FloatTree& tree = f->tree();
+  auto ov = [](const nanovdb::Coord& c) { return openvdb::Coord(c[0], c[1], c[2]); };
+  const auto* root = grid.tree().root().data();
+  for (uint32_t i = 0; i < root->mTableSize; ++i) {
+    const auto* t = root->tile(i);
+    if (!t->isChild()) {
+      if (t->state) tree.addTile(3, ov(t->origin()), t->value, true);
+      continue;
+    }
+    const auto* up = root->getChild(t)->data();
+    for (uint32_t n = 0; n < Upper::SIZE; ++n) {
+      const nanovdb::Coord lo = t->origin() + (Upper::OffsetToLocalCoord(n) << Lower::TOTAL);
+      if (!up->mChildMask.isOn(n)) {
+        if (up->mValueMask.isOn(n)) tree.addTile(2, ov(lo), up->mTable[n].value, true);
+        continue;
+      }
+      const auto* low = up->getChild(n)->data();
+      for (uint32_t m = 0; m < Lower::SIZE; ++m) {
+        const nanovdb::Coord lf = lo + (Lower::OffsetToLocalCoord(m) << Leaf::TOTAL);
+        if (!low->mChildMask.isOn(m)) {
+          if (low->mValueMask.isOn(m)) tree.addTile(1, ov(lf), low->mTable[m].value, true);
+          continue;
+        }
+        const Leaf& leaf = *low->getChild(m);
+        if (leaf.valueMask().isOff()) continue;
+        openvdb::FloatTree::LeafNodeType* out = tree.touchLeaf(ov(lf));
+        for (auto it = leaf.valueMask().beginOn(); it; ++it) out->setValueOn(*it, leaf.getValue(*it));
+      }
+    }
+  }
+  std::vector<NanoVolume::Block> out = convert(*f);
+  // The transform as the file has it (the OpenVDB grid above has none).
+  auto* to = reinterpret_cast<nanovdb::GridData*>(bytes(out));
+  const auto* from = reinterpret_cast<const nanovdb::GridData*>(q.data());
+  to->mMap = from->mMap;
+  to->mWorldBBox = from->mWorldBBox;
+  to->mVoxelSize = from->mVoxelSize;
   return out;
 }
 
@@ -282,18 +377,30 @@ NanoVolume assemble(std::vector<std::pair<std::string, std::vector<NanoVolume::B
   return n;
 }
 
-/// The grids of the .vdb export as NanoVDB bytes, density first, with metadata and checksums.
-std::vector<std::pair<std::string, std::vector<NanoVolume::Block>>> nano_grids(const openvdb::GridPtrVec& grids) {
+/// The grids of the .vdb export as NanoVDB bytes of build type B, density first, with metadata and
+/// checksums.
+template <class B = float>
+std::vector<std::pair<std::string, std::vector<NanoVolume::Block>>> nano_grids(const openvdb::GridPtrVec& grids,
+                                                                               float tolerance = 0.0f) {
   std::vector<std::pair<std::string, std::vector<NanoVolume::Block>>> out;
   for (size_t i = 0; i < grids.size(); ++i) {
     auto g = openvdb::gridPtrCast<openvdb::FloatGrid>(grids[i]);
     if (!g) continue;  // only float grids: the viewer's channels
-    std::vector<NanoVolume::Block> b = convert(*g);
+    std::vector<NanoVolume::Block> b = convert_as<B>(*g, tolerance);
     if (i == 0) add_metadata_blind(b, meta_json(*g));
-    nanovdb::updateChecksum(*reinterpret_cast<NanoGrid*>(bytes(b)), nanovdb::ChecksumMode::Full);
+    nanovdb::updateChecksum(*reinterpret_cast<nanovdb::NanoGrid<B>*>(bytes(b)), nanovdb::ChecksumMode::Full);
     out.push_back({g->getName(), std::move(b)});
   }
   return out;
+}
+
+/// Inactive voxels of every leaf to 0 before quantising, as the float export stores them: a stale
+/// value OpenVDB left in a voxel it turned off would widen its leaf's [min, max] and so its step.
+void zero_inactive_leaf_values(const openvdb::GridPtrVec& grids) {
+  for (const auto& base : grids)
+    if (auto g = openvdb::gridPtrCast<openvdb::FloatGrid>(base))
+      for (auto leaf = g->tree().beginLeaf(); leaf; ++leaf)
+        for (auto it = leaf->beginValueOff(); it; ++it) it.setValue(0.0f);
 }
 
 NanoVolume nano_of_export(const Volume& v, const std::string& path, const ExportOptions& o) {
@@ -306,20 +413,36 @@ NanoVolume nano_of_export(const Volume& v, const std::string& path, const Export
   return n;
 }
 
-/// The .nvdb file of a NanoVolume's grids: the layout nanovdb::io::writeGrids writes uncompressed.
-std::string nvdb_file_bytes(const NanoVolume& n) {
+/// The .nvdb file of NanoVDB grids (any build type with_build_type takes): the layout
+/// nanovdb::io::writeGrids writes uncompressed.
+std::string nvdb_file_bytes(const std::vector<std::pair<std::string, const uint8_t*>>& grids) {
   nanovdb::io::Segment seg(nanovdb::io::Codec::NONE);
-  for (size_t i = 0; i < n.grids.size(); ++i) {
-    nanovdb::io::GridMetaData m(n.grids[i].bytes, nanovdb::io::Codec::NONE, *grid_at(n, i));
-    m.fileSize = n.grids[i].bytes;
-    seg.meta.push_back(m);
+  for (const auto& grid : grids) {
+    const uint8_t* p = grid.second;  // not a structured binding: clang 14 cannot capture one
+    const std::string& name = grid.first;
+    const auto* gd = reinterpret_cast<const nanovdb::GridData*>(p);
+    const bool known = with_build_type(gd->mGridType, [&](auto tag) {
+      using B = decltype(tag);
+      nanovdb::io::GridMetaData m(gd->mGridSize, nanovdb::io::Codec::NONE,
+                                  *reinterpret_cast<const nanovdb::NanoGrid<B>*>(p));
+      m.fileSize = gd->mGridSize;
+      seg.meta.push_back(m);
+    });
+    if (!known) throw Error("grid \"" + name + "\" has a value type the .nvdb writer does not write");
     seg.header.gridCount += 1;
   }
   std::ostringstream os;
   seg.write(os);
-  for (const auto& g : n.grids) os.write(reinterpret_cast<const char*>(n.data() + g.offset), std::streamsize(g.bytes));
+  for (const auto& g : grids)
+    os.write(reinterpret_cast<const char*>(g.second),
+             std::streamsize(reinterpret_cast<const nanovdb::GridData*>(g.second)->mGridSize));
   if (!os) throw Error("could not assemble the NanoVDB file in memory");
   return os.str();
+}
+std::string nvdb_file_bytes(const NanoVolume& n) {
+  std::vector<std::pair<std::string, const uint8_t*>> grids;
+  for (const auto& g : n.grids) grids.push_back({g.name, n.data() + g.offset});
+  return nvdb_file_bytes(grids);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -347,34 +470,28 @@ struct Checker {
   }
 };
 
-void check_grid(const uint8_t* p, uint64_t size, const std::string& where) {
-  Checker c{p, size, where};
-  if (size < sizeof(nanovdb::GridData) + sizeof(nanovdb::TreeData<3>)) c.bad("it is shorter than a grid header");
-  const auto* gd = reinterpret_cast<const nanovdb::GridData*>(p);
-  if (gd->mMagic != NANOVDB_MAGIC_NUMBER) c.bad("no NanoVDB magic number at the start of the grid");
-  if (gd->mVersion.getMajor() != NANOVDB_MAJOR_VERSION_NUMBER)
-    c.bad("grid version " + version_text(gd->mVersion) + ", this reader reads major version " +
-          std::to_string(NANOVDB_MAJOR_VERSION_NUMBER));
-  if (gd->mGridSize != size) c.bad("the grid says it has " + std::to_string(gd->mGridSize) + " bytes, the file " + std::to_string(size));
-  if (gd->mGridName[nanovdb::GridData::MaxNameSize - 1] != '\0') c.bad("the grid name is not terminated");
-  if (gd->mGridType != nanovdb::GridType::Float)
-    throw InputError(where + ": grid \"" + printable(gd->mGridName) + "\" has value type " +
-                     (uint32_t(gd->mGridType) < uint32_t(nanovdb::GridType::End)
-                          ? std::string(nanovdb::toStr(gd->mGridType))
-                          : "code " + std::to_string(uint32_t(gd->mGridType)) + " (unknown)") +
-                     "; cloudgen reads float grids");
+/// The tree of a grid of build type B: node arrays, child links and node counts. FpN leaves vary
+/// in size (a 96-byte header, then 64 bytes per bit of its width, 1 to 16), so a link to one is
+/// checked for the leaf's own extent rather than for a place in an array of equal nodes.
+template <class B>
+void check_tree(const uint8_t* p, uint64_t size, const Checker& c) {
+  using Upper = nanovdb::NanoUpper<B>;
+  using Lower = nanovdb::NanoLower<B>;
+  using Leaf = nanovdb::NanoLeaf<B>;
+  constexpr bool fixed_leaves = Leaf::DataType::FIXED_SIZE;
   const uint64_t tree_at = sizeof(nanovdb::GridData);
   const auto* td = reinterpret_cast<const nanovdb::TreeData<3>*>(p + tree_at);
   const uint64_t root_at = tree_at + td->mNodeOffset[3];
-  if (td->mNodeOffset[3] > size || root_at % 32 || root_at + sizeof(nanovdb::RootData<NanoUpper>) > size)
+  if (td->mNodeOffset[3] > size || root_at % 32 || root_at + sizeof(nanovdb::RootData<Upper>) > size)
     c.bad("the root node lies outside the grid");
-  const auto* root = reinterpret_cast<const nanovdb::RootData<NanoUpper>*>(p + root_at);
+  const auto* root = reinterpret_cast<const nanovdb::RootData<Upper>*>(p + root_at);
   const uint64_t tiles = root->mTableSize;
-  using Tile = nanovdb::RootData<NanoUpper>::Tile;
+  using Tile = typename nanovdb::RootData<Upper>::Tile;
   if (tiles > (size - root_at - sizeof(*root)) / sizeof(Tile)) c.bad("the root table runs past the end");
   const uint64_t counts[3] = {td->mNodeCount[0], td->mNodeCount[1], td->mNodeCount[2]};
   uint64_t first[3];
-  const uint64_t node_size[3] = {sizeof(NanoLeaf), sizeof(NanoLower), sizeof(NanoUpper)};
+  // An FpN leaf is at least its header and one bit a voxel.
+  const uint64_t node_size[3] = {fixed_leaves ? sizeof(Leaf) : sizeof(Leaf) + 64, sizeof(Lower), sizeof(Upper)};
   const char* names[3] = {"leaf", "lower internal", "upper internal"};
   for (int l = 0; l < 3; ++l) {
     if (counts[l] && td->mNodeOffset[l] > size) c.bad(std::string(names[l]) + " nodes lie outside the grid");
@@ -385,36 +502,97 @@ void check_grid(const uint8_t* p, uint64_t size, const std::string& where) {
     const Tile* t = reinterpret_cast<const Tile*>(p + root_at + sizeof(*root)) + i;
     if (t->child) c.link(root_at, t->child, first[2], counts[2], node_size[2], names[2]);
   }
+  auto leaf_link = [&](uint64_t from, int64_t off) {
+    if (fixed_leaves) return c.link(from, off, first[0], counts[0], node_size[0], names[0]);
+    const int64_t at = int64_t(from) + off;
+    if (at < int64_t(first[0]) || uint64_t(at) % 32 || uint64_t(at) > size || size - uint64_t(at) < sizeof(Leaf))
+      c.bad("a link to a leaf node points outside the grid");
+    const uint32_t log2_bits = reinterpret_cast<const Leaf*>(p + at)->data()->mFlags >> 5;
+    if (log2_bits > 4) c.bad("a leaf claims " + std::to_string(1u << log2_bits) + " bits a value (FpN has 1 to 16)");
+    if (size - uint64_t(at) - sizeof(Leaf) < (uint64_t(64) << log2_bits)) c.bad("a leaf's values run past the end");
+  };
   auto internal = [&](auto* type_tag, int level) {
     using Node = std::remove_pointer_t<decltype(type_tag)>;
     for (uint64_t i = 0; i < counts[level]; ++i) {
       const uint64_t at = first[level] + i * node_size[level];
       const auto* node = reinterpret_cast<const Node*>(p + at);
-      for (auto it = node->data()->mChildMask.beginOn(); it; ++it)
-        c.link(at, node->data()->mTable[*it].child, first[level - 1], counts[level - 1], node_size[level - 1],
-               names[level - 1]);
+      for (auto it = node->data()->mChildMask.beginOn(); it; ++it) {
+        if (level == 1) leaf_link(at, node->data()->mTable[*it].child);
+        else c.link(at, node->data()->mTable[*it].child, first[level - 1], counts[level - 1], node_size[level - 1],
+                    names[level - 1]);
+      }
     }
   };
-  internal(static_cast<const NanoUpper*>(nullptr), 2);
-  internal(static_cast<const NanoLower*>(nullptr), 1);
+  internal(static_cast<const Upper*>(nullptr), 2);
+  internal(static_cast<const Lower*>(nullptr), 1);
+  // The nodes reached from the root, level by level, number what the tree says: NanoVDB's node
+  // manager (the checksum's, the decoder's walks) fills arrays of nodeCount entries by this walk.
+  uint64_t reached[3] = {0, 0, 0};
+  auto reach = [&](int level, uint64_t n) {
+    reached[level] += n;
+    if (reached[level] > counts[level]) c.bad(std::string("more ") + names[level] + " nodes are linked than the tree counts");
+  };
+  // On the way, every leaf's own origin must be the one its slots give (from the root tile's key
+  // down): the decoder and OpenVDB go by it. Internal nodes are not compared: theirs is the
+  // minimum of their active values' box, unset when they have none.
+  for (uint64_t i = 0; i < tiles; ++i) {
+    const Tile* t = reinterpret_cast<const Tile*>(p + root_at + sizeof(*root)) + i;
+    if (!t->child) continue;
+    reach(2, 1);
+    const auto* up = reinterpret_cast<const Upper*>(p + root_at + t->child);
+    for (auto it = up->data()->mChildMask.beginOn(); it; ++it) {
+      reach(1, 1);
+      const auto* low = reinterpret_cast<const Lower*>(reinterpret_cast<const uint8_t*>(up) + up->data()->mTable[*it].child);
+      reach(0, low->data()->mChildMask.countOn());
+      const nanovdb::Coord low_origin = t->origin() + (Upper::OffsetToLocalCoord(*it) << Lower::TOTAL);
+      for (auto jt = low->data()->mChildMask.beginOn(); jt; ++jt) {
+        const auto* leaf = reinterpret_cast<const Leaf*>(reinterpret_cast<const uint8_t*>(low) + low->data()->mTable[*jt].child);
+        if (!(leaf->origin() == low_origin + (Lower::OffsetToLocalCoord(*jt) << Leaf::TOTAL)))
+          c.bad("a leaf's origin is not where its parent puts it");
+      }
+    }
+  }
+  for (int l = 0; l < 3; ++l)
+    if (reached[l] != counts[l]) c.bad(std::string("fewer ") + names[l] + " nodes are linked than the tree counts");
+}
+
+void check_grid(const uint8_t* p, uint64_t size, const std::string& where) {
+  Checker c{p, size, where};
+  if (size < sizeof(nanovdb::GridData) + sizeof(nanovdb::TreeData<3>)) c.bad("it is shorter than a grid header");
+  const auto* gd = reinterpret_cast<const nanovdb::GridData*>(p);
+  if (gd->mMagic != NANOVDB_MAGIC_NUMBER) c.bad("no NanoVDB magic number at the start of the grid");
+  if (gd->mVersion.getMajor() != NANOVDB_MAJOR_VERSION_NUMBER)
+    c.bad("grid version " + version_text(gd->mVersion) + ", this reader reads major version " +
+          std::to_string(NANOVDB_MAJOR_VERSION_NUMBER));
+  if (gd->mGridSize != size) c.bad("the grid says it has " + std::to_string(gd->mGridSize) + " bytes, the file " + std::to_string(size));
+  if (gd->mGridName[nanovdb::GridData::MaxNameSize - 1] != '\0') c.bad("the grid name is not terminated");
+  const bool known = with_build_type(gd->mGridType, [&](auto tag) { check_tree<decltype(tag)>(p, size, c); });
+  if (!known)
+    throw InputError(where + ": grid \"" + printable(gd->mGridName) + "\" has value type " +
+                     (uint32_t(gd->mGridType) < uint32_t(nanovdb::GridType::End)
+                          ? std::string(nanovdb::toStr(gd->mGridType))
+                          : "code " + std::to_string(uint32_t(gd->mGridType)) + " (unknown)") +
+                     "; cloudgen reads float grids and NanoVDB's quantised Fp4, Fp8, Fp16 and FpN");
   if (gd->mBlindMetadataCount) {
     if (gd->mBlindMetadataCount > 1024 || gd->mBlindMetadataOffset < 0 || uint64_t(gd->mBlindMetadataOffset) > size ||
         gd->mBlindMetadataCount > (size - uint64_t(gd->mBlindMetadataOffset)) / sizeof(nanovdb::GridBlindMetaData))
       c.bad("its blind data table lies outside the grid");
   }
   if (gd->mChecksum != ~uint64_t(0)) {
-    const auto* grid = reinterpret_cast<const NanoGrid*>(p);
     const bool partial = (gd->mChecksum >> 32) == 0xFFFFFFFFu;
-    if (!nanovdb::validateChecksum(*grid, partial ? nanovdb::ChecksumMode::Partial : nanovdb::ChecksumMode::Full))
-      c.bad("its checksum does not match its contents");
+    with_build_type(gd->mGridType, [&](auto tag) {
+      const auto* grid = reinterpret_cast<const nanovdb::NanoGrid<decltype(tag)>*>(p);
+      if (!nanovdb::validateChecksum(*grid, partial ? nanovdb::ChecksumMode::Partial : nanovdb::ChecksumMode::Full))
+        c.bad("its checksum does not match its contents");
+    });
   }
 }
 
 /// The text of the density grid's metadata block; empty if it has none.
-std::string blind_text(const NanoGrid& g, uint64_t size, const std::string& where) {
-  const auto* gd = g.data();
+std::string blind_text(const nanovdb::GridData& g, uint64_t size, const std::string& where) {
+  const auto* gd = &g;
   for (uint32_t i = 0; i < gd->mBlindMetadataCount; ++i) {
-    const auto& m = g.blindMetaData(i);
+    const auto& m = *gd->blindMetaData(i);
     if (m.mName[nanovdb::GridBlindMetaData::MaxNameSize - 1] != '\0' || std::string(m.mName) != kMetaBlind) continue;
     const uint64_t meta_at = uint64_t(gd->mBlindMetadataOffset) + i * sizeof(nanovdb::GridBlindMetaData);
     const int64_t at = int64_t(meta_at) + m.mByteOffset;
@@ -434,9 +612,32 @@ void write_nvdb(const Volume& v, const std::string& path, const ExportOptions& o
   double erosion = 0;
   const openvdb::GridPtrVec grids = vdb::export_grids(v, path, o, &erosion);
   vdb::finish_grids(v, grids, path, o, erosion);
-  const NanoVolume n = assemble(nano_grids(grids), path);
-  const std::string bytes = nvdb_file_bytes(n);
-  batch.stage(path, [&](const std::string& tmp) { write_file_bytes(tmp, bytes.data(), bytes.size()); });
+  const NanoVolume n = assemble(nano_grids(grids), path);  // the float grids: checked as every .nvdb
+  std::string file;
+  if (o.nvdb_precision == NvdbPrecision::Float) {
+    file = nvdb_file_bytes(n);  // no precision key: float files stay byte for byte what they were
+  } else {
+    // The preset table refuses these already; ExportOptions filled by code pass here too.
+    if (o.nvdb_precision == NvdbPrecision::FpN && !(o.nvdb_tolerance >= 1e-6 && o.nvdb_tolerance <= 1000))
+      throw InputError("/export/nvdb/tolerance: " + shortest_text(o.nvdb_tolerance) +
+                       " is out of range; allowed: number in [1e-06, 1000] (fpn's largest error per voxel)");
+    grids[0]->insertMeta(kPrecisionKey, openvdb::StringMetadata(nvdb_precision_name(o.nvdb_precision)));
+    if (o.nvdb_precision == NvdbPrecision::FpN)
+      grids[0]->insertMeta("nvdb_tolerance", openvdb::DoubleMetadata(o.nvdb_tolerance));
+    zero_inactive_leaf_values(grids);
+    const float tol = float(o.nvdb_tolerance);
+    std::vector<std::pair<std::string, std::vector<NanoVolume::Block>>> parts;
+    switch (o.nvdb_precision) {
+      case NvdbPrecision::Fp16: parts = nano_grids<nanovdb::Fp16>(grids); break;
+      case NvdbPrecision::Fp8: parts = nano_grids<nanovdb::Fp8>(grids); break;
+      case NvdbPrecision::Fp4: parts = nano_grids<nanovdb::Fp4>(grids); break;
+      default: parts = nano_grids<nanovdb::FpN>(grids, tol); break;
+    }
+    std::vector<std::pair<std::string, const uint8_t*>> view;
+    for (auto& [gname, b] : parts) view.push_back({gname, bytes(b)});
+    file = nvdb_file_bytes(view);
+  }
+  batch.stage(path, [&](const std::string& tmp) { write_file_bytes(tmp, file.data(), file.size()); });
 }
 
 NanoVolume nano_from_vdb(const std::string& path) {
@@ -508,17 +709,27 @@ NanoVolume parse_nvdb(const uint8_t* data, size_t size, const std::string& name_
     if (m.gridSize % 32) bad("grid \"" + printable(gname) + "\" has a size that is not a multiple of 32 bytes");
   }
   std::vector<std::pair<std::string, std::vector<NanoVolume::Block>>> parts;
+  std::vector<std::string> precisions;
   int density = -1;
+  std::string density_meta;  // a quantised density's metadata block (its decoded copy has none)
   for (auto& [m, gname] : metas) {
     if (m.gridSize > size - pos)
       bad("grid \"" + printable(gname) + "\" (" + std::to_string(m.gridSize) + " bytes at byte " + std::to_string(pos) +
           ") runs past the end");
     std::vector<NanoVolume::Block> b(size_t(m.gridSize / 32));
     take(b.data(), m.gridSize, "a grid");
-    check_grid(bytes(b), m.gridSize, name + ": grid \"" + printable(gname) + "\"");
+    const std::string where = name + ": grid \"" + printable(gname) + "\"";
+    check_grid(bytes(b), m.gridSize, where);
+    const nanovdb::GridType type = reinterpret_cast<const nanovdb::GridData*>(bytes(b))->mGridType;
+    const bool is_density = gname == "density" && density < 0;
+    if (type != nanovdb::GridType::Float) {
+      if (is_density) density_meta = blind_text(*reinterpret_cast<const nanovdb::GridData*>(bytes(b)), m.gridSize, name);
+      with_build_type(type, [&](auto tag) { b = decode<decltype(tag)>(b); });
+    }
     zero_inactive(*reinterpret_cast<NanoGrid*>(bytes(b)));
-    if (gname == "density" && density < 0) density = int(parts.size());
+    if (is_density) density = int(parts.size());
     parts.push_back({gname, std::move(b)});
+    precisions.push_back(precision_of(type));
   }
   if (density < 0) {
     std::string have;
@@ -526,14 +737,20 @@ NanoVolume parse_nvdb(const uint8_t* data, size_t size, const std::string& name_
     throw InputError(name + ": no float grid named \"density\" (grids: " + have + ")");
   }
   std::rotate(parts.begin(), parts.begin() + density, parts.begin() + density + 1);
+  std::rotate(precisions.begin(), precisions.begin() + density, precisions.begin() + density + 1);
   NanoVolume n = assemble(std::move(parts), name);
+  for (size_t g = 0; g < n.grids.size(); ++g) n.grids[g].precision = precisions[g];
   const NanoGrid& d = *grid_at(n, 0);
   if (d.gridClass() == nanovdb::GridClass::LevelSet)
     throw InputError(name + ": grid \"density\" is a level set (signed distances to a surface), not a fog volume");
   apply_metadata(n, [&] {
-    const std::string t = blind_text(d, n.grids[0].bytes, name);
+    const std::string t = precisions[0] != "float" ? density_meta : blind_text(*d.data(), n.grids[0].bytes, name);
     return t.empty() ? std::string("{}") : t;
   }(), name);
+  // A quantised file from another writer: say so where cloudgen's own would (`cloudgen info`).
+  if (precisions[0] != "float" &&
+      std::none_of(n.metadata.begin(), n.metadata.end(), [](const auto& kv) { return kv.first == kPrecisionKey; }))
+    n.metadata.push_back({kPrecisionKey, precisions[0]});
   return n;
 }
 

@@ -712,6 +712,9 @@ std::string preset_hash(const Preset& p) {
       << p.weather_map->channels << ';';
   const ExportOptions& e = p.export_options;
   o << e.vdb_half << ',' << e.vdb_detail << ',' << e.vdb_up << ',' << e.vdb_physical << ',' << e.vdb_bake_erosion << ';';
+  if (e.nvdb_precision != NvdbPrecision::Float)  // float .nvdb presets keep their hash
+    o << "nvdb:" << nvdb_precision_name(e.nvdb_precision) << ','
+      << (e.nvdb_precision == NvdbPrecision::FpN ? e.nvdb_tolerance : 0.0) << ';';
   uint64_t h = 0xcbf29ce484222325ull;
   for (unsigned char ch : o.str()) h = (h ^ ch) * 0x100000001b3ull;
   char hex[17];

@@ -42,6 +42,8 @@ constexpr HeightProfile kHeightProfiles[] = {HeightProfile::Exponential, HeightP
                                              HeightProfile::Cumulonimbus};
 constexpr VdbCompression kCompressions[] = {VdbCompression::Blosc, VdbCompression::Zip, VdbCompression::None};
 constexpr Texel kTexels[] = {Texel::Rgba8, Texel::Rgba16f, Texel::Rgba32f};
+constexpr NvdbPrecision kPrecisions[] = {NvdbPrecision::Float, NvdbPrecision::Fp16, NvdbPrecision::Fp8,
+                                         NvdbPrecision::Fp4, NvdbPrecision::FpN};
 
 /// The choices of a string key, from the enum's one name table.
 template <class E, size_t N>
@@ -282,6 +284,21 @@ std::vector<Spec> build_table() {
       "longer be changed at render time; false keeps the detail grids (on the density's topology dilated by one "
       "voxel) for the viewer's live erosion and for Houdini.",
       [](Preset& p, const json& j, const Index&) { p.export_options.vdb_bake_erosion = j.get<bool>(); });
+  add("/export/nvdb/precision", "string", "\"float\"", 0, 0,
+      "Value type of .nvdb grids: float (32 bits a voxel), or NanoVDB's quantised leaves, each 8^3 leaf storing "
+      "min + code * (max - min) / (2^bits - 1): fp16 (16 bits, error at most (max - min) / 131070 of the leaf), "
+      "fp8 (range / 510), fp4 (range / 30), fpn (per leaf the fewest of 1-16 bits within export.nvdb.tolerance). "
+      "Readers decode to float; the .vdb export is unaffected (export.vdb.half). Sizes and render errors: "
+      "docs/nanovdb.md.",
+      [](Preset& p, const json& j, const Index&) {
+        p.export_options.nvdb_precision = parse_nvdb_precision(j.get<std::string>());
+      },
+      names_of(kPrecisions, nvdb_precision_name));
+  add("/export/nvdb/tolerance", "number", "0.01", 1e-6, 1000,
+      "Largest absolute error of a voxel with export.nvdb.precision = fpn, in the density grid's units "
+      "(normalised, or extinction per metre with export.vdb.units = physical); a leaf that 16 bits cannot keep "
+      "within it gets 16 bits. Other precisions ignore it.",
+      [](Preset& p, const json& j, const Index&) { p.export_options.nvdb_tolerance = j.get<double>(); });
   add("/export/raw/format", "string", "\"rgba8\"", 0, 0, "Texel format of raw/KTX2 textures.",
       [](Preset& p, const json& j, const Index&) { p.export_options.texel = parse_texel(j.get<std::string>()); },
       names_of(kTexels, texel_name));
