@@ -8,6 +8,7 @@
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
 #include "cloudgen/phase.h"
+#include "cloudgen/schema.h"
 #include "commands.h"
 
 namespace cloudgen::cli {
@@ -44,15 +45,15 @@ void run_phase(const PhaseArgs& a) {
     }
   } else if (a.model == "hg") {
     const double g = a.g > -2 ? a.g : 0.86;
-    if (!(std::fabs(g) < 1)) throw InputError("--g: " + std::to_string(g) + " must be in (-1, 1)");
+    if (!(std::fabs(g) < 1)) throw InputError("--g: " + shortest_text(g) + " must be in (-1, 1)");
     grey([&](double c) { return phase::henyey_greenstein(g, c); });
-    summary = "g " + std::to_string(g);
+    summary = "g " + shortest_text(g);
   } else if (a.model == "two-lobe-hg") {
     const double g = a.g > -2 ? a.g : 0.9;
     if (!(std::fabs(g) < 1) || !(std::fabs(a.g2) < 1) || !(a.w >= 0 && a.w <= 1))
       throw InputError("--g and --g2 must be in (-1, 1) and --weight in [0, 1]");
     grey([&](double c) { return phase::two_lobe_hg(g, a.g2, a.w, c); });
-    summary = "g1 " + std::to_string(g) + ", g2 " + std::to_string(a.g2) + ", weight " + std::to_string(a.w);
+    summary = "g1 " + shortest_text(g) + ", g2 " + shortest_text(a.g2) + ", weight " + shortest_text(a.w);
   } else {
     const phase::DraineHgFit f = phase::draine_hg_fit(2 * a.radius);
     grey([&](double c) { return phase::draine_hg(f, c); });

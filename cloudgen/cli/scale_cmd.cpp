@@ -111,10 +111,18 @@ Preset load_with_args(const std::string& path, const std::vector<std::string>& a
 
 void run_plan(const PlanArgs& a) {
   if (a.out.empty()) throw InputError("-o/--output: give the manifest file to write, e.g. -o tiles/plan.json");
-  unsigned t[3];
-  char extra = 0;
-  if (std::sscanf(a.tiles.c_str(), "%u,%u,%u%c", &t[0], &t[1], &t[2], &extra) != 3 || !t[0] || !t[1] || !t[2])
-    throw InputError("--tiles: \"" + a.tiles + "\" should be X,Y,Z (tiles per axis, each >= 1)");
+  uint32_t t[3];
+  {  // whole numbers only: "-1,1,1" is refused as typed (sscanf's %u wrapped it to 4294967295)
+    size_t at = 0;
+    bool ok = true;
+    for (int i = 0; i < 3 && ok; ++i) {
+      uint64_t v = 0;
+      ok = parse_whole(a.tiles, at, kMaxResolution, v) && v >= 1 && (i == 2 || (at < a.tiles.size() && a.tiles[at++] == ','));
+      t[i] = uint32_t(v);
+    }
+    if (!ok || at != a.tiles.size())
+      throw InputError("--tiles: \"" + printable(a.tiles) + "\" should be X,Y,Z (tiles per axis, each a whole number >= 1)");
+  }
   // Absolute paths in the commands, so a farm job may start in any folder (of a shared file system).
   const std::string path = fs::absolute(resolve_preset_path(a.preset)).lexically_normal().string();
   const std::vector<std::string> args = tile_args(a.sets, a.seed, a.resolution);

@@ -32,6 +32,7 @@
 #include "cloudgen/erosion.h"
 #include "cloudgen/io.h"
 #include "cloudgen/motion.h"
+#include "cloudgen/schema.h"
 #include "cloudgen/view.h"
 #include "io/vdb_internal.h"
 #include "cloudgen/input_scope.h"
@@ -759,7 +760,7 @@ Volume read_vdb_level(const std::string& path, uint32_t level, uint64_t max_byte
   openvdb::CoordBBox bb = grid->evalActiveVoxelBoundingBox();
   if (bb.empty()) throw InputError(printable(path) + ": grid \"density\" has no active voxels");
   if (!(grid->voxelSize()[0] > 0) || !std::isfinite(grid->voxelSize()[0]) || grid->voxelSize()[0] > 1e9)
-    throw InputError(printable(path) + ": voxel size " + std::to_string(grid->voxelSize()[0]) + " is outside (0, 1e9] metres");
+    throw InputError(printable(path) + ": voxel size " + shortest_text(grid->voxelSize()[0]) + " is outside (0, 1e9] metres");
   const openvdb::Coord lo = bb.min(), dim = bb.dim();
   uint64_t count = 0, xy = 0;
   if (__builtin_mul_overflow(uint64_t(dim.x()), uint64_t(dim.y()), &xy) ||
