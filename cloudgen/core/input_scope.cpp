@@ -69,8 +69,8 @@ std::string protected_input_role(const std::string& path) {
   return it == g_scope->inputs.end() ? std::string() : it->second;
 }
 
-std::string read_text_input(const std::string& path, const std::string& role, const std::string& what,
-                            size_t cap) {
+std::vector<uint8_t> read_input_bytes(const std::string& path, const std::string& role, const std::string& what,
+                                      size_t cap) {
   protect_input(path, role);
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) {
@@ -82,29 +82,35 @@ std::string read_text_input(const std::string& path, const std::string& role, co
     ::close(fd);
     throw InputError(printable(what) + ": is a folder, not a file");
   }
+  const std::string cap_text =
+      cap % (size_t(1) << 20) == 0 ? std::to_string(cap >> 20) + " MiB" : std::to_string(cap) + " bytes";
   const auto too_big = [&](const std::string& size) {
     ::close(fd);
-    return InputError(printable(what) + ": " + size + " is more than the " + std::to_string(cap >> 20) +
-                      " MiB a text input may have (presets, plans, tracks and tables are small)");
+    return InputError(printable(what) + ": " + size + " is more than the " + cap_text + " this reader accepts");
   };
   if (uint64_t(st.st_size) > cap) throw too_big(std::to_string(st.st_size) + " bytes");
-  std::string text;
-  text.reserve(size_t(st.st_size));
-  char buf[1 << 16];
+  std::vector<uint8_t> bytes;
+  bytes.reserve(size_t(st.st_size));
+  unsigned char buf[1 << 16];
   for (;;) {
     const ssize_t n = ::read(fd, buf, sizeof buf);
     if (n < 0 && errno == EINTR) continue;
     if (n < 0) {
       const int e = errno;
       ::close(fd);
-      throw InputError(printable(what) + ": read failed: " + std::strerror(e));
+      throw IoError(printable(what) + ": read failed: " + std::strerror(e));
     }
     if (n == 0) break;
-    if (text.size() + size_t(n) > cap) throw too_big("the file (it grew while read)");
-    text.append(buf, size_t(n));
+    if (bytes.size() + size_t(n) > cap) throw too_big("the file (it grew while read)");
+    bytes.insert(bytes.end(), buf, buf + n);
   }
   ::close(fd);
-  return text;
+  return bytes;
+}
+
+std::string read_text_input(const std::string& path, const std::string& role, const std::string& what, size_t cap) {
+  const std::vector<uint8_t> bytes = read_input_bytes(path, role, what, cap);
+  return std::string(bytes.begin(), bytes.end());
 }
 
 }  // namespace cloudgen

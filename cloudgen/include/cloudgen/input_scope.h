@@ -7,8 +7,10 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace cloudgen {
 
@@ -43,9 +45,14 @@ std::string protected_input_role(const std::string& path);
 /// cost memory without bound.
 constexpr size_t kTextInputCap = size_t(64) << 20;
 
-/// Reads a whole text input under the one rule: protect_input first (so a pipe or device is
-/// refused), then at most `cap` bytes, or InputError naming the file, its size and the cap.
-/// `what` names it in the messages ("--bench track.json"); a missing file is "no such file".
+/// Reads a whole input file under the one rule: protect_input first (so a pipe or device is
+/// refused), then at most `cap` bytes, checked from its size before reading and while reading, or
+/// InputError naming it (`what`, e.g. "--bench track.json"), its size and the cap; a missing file
+/// is "no such file", a failed read an IoError with the system's reason.
+std::vector<uint8_t> read_input_bytes(const std::string& path, const std::string& role, const std::string& what,
+                                      size_t cap);
+
+/// read_input_bytes for a text input, with the text inputs' cap by default.
 std::string read_text_input(const std::string& path, const std::string& role, const std::string& what,
                             size_t cap = kTextInputCap);
 

@@ -500,45 +500,7 @@ void write_file_stream(const std::string& path, const std::function<void(std::os
 }
 
 std::vector<uint8_t> read_file_bytes(const std::string& path, size_t max_bytes) {
-  protect_input(path, "the input " + path);
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) {
-    const int e = errno;
-    if (e == ENOENT) throw InputError(path + ": no such file");
-    throw InputError(path + ": cannot open: " + system_error_text(e));
-  }
-  std::vector<uint8_t> out;
-  struct stat st;
-  if (::fstat(fd, &st) == 0 && S_ISDIR(st.st_mode)) {
-    ::close(fd);
-    throw InputError(path + ": is a folder, not a file");
-  }
-  if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode)) {
-    if (uint64_t(st.st_size) > max_bytes) {
-      ::close(fd);
-      throw InputError(path + ": " + std::to_string(st.st_size) + " bytes is more than the " +
-                       std::to_string(max_bytes) + " this reader accepts");
-    }
-    out.reserve(size_t(st.st_size));
-  }
-  char buf[1 << 16];
-  for (;;) {
-    const ssize_t n = ::read(fd, buf, sizeof buf);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) {
-      const int e = errno;
-      ::close(fd);
-      throw_io(path, "read failed", e);
-    }
-    if (n == 0) break;
-    if (out.size() + size_t(n) > max_bytes) {
-      ::close(fd);
-      throw InputError(path + ": more than the " + std::to_string(max_bytes) + " bytes this reader accepts");
-    }
-    out.insert(out.end(), buf, buf + n);
-  }
-  ::close(fd);
-  return out;
+  return read_input_bytes(path, "the input " + path, path, max_bytes);
 }
 
 }  // namespace cloudgen
