@@ -232,6 +232,12 @@ TEST(BlenderExport, BlenderCommandErrorsNameTheProblem) {
   EXPECT_EQ(out.find("wrote " + (dir / "x.blend")), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir / "x.blend"));
   EXPECT_FALSE(fs::exists(dir / "x.png"));
+  EXPECT_FALSE(fs::exists(dir / "x.vdb")) << "the sibling VDB is in the scene's transaction";
+  // Issue 47, D12: a failed Blender leaves an existing sibling OUT.vdb byte for byte.
+  testutil::write_text(dir / "y.vdb", "previous contents");
+  EXPECT_EQ(run("env CLOUDGEN_BLENDER=/bin/false", "blender tiny -o " + (dir / "y.blend"), out), 2) << out;
+  EXPECT_EQ(testutil::read_text(dir / "y.vdb"), "previous contents");
+  EXPECT_FALSE(fs::exists(dir / "y.blend"));
   for (const std::string& f : testutil::list_dir(dir.path))
     EXPECT_EQ(f.find(".tmp-"), std::string::npos) << "a temporary was left: " << f;
 }

@@ -3,7 +3,9 @@
 // the scene (camera, sun, world, material, tone map) is computed here from the VDB's metadata and
 // cloudgen/view.h, the definitions the viewer uses, and handed to the script as JSON.
 #include <fcntl.h>
+#include <signal.h>
 #include <spawn.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -83,9 +85,20 @@ int run_logged(const std::vector<std::string>& argv, const std::string& log) {
   const int rc = posix_spawn(&pid, cargs[0], &fa, nullptr, cargs.data(), environ);
   posix_spawn_file_actions_destroy(&fa);
   if (rc != 0) throw IoError(argv[0] + ": cannot start (" + std::strerror(rc) + ")");
+  // Waited for by polling, so Ctrl-C ends Blender and this run well within the half second the
+  // signal policy allows (cloudgen/interrupt.h); the staged temporaries are then discarded.
   int st = 0;
-  while (::waitpid(pid, &st, 0) < 0)
-    if (errno != EINTR) throw IoError(argv[0] + ": waitpid failed");
+  for (;;) {
+    const pid_t r = ::waitpid(pid, &st, WNOHANG);
+    if (r == pid) break;
+    if (r < 0 && errno != EINTR) throw IoError(argv[0] + ": waitpid failed");
+    if (g_cancel) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &st, 0);
+      throw Cancelled();
+    }
+    ::usleep(5000);
+  }
   return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 
@@ -129,16 +142,60 @@ std::array<int, 2> check_args(const BlenderArgs& a) {
 }
 
 /// The VDB the scene shows: the input's, the first frame of a sequence, or a preset's, generated.
+/// The sibling OUT.vdb a preset input is generated into, in the .blend's transaction: Blender
+/// reads it at its final path, so it is published first, and put back as it was (restored from a
+/// hard link, or removed if it was new) unless the scene is written too.
+class SiblingVdb {
+ public:
+  SiblingVdb() = default;
+  SiblingVdb(const SiblingVdb&) = delete;
+  SiblingVdb& operator=(const SiblingVdb&) = delete;
+  SiblingVdb(SiblingVdb&& o) noexcept : path_(std::move(o.path_)), backup_(std::move(o.backup_)), armed_(o.armed_) {
+    o.armed_ = false;
+  }
+  ~SiblingVdb() {
+    if (!armed_) {
+      if (!backup_.empty()) ::unlink(backup_.c_str());
+      return;
+    }
+    if (!backup_.empty()) ::rename(backup_.c_str(), path_.c_str());
+    else ::unlink(path_.c_str());
+  }
+  /// Before the VDB is written: a hard link to the file it will replace, if any.
+  void keep(const std::string& path) {
+    path_ = path;
+    struct stat st;
+    if (::lstat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return;
+    const fs::path p(path);
+    backup_ = ((p.parent_path().empty() ? fs::path(".") : p.parent_path()) /
+               ("." + p.filename().string().substr(0, 200) + ".bak-" + std::to_string(::getpid()) + "-blender"))
+                  .string();
+    if (::link(path.c_str(), backup_.c_str()) != 0) backup_.clear();
+  }
+  /// The VDB was written: from now on it is put back unless commit() is reached.
+  void arm() { armed_ = true; }
+  /// The scene was written: the new VDB stays.
+  void commit() {
+    if (armed_ && !backup_.empty()) ::unlink(backup_.c_str());
+    armed_ = false;
+  }
+
+ private:
+  std::string path_, backup_;
+  bool armed_ = false;
+};
+
 struct SceneInput {
   std::string vdb;
   bool sequence = false;
   FrameRange seq;
+  SiblingVdb sibling;
 };
 
 SceneInput scene_input(const BlenderArgs& a) {
   // A VDB sequence (cloud_####.vdb --frames A:B, as `generate --frames` writes it): the scene is
   // framed on its first frame and Blender plays the files as a volume sequence.
-  SceneInput in{a.input, has_frame_pattern(a.input), {}};
+  SceneInput in{a.input, has_frame_pattern(a.input), {}, {}};
   if (in.sequence != !a.frames.empty())
     throw InputError(in.sequence ? a.input + ": a VDB sequence (# in the name) needs --frames A:B, the frames to play"
                                  : "--frames: only for a VDB sequence input such as out/cloud_####.vdb");
@@ -163,7 +220,9 @@ SceneInput scene_input(const BlenderArgs& a) {
     Volume v = generate(p, go);
     ExportOptions eo = p.export_options;
     in.vdb = fs::path(a.output).replace_extension(".vdb").string();
+    in.sibling.keep(in.vdb);  // put back if the scene is not written (D12)
     write_vdb(v, in.vdb, eo);
+    in.sibling.arm();
     if (!a.quiet) std::fprintf(stderr, "wrote %s (vdb)\n", printable(in.vdb).c_str());
   } else if (!a.sets.empty()) {
     throw InputError("--set: only a preset input takes overrides; " + a.input + " is a VDB");
@@ -365,7 +424,7 @@ void run_blender(const BlenderArgs& a) {
   const std::string blender = find_blender();
   const std::string script = script_path();
   if (!fs::exists(script)) throw IoError(script + ": the Blender scene script is missing (set CLOUDGEN_SCRIPT_DIR)");
-  const SceneInput in = scene_input(a);
+  SceneInput in = scene_input(a);
   const DefaultView d = default_view(in.vdb, a, size);
   if (a.level > d.info.lod_levels)
     throw InputError("--level: " + std::to_string(a.level) + " is not a level of detail of " + in.vdb +
@@ -376,6 +435,7 @@ void run_blender(const BlenderArgs& a) {
   if (!a.quiet) std::fprintf(stderr, "lighting: %s\n", lit.source.c_str());
   json s = scene_description(a, in, d, lit, size);
   write_scene(a, s, blender, script, work.path);
+  in.sibling.commit();
   if (!a.quiet) {
     std::fprintf(stderr, "wrote %s (Blender scene of %s)\n", printable(a.output).c_str(), printable(in.vdb).c_str());
     if (!a.render.empty())
