@@ -41,14 +41,7 @@ const LodFileFixture& field() {
 }
 
 LodFile facts(const std::string& path) {
-  const cloudgen::SceneInfo info = cloudgen::read_scene_info(path);
-  LodFile f;
-  f.box_min = glm::dvec3(info.origin[0], info.origin[1], info.origin[2]);
-  f.box_size = glm::dvec3(info.size()[0], info.size()[1], info.size()[2]);
-  f.voxel_size = info.voxel_size;
-  f.dims = info.dims;
-  f.levels = info.lod_levels;
-  return f;
+  return lod_file_of(cloudgen::read_scene_info(path));
 }
 
 /// Looking at the box's centre along +z from `d` metres before its near face, at its mid height.

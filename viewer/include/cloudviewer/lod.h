@@ -9,6 +9,10 @@
 #include "cloudviewer/camera.h"
 #include "cloudviewer/settings.h"
 
+namespace cloudgen {
+struct SceneInfo;
+}
+
 namespace cloudviewer {
 
 /// What the choice needs to know of the file: level 0's active box (world metres, y up) and voxel
@@ -19,6 +23,11 @@ struct LodFile {
   std::array<uint32_t, 3> dims{{0, 0, 0}};  ///< level 0's active box in voxels
   uint32_t levels = 0;                      ///< coarser levels: 1 .. levels
 };
+
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+/// The choice's facts of a .vdb, from what cloudgen reads of its density grid's metadata.
+LodFile lod_file_of(const cloudgen::SceneInfo& info);
+#endif
 
 struct LodPick {
   uint32_t level = 0;           ///< the level drawn (0 = full resolution)

@@ -511,12 +511,7 @@ uint32_t choose_input_lod(Options& o, std::ostream& out) {
   if (ext != ".vdb" || o.settings.mode != PlaceMode::Box || !std::filesystem::is_regular_file(o.input, ec)) return 0;
   const cloudgen::SceneInfo info = cloudgen::read_scene_info(o.input);
   if (info.lod_levels == 0) return 0;
-  LodFile f;
-  f.box_min = glm::dvec3(info.origin[0], info.origin[1], info.origin[2]);
-  f.box_size = glm::dvec3(info.size()[0], info.size()[1], info.size()[2]);
-  f.voxel_size = info.voxel_size;
-  f.dims = info.dims;
-  f.levels = info.lod_levels;
+  const LodFile f = lod_file_of(info);
   Camera cam;
   if (o.camera) {
     cam = *o.camera;

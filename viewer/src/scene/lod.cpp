@@ -7,7 +7,23 @@
 #include "cloudviewer/memory_budget.h"
 #include "cloudviewer/prepared_volume.h"
 
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+#include "cloudgen/view.h"
+#endif
+
 namespace cloudviewer {
+
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+LodFile lod_file_of(const cloudgen::SceneInfo& info) {
+  LodFile f;
+  f.box_min = glm::dvec3(info.origin[0], info.origin[1], info.origin[2]);
+  f.box_size = glm::dvec3(info.size()[0], info.size()[1], info.size()[2]);
+  f.voxel_size = info.voxel_size;
+  f.dims = info.dims;
+  f.levels = info.lod_levels;
+  return f;
+}
+#endif
 
 std::array<uint32_t, 3> lod_dims(const std::array<uint32_t, 3>& dims, uint32_t level) {
   std::array<uint32_t, 3> d{};
