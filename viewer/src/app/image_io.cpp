@@ -45,22 +45,54 @@ void write_atomically(const std::string& path, const std::function<void(const st
 
 std::string system_reason(const char* fallback) { return errno ? std::strerror(errno) : fallback; }
 
+// libpng's own messages ("Write Error") say nothing of the cause: the write callback keeps the
+// system's errno from the failed fwrite, the error callback keeps libpng's text, and neither
+// prints to stderr (the caller's exception carries the reason).
+struct PngSink {
+  FILE* fp = nullptr;
+  int write_errno = 0;
+  char message[160] = {0};
+};
+
+void png_sink_write(png_structp png, png_bytep data, png_size_t n) {
+  auto* sink = static_cast<PngSink*>(png_get_io_ptr(png));
+  errno = 0;
+  if (std::fwrite(data, 1, n, sink->fp) != n) {
+    sink->write_errno = errno ? errno : EIO;
+    png_error(png, "write failed");
+  }
+}
+
+void png_sink_flush(png_structp png) { std::fflush(static_cast<PngSink*>(png_get_io_ptr(png))->fp); }
+
+void png_sink_error(png_structp png, png_const_charp msg) {
+  auto* sink = static_cast<PngSink*>(png_get_error_ptr(png));
+  std::snprintf(sink->message, sizeof sink->message, "%s", msg ? msg : "libpng error");
+  png_longjmp(png, 1);
+}
+
+void png_sink_warning(png_structp, png_const_charp) {}
+
 void write_png_file(const std::string& path, const std::string& shown, const Image& img) {
   errno = 0;
-  FILE* fp = std::fopen(path.c_str(), "wb");
-  if (!fp) throw IoError("cannot write '" + shown + "': " + system_reason("cannot open"));
+  PngSink sink;
+  sink.fp = std::fopen(path.c_str(), "wb");
+  if (!sink.fp) throw IoError("cannot write '" + shown + "': " + system_reason("cannot open"));
+  FILE* fp = sink.fp;
   // Everything with a destructor exists before setjmp: libpng's error longjmp skips destructors of
   // objects constructed after it (ASan found the row buffer leaking on a failed write).
   std::vector<png_byte> row(size_t(img.width) * 3);
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &sink, png_sink_error, png_sink_warning);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   if (!png || !info || setjmp(png_jmpbuf(png))) {
-    std::string why = system_reason("libpng error");
+    const std::string why = sink.write_errno ? std::strerror(sink.write_errno)
+                            : sink.message[0] ? std::string("libpng: ") + sink.message
+                                              : std::string("out of memory");
     png_destroy_write_struct(&png, &info);
     std::fclose(fp);
     throw IoError("cannot write '" + shown + "': " + why);
   }
-  png_init_io(png, fp);
+  png_set_write_fn(png, &sink, png_sink_write, png_sink_flush);
   png_set_IHDR(png, info, png_uint_32(img.width), png_uint_32(img.height), 8, PNG_COLOR_TYPE_RGB,
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
