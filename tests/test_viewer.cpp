@@ -1153,6 +1153,8 @@ TEST(ViewerCli, FailedWriteLeavesTheExistingPngByteForByte) {
   EXPECT_EQ(code, 2) << err;
   EXPECT_NE(err.find("keep.png"), std::string::npos) << err;
   EXPECT_EQ(err.find("Success"), std::string::npos) << err;  // the system's reason, not errno 0
+  EXPECT_NE(err.find("File too large"), std::string::npos) << "the system's reason (EFBIG): " << err;
+  EXPECT_EQ(err.find("Write Error"), std::string::npos) << "libpng's text instead of the reason: " << err;
   std::string after;
   {
     std::ifstream in(p, std::ios::binary);
