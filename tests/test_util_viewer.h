@@ -37,10 +37,13 @@ inline const cloudgen::Volume& synthetic(const std::string& kind) {
   return it->second;
 }
 
-/// One frame of `vol` through a fresh GL renderer, read back.
+/// One frame of `vol` through the test process's one GL renderer, read back. It is kept across
+/// frames, volumes and settings as the window keeps its one renderer, so every frame also checks
+/// that the renderer's caches (LUTs, light volume, shadow map, programs) follow what changed; a
+/// fresh renderer per frame cost most of the GL tests' time in recomputing the same LUTs.
 inline cloudviewer::FrameImages render_gl(const cloudviewer::PreparedVolume& vol, const cloudviewer::FrameSetup& f) {
   gl_context();
-  cloudviewer::GlRenderer r{cloudviewer::ShaderSource()};
+  static cloudviewer::GlRenderer r{cloudviewer::ShaderSource()};
   r.set_volume(vol);
   r.render(f);
   return r.read_back();
