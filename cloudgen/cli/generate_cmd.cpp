@@ -8,6 +8,7 @@
 #include <memory>
 #include <sstream>
 
+#include "cloudgen/budget.h"
 #include "cloudgen/cli_parse.h"
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
@@ -36,8 +37,20 @@ void run_generate(const GenerateArgs& a) {
   const std::string path = resolve_preset_path(a.preset);
   Preset p = load_preset(path, sets);
   if (a.resolution) rescale(p, a.resolution);
+  std::string budget_note;
+  if (!a.voxel_budget.empty()) {
+    if (a.resolution) throw InputError("--voxel-budget and --resolution both set the voxel size: give one of them");
+    const BudgetChoice c = choose_for_budget(p, parse_voxel_count(a.voxel_budget, "--voxel-budget", 4096), a.threads);
+    rescale(p, c.longest);
+    budget_note = std::to_string(c.budget);
+    if (!a.quiet) std::fprintf(stderr, "%s\n", describe(c).c_str());
+  }
   check_lod_levels(p.export_options.vdb_lod, p.resolution.data());  // before any work: nothing written
-  if (!a.frames.empty() || !a.fps.empty() || a.loop) return run_generate_sequence(p, path, a);
+  const bool sequence = !a.frames.empty() || !a.fps.empty() || a.loop;
+  if (!budget_note.empty() && (sequence || mpi_requested(a.mpi)))
+    throw InputError("--voxel-budget works in one process without --frames for now: run it once to see the voxel "
+                     "size it prints, then give that with --resolution N");
+  if (sequence) return run_generate_sequence(p, path, a);
   if (a.outputs.empty()) throw InputError("-o/--output: give at least one output file (.vdb, .nvdb, .raw, .ktx2, .png, .exr)");
   const ExportOptions& eo = p.export_options;
   std::vector<Format> formats;
@@ -89,6 +102,8 @@ void run_generate(const GenerateArgs& a) {
   if (mpi) return run_generate_mpi(p, go, a.outputs, formats, a.quiet, a.stats);
   GenerateStats st;
   Volume v = generate(p, go, &st);
+  // The budget that chose the voxel size travels with the file (the size is the grid's transform).
+  if (!budget_note.empty()) v.metadata.push_back({"voxel_budget", budget_note});
   const auto t0 = std::chrono::steady_clock::now();
   for (size_t i = 0; i < a.outputs.size(); ++i) {
     if (g_cancel) throw Cancelled();
@@ -131,6 +146,9 @@ void add_generate_command(CLI::App& app, std::function<void()>& run) {
                   "Levels of detail in .vdb outputs: N grids density_level_1 .. density_level_N, each twice as coarse "
                   "(0 = none, the default); = --set export.vdb.lod=N");
   gen->add_option("--resolution", ga->resolution, "Rescale so the longest axis has N voxels (world size kept)");
+  gen->add_option("--voxel-budget", ga->voxel_budget,
+                  "Choose the voxel size (world size kept) so about this many voxels hold cloud, e.g. 200M "
+                  "(M = 1e6); the size is printed and the budget stored in the file");
   gen->add_option("--threads", ga->threads, "Worker threads (0 = all cores); output bytes are identical for any count")
       ->check(CLI::Range(0, kMaxThreads));
   gen->add_option("--set", ga->sets, "Override a preset key with the same validation, e.g. --set threshold=0.4 "
