@@ -163,13 +163,7 @@ struct SkyView {
   double fov;
 };
 
-FrameImages gl_frame(const FrameSetup& f) {
-  gl_context();
-  GlRenderer r{ShaderSource()};
-  r.set_volume(blob());
-  r.render(f);
-  return r.read_back();
-}
+FrameImages gl_frame(const FrameSetup& f) { return testutil::render_gl(blob(), f); }
 
 glm::dvec3 pixel(const Image& img, int x, int y) {
   const float* p = img.at(x, y);
