@@ -154,9 +154,9 @@ TEST(RenderDetail, SkippingStaysExact) {
 }
 
 // On against off: the cloud's pixels change, by 0.025 on average (display, 0..1; llvmpipe and the
-// CPU reference alike, 0.01 asserted); strength 0
-// is the image without detail, bit for bit; and the texture is laid a whole number of times over
-// each axis of the box, as near render.detail_period as that allows.
+// CPU reference alike, 0.01 asserted); strength 0 is the image without detail, bit for bit; and
+// the texture is laid a whole number of times over each axis of the box, as near
+// render.detail_period as that allows.
 TEST(RenderDetail, ChangesTheCloudAndStrengthZeroIsOff) {
   const PreparedVolume& vol = blob();
   const RenderSettings base = with({"render.steps=64", "render.detail_period=100"});
