@@ -833,6 +833,9 @@ TEST(ViewerGl, CloudBlockLayoutMatchesTheCppStruct) {
   CV_EXPECT_OFFSET(shadow_map_min_z_m);
   CV_EXPECT_OFFSET(shadow_map_ground_m);
   CV_EXPECT_OFFSET(skip_tree);
+  CV_EXPECT_OFFSET(fine_detail_repeats);
+  CV_EXPECT_OFFSET(fine_detail_strength);
+  CV_EXPECT_OFFSET(fine_detail_size);
 #undef CV_EXPECT_OFFSET
   EXPECT_EQ(r.pass_names().front(), "atmosphere_transmittance");  // the LUT precomputes come first
   EXPECT_EQ(r.pass_names().at(1), "atmosphere_multiple_scattering");

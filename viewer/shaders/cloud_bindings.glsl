@@ -170,6 +170,9 @@ layout(binding = CV_UNIT_MOTION) uniform sampler2D s_motion;        // RGBA32F: 
 vec3 motion_texel(int i, int row) { return texelFetch(s_motion, ivec2(i, row), 0).xyz; }
 layout(binding = CV_UNIT_CURL) uniform sampler3D s_curl;  // RGBA32F: the curl field (cloudgen/curl_distortion.glsl)
 vec3 curl_texel(ivec3 i) { return texelFetch(s_curl, i, 0).xyz; }
+layout(binding = CV_UNIT_DETAIL) uniform sampler3D s_detail;  // R32F, GL_REPEAT: render.detail's texture
+Number fine_detail_texel(ivec3 i) { return texelFetch(s_detail, i, 0).r; }
+Number fine_detail_filtered(vec3 q) { return texture(s_detail, q).r; }
 ivec2 coverage_size() { return textureSize(s_coverage, 0); }
 // Distance skipping and the light volume (march.glsl, lighting.glsl).
 layout(binding = CV_UNIT_DISTANCE) uniform usampler3D s_distance;    // R8UI: cells to the nearest cell holding density

@@ -133,4 +133,12 @@ struct CloudParams {
   Number shadow_map_min_z_m;
   Number shadow_map_ground_m;  // the ground's height in the march box (rounded to 1 mm: part of the map's key)
   Number skip_tree;         // 1: with skip_distance, the radius from the NanoVDB tree's empty nodes, not the field
+  // Render-time detail (render.detail, medium.glsl fine_detail_threshold): a small tileable Worley
+  // texture laid over the box (or the repeating texture) a whole number of times per axis, eroding
+  // the density near its boundary. Erosion only: it never adds density, so skipping stays exact.
+  vec3 fine_detail_repeats; Number fine_detail_strength;  // tiles per volume axis; strength, 0 = off
+  Number fine_detail_size;  // texture edge in texels (detail_texture.h)
+  Number fine_detail_pad0;
+  Number fine_detail_pad1;
+  Number fine_detail_pad2;
 };

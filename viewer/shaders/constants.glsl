@@ -132,6 +132,7 @@
 #define CV_AIR_DEPTH_LAMBDA 9.0
 #define CV_UNIT_AIR 30                // RGBA32F 3D: the air LUT's Rayleigh part (orders 2..N folded in)
 #define CV_UNIT_AIR_MIE 31            // RGBA32F 3D: its Mie part
+#define CV_UNIT_DETAIL 32             // R32F 3D, GL_REPEAT: the render-time detail texture (render.detail)
 // Where the sky's integrals come from (atmosphere_sky's `source`).
 #define CV_AIR_MARCH 0                // marched per pixel (scattering_sums)
 #define CV_AIR_SKY_LUT 1              // Bruneton's 4D scattering LUT (render.sky_lut)

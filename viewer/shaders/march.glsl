@@ -30,6 +30,8 @@
 //   vec2   coverage_texel(ivec2 texel)   layer coverage map: R coverage, G cloud type, in [0, 1]
 //   ivec2  coverage_size()               size of the coverage map in texels
 //   vec3   motion_texel(int i, int row)  motion table D(h_i): row 0 this frame, row 1 the last (medium.glsl)
+//   Number fine_detail_texel(ivec3 t)    render.detail's texture (fine_detail_size^3, repeats on every axis)
+//   Number fine_detail_filtered(vec3 q)  its filtered lookup at q in tiles (GL_REPEAT; exact on the CPU)
 // Constants are macros, not globals, so that the files also work inside a C++ class body.
 //
 // Implements R. Hogfeldt, "Convincing Cloud Rendering", and R. Olajos, "Real-Time Rendering of

@@ -5,7 +5,7 @@
 // coverage map says where clouds are and the cloud-type height gradient (cloudgen's
 // cloud_type.glsl, shared with cloudgen) shapes their profile.
 // Needs common.glsl, cloud_type.glsl, erosion.glsl, `u_cloud` and the lookups volume_texel, volume_filtered,
-// occupancy_texel, coverage_texel and coverage_size (see march.glsl).
+// occupancy_texel, coverage_texel, coverage_size, fine_detail_texel and fine_detail_filtered (see march.glsl).
 
 // Trilinear filter done by hand from texel fetches: texel centres at (i + 0.5) / n, x and z
 // wrapped for tileable volumes, clamped otherwise (GL_REPEAT / GL_CLAMP_TO_EDGE semantics).
@@ -126,6 +126,32 @@ vec3 motion_at_previous(vec3 p) {
 // parabolic Earth term of layer_altitude depends on the horizontal distance).
 vec3 moving_uvw(vec3 p, vec3 motion) { return volume_uvw(p) - motion / volume_uvw_extent_m(); }
 
+// Render-time detail (render.detail; Schneider 2015/2017, Nubis's separate high-frequency detail
+// texture): a tileable Worley fBm of fine_detail_size^3 texels (detail_texture.h) at q in its tiles,
+// trilinear and wrapped on every axis, by hand (exact_filter, the CPU reference) or by the texture unit.
+Number fine_detail_trilinear(vec3 q) {
+  int n = int(u_cloud.fine_detail_size);
+  TrilinearCell cell = trilinear_cell(q, ivec3(n));
+  Number acc = 0.0;
+  for (int k = 0; k < 8; ++k) {
+    ivec3 i = cell.i0 + ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
+    acc += trilinear_weight(cell.f, k) * fine_detail_texel(ivec3(wrap_index(i.x, n), wrap_index(i.y, n), wrap_index(i.z, n)));
+  }
+  return acc;
+}
+// Its erosion threshold at static volume coordinates uvw seen at height fraction seen_h: the
+// texture laid fine_detail_repeats times over the volume (or the repeating texture) per axis, at
+// strength fine_detail_strength, through erosion_threshold's height rule (cloudgen/erosion.glsl:
+// inverted, so wispy, near the base; billowy above). The density then takes eroded_base, the same
+// remap as the volume's own detail: density' = clamp((density - e) / (1 - e), 0, 1) with
+// e = strength * mix(1 - d, d, clamp(5 h, 0, 1)), d the detail in [0, 1]. It never raises density
+// and keeps 0 at 0, so the occupancy grid and the distance field (built without it) stay exact bounds.
+Number fine_detail_threshold(vec3 uvw, Number seen_h) {
+  vec3 q = uvw * u_cloud.fine_detail_repeats;
+  Number d = CV_MODE_EXACT_FILTER > 0.5 ? fine_detail_trilinear(q) : fine_detail_filtered(q);
+  return erosion_threshold(d, seen_h, u_cloud.fine_detail_strength);
+}
+
 // Cloud density (dimensionless, >= 0) at camera-relative position p (moved by the motion): base shape R, eroded by the
 // G/B/A detail fBm (HZD remap), scaled by the density multiplier. Zero outside the box (x and z
 // repeat for tileable volumes). Erosion only lowers density, so the occupancy grid built from R
@@ -164,6 +190,7 @@ Number cloud_density_seen(vec3 p, vec3 motion, vec3 uvw) {
     Number e = erosion_threshold(erosion_detail(dv.x, dv.y, dv.z), seen_h, erosion);
     base = eroded_base(base, e);
   }
+  if (CV_MODE_FINE_DETAIL > 0.5 && base > 0.0) base = eroded_base(base, fine_detail_threshold(uvw, seen_h));
   return max(base, 0.0) * u_cloud.density_scale;
 }
 Number cloud_density(vec3 p) {

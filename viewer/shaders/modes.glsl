@@ -12,6 +12,7 @@
 #define CV_MODE_EXACT_FILTER u_cloud.exact_filter
 #define CV_MODE_DETAIL u_cloud.has_detail
 #define CV_MODE_CURL (u_cloud.curl_amplitude_m > 0.0 ? 1.0 : 0.0)
+#define CV_MODE_FINE_DETAIL (u_cloud.fine_detail_strength > 0.0 ? 1.0 : 0.0)
 #define CV_MODE_LIGHT u_cloud.light_mode
 #define CV_MODE_DF_LIGHT u_cloud.df_light
 #define CV_MODE_LIGHT_VOLUME u_cloud.light_volume_on

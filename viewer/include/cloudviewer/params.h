@@ -21,8 +21,8 @@ using vec4 = glm::dvec4;
 #include "../../shaders/cloud_params.glsl"
 }  // namespace ref
 
-/// Scalars in CloudParams: 34 groups of 16 bytes (std140), each a vec3 + one scalar or four scalars.
-constexpr int kCloudParamsScalars = 148;
+/// Scalars in CloudParams: 39 groups of 16 bytes (std140), each a vec3 + one scalar or four scalars.
+constexpr int kCloudParamsScalars = 156;
 static_assert(sizeof(gpu::CloudParams) == kCloudParamsScalars * 4, "std140 CloudBlock size (no padding)");
 static_assert(sizeof(ref::CloudParams) == kCloudParamsScalars * 8, "double CloudParams size (no padding)");
 static_assert(sizeof(gpu::CloudParams) % 16 == 0, "std140 rounds a struct to 16 bytes");

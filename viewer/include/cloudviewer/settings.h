@@ -69,6 +69,10 @@ struct RenderSettings {
   double sigma_t = 0;              ///< extinction per metre at density 1; 0 = auto (0.5 / voxel size)
   double density = 1;              ///< density multiplier
   double erosion = 0.35;           ///< detail erosion strength [0,1]
+  bool detail = false;             ///< render-time detail: a fine tileable Worley texture erodes the boundary (medium.glsl)
+  double detail_period = 200;      ///< m: one tile of the detail texture (its finest cells are period / 16)
+  double detail_strength = 0.35;   ///< its erosion strength [0, 1] (0: off, the same image bit for bit)
+  int detail_size = 64;            ///< texture edge in texels (detail_texture.h)
   double albedo = 1;               ///< single-scattering albedo
   // lighting
   bool light_march = true;         ///< secondary march toward the sun

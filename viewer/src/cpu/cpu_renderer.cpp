@@ -18,6 +18,7 @@
 
 #include "cloudviewer/atmosphere_luts.h"
 #include "cloudviewer/constants.h"
+#include "cloudviewer/detail_texture.h"
 #include "cloudviewer/renderer.h"
 
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
@@ -225,6 +226,14 @@ struct CpuShader {
   ivec2 coverage_size() const { return ivec2(CV_COVERAGE_MAP_SIZE, CV_COVERAGE_MAP_SIZE); }
   vec3 motion_texel(int i, int row) const { return (*motion)[size_t(row) * CV_MOTION_LUT_SIZE + size_t(i)]; }
   vec3 curl_texel(ivec3 i) const { return cloudgen::curl_field_texel(i.x, i.y, i.z); }
+  // render.detail's texture (detail_texture.h), fetched at the first lookup.
+  mutable std::shared_ptr<const std::vector<float>> fine_detail;
+  Number fine_detail_texel(ivec3 t) const {
+    const size_t n = size_t(u_cloud.fine_detail_size);
+    if (!fine_detail) fine_detail = detail_texture(int(n));
+    return (*fine_detail)[(size_t(t.z) * n + size_t(t.y)) * n + size_t(t.x)];
+  }
+  Number fine_detail_filtered(vec3 q) { return fine_detail_trilinear(q); }  // exact, as the texture unit
 
 // The modes, the cloud maths in their one order (shaders/cloud_math.glsl), and the post passes.
 #include "../../shaders/modes.glsl"

@@ -19,6 +19,7 @@
 #include "cloudgen/motion.h"
 #include "cloudviewer/atmosphere_luts.h"
 #include "cloudviewer/constants.h"
+#include "cloudviewer/detail_texture.h"
 #include "cloudviewer/errors.h"
 #include "cloudviewer/renderer.h"
 #include "cloudgen/nvdb.h"
@@ -91,6 +92,7 @@ const ModeRow kModes[] = {
     {"CV_MODE_EXACT_FILTER", [](const ref::CloudParams& p) { return p.exact_filter; }},
     {"CV_MODE_DETAIL", [](const ref::CloudParams& p) { return p.has_detail; }},
     {"CV_MODE_CURL", [](const ref::CloudParams& p) { return p.curl_amplitude_m > 0.0 ? 1.0 : 0.0; }},
+    {"CV_MODE_FINE_DETAIL", [](const ref::CloudParams& p) { return p.fine_detail_strength > 0.0 ? 1.0 : 0.0; }},
     {"CV_MODE_LIGHT", [](const ref::CloudParams& p) { return p.light_mode; }},
     {"CV_MODE_DF_LIGHT", [](const ref::CloudParams& p) { return p.df_light; }},
     {"CV_MODE_LIGHT_VOLUME", [](const ref::CloudParams& p) { return p.light_volume_on; }},
@@ -468,7 +470,9 @@ struct GlRenderer::Impl {
   ShaderSource shaders;
   std::vector<Target> targets = make_targets();
   std::vector<Pass> passes = make_passes();
-  GLuint tex_volume = 0, tex_occ = 0, tex_dist = 0, tex_mie = 0, tex_coverage = 0, tex_motion = 0, tex_curl = 0;
+  GLuint tex_volume = 0, tex_occ = 0, tex_dist = 0, tex_mie = 0, tex_coverage = 0, tex_motion = 0, tex_curl = 0,
+         tex_detail = 0;
+  int detail_size = 0;  ///< edge of tex_detail's texels (render.detail_size)
   glm::ivec3 dist_dims{0};  // the distance field texture's cells (set_distance_field re-uploads into it)
   GLuint tex_moved_occ = 0;           // FrameSetup::moved_occupancy (R8), bound for occupied() while clouds move
   glm::ivec3 moved_occ_dims{0, 0, 0};  // its allocated size
@@ -803,6 +807,20 @@ struct GlRenderer::Impl {
     glTextureParameteri(tex_curl, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glTextureParameteri(tex_curl, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   }
+  // render.detail's texture (detail_texture.h): R32F, repeating on every axis, trilinear; made again
+  // when the size changes.
+  void ensure_detail_texture(int n) {
+    if (tex_detail && detail_size == n) return;
+    if (tex_detail) glDeleteTextures(1, &tex_detail);
+    const std::shared_ptr<const std::vector<float>> d = detail_texture(n);
+    glCreateTextures(GL_TEXTURE_3D, 1, &tex_detail);
+    glTextureStorage3D(tex_detail, 1, GL_R32F, n, n, n);
+    glTextureSubImage3D(tex_detail, 0, 0, 0, 0, n, n, n, GL_RED, GL_FLOAT, d->data());
+    for (GLenum wrap : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R}) glTextureParameteri(tex_detail, wrap, GL_REPEAT);
+    glTextureParameteri(tex_detail, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTextureParameteri(tex_detail, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    detail_size = n;
+  }
   // What the light volume depends on, camera excluded (positions are camera-relative, the texels
   // are in the march box's own coordinates): the sun, the volume, the medium, the light march and,
   // while the clouds move, the march box and the motion at this time.
@@ -830,7 +848,8 @@ struct GlRenderer::Impl {
     return {double(volume_serial), p.sun_dir.x, p.sun_dir.y, p.sun_dir.z, p.volume_size_m.x, p.volume_size_m.y,
             p.volume_size_m.z, p.tiles_xz, p.has_detail, p.sigma_t_per_m, p.erosion, p.density_scale,
             p.exact_filter, p.df_light, p.curl_amplitude_m, p.curl_repeats.x, p.curl_repeats.y, p.curl_repeats.z,
-            p.curl_shift};
+            p.curl_shift, p.fine_detail_strength, p.fine_detail_size, p.fine_detail_repeats.x, p.fine_detail_repeats.y,
+            p.fine_detail_repeats.z};
   }
   // The ground shadow map's key: the sun and the medium (not the light march's keys), its grid,
   // the march box and the ground in it, the shadow march and the motion at this time (all
@@ -1128,7 +1147,7 @@ GlRenderer::~GlRenderer() {
   m.delete_programs();
   m.delete_targets();
   m.delete_atlas();
-  GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_dist, m.tex_mie, m.tex_coverage, m.tex_motion, m.tex_curl, m.tex_ms, m.tex_moved_occ};
+  GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_dist, m.tex_mie, m.tex_coverage, m.tex_motion, m.tex_curl, m.tex_detail, m.tex_ms, m.tex_moved_occ};
   for (GLuint t : texs)
     if (t) glDeleteTextures(1, &t);
   if (m.tex_nano) glDeleteTextures(1, &m.tex_nano);
@@ -1373,6 +1392,8 @@ void GlRenderer::Impl::bind_inputs(const FrameSetup& f, bool atlas, bool moved_o
   glBindTextureUnit(CV_UNIT_MOTION, tex_motion);
   if (f.params.curl_amplitude_m > 0) ensure_curl_texture();
   glBindTextureUnit(CV_UNIT_CURL, tex_curl);
+  if (f.params.fine_detail_strength > 0) ensure_detail_texture(int(f.params.fine_detail_size));
+  glBindTextureUnit(CV_UNIT_DETAIL, tex_detail);
   glDisable(GL_BLEND);
   glDisable(GL_CULL_FACE);
   glDisable(GL_FRAMEBUFFER_SRGB);

@@ -527,6 +527,17 @@ void set_motion(const PreparedVolume& vol, const RenderSettings& s, const MarchG
   }
 }
 
+// Render-time detail (render.detail; medium.glsl fine_detail_threshold): the texture laid over the
+// box, or the repeating texture in layer mode, a whole number of tiles per axis (so a tiling volume
+// stays seamless) as near render.detail_period metres each as that allows. Strength 0 is off.
+void set_fine_detail(const RenderSettings& s, ref::CloudParams& p) {
+  const glm::dvec3 extent = p.layer_on > 0.5 ? glm::dvec3(p.tile_x_m, p.layer_top_m - p.layer_bottom_m, p.tile_z_m)
+                                             : p.volume_size_m;
+  p.fine_detail_strength = s.detail ? s.detail_strength : 0.0;
+  p.fine_detail_size = s.detail_size;
+  for (int i = 0; i < 3; ++i) p.fine_detail_repeats[i] = std::max(1.0, std::round(extent[i] / s.detail_period));
+}
+
 }  // namespace
 
 FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const Camera& cam,
@@ -545,6 +556,7 @@ FrameSetup make_frame(const PreparedVolume& vol, const RenderSettings& s, const 
   set_light_params(vol, s, g, p);
   set_ground_and_sky(vol, s, cam, sun, g, f);
   set_motion(vol, s, g, distance, width, height, f);
+  set_fine_detail(s, p);
   set_shadow_map(s, width, height, p);
   if (int(p.phase_mode) == CV_PHASE_MIE) f.mie = mie_table_of(s);
   if (g.layer) f.coverage = procedural_coverage_map();

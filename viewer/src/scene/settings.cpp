@@ -76,6 +76,10 @@ std::vector<ParamDef> build() {
   t.push_back(real("sigma_t", &RenderSettings::sigma_t, 0, 1e4, "extinction per metre at density 1 (0 = 0.5 / voxel size)"));
   t.push_back(real("density", &RenderSettings::density, 0, 1e3, "density multiplier"));
   t.push_back(real("erosion", &RenderSettings::erosion, 0, 1, "strength of the G/B/A detail erosion of the R base shape"));
+  t.push_back(boolean("detail", &RenderSettings::detail, "render-time detail: a small tileable Worley texture (libnoise3d), laid at render.detail_period metres, erodes the density near the cloud's boundary, finer than the voxels (erosion only: skipping stays exact; not in baked frames or LOD levels, so off by default)"));
+  t.push_back(real("detail_period", &RenderSettings::detail_period, 10, 1e5, "render.detail: one tile of the detail texture, m (rounded to a whole number of tiles per volume axis); its finest Worley cells are a sixteenth of it"));
+  t.push_back(real("detail_strength", &RenderSettings::detail_strength, 0, 1, "render.detail: erosion strength (the threshold the detail sets, as render.erosion's; 0 = no change)"));
+  t.push_back(integer("detail_size", &RenderSettings::detail_size, 32, 128, "render.detail: the texture's edge in texels (made once per size at startup)"));
   t.push_back(real("albedo", &RenderSettings::albedo, 0, 1, "single-scattering albedo sigma_s / sigma_t"));
   t.push_back(boolean("light_march", &RenderSettings::light_march, "secondary march toward the sun (off: no self-shadowing)"));
   t.push_back(integer("light_samples", &RenderSettings::light_samples, 1, 128, "samples of the light march"));
