@@ -71,7 +71,8 @@ void run_generate(const GenerateArgs& a) {
   if (!mpi && need > limit)
     throw InputError(path + ": resolution " + std::to_string(p.resolution[0]) + "x" + std::to_string(p.resolution[1]) + "x" +
                      std::to_string(p.resolution[2]) + " needs about " + human(need) + ", more than --max-memory " +
-                     a.max_memory + " (lower /resolution or use --resolution N)");
+                     a.max_memory + " (lower /resolution, use --resolution N or --voxel-budget N, or add --mpi: the sparse path "
+                     "holds only the bricks with cloud, in one process too)");
   GenerateOptions go;
   go.threads = a.threads;
   go.detail = detail;
