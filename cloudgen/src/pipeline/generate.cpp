@@ -26,6 +26,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <sstream>
 
 namespace cloudgen {
@@ -412,7 +413,7 @@ noise3d::GridRegion grid_of(const std::array<uint32_t, 3>& N, const PlannedBrick
 
 /// What execute_plan's workers count, together (they run in parallel).
 struct PlanCounters {
-  std::atomic<size_t> done{0}, skipped{0}, detail_done{0}, active{0};
+  std::atomic<size_t> done{0}, skipped{0}, detail_done{0}, active{0}, noise_cached{0}, noise_evaluated{0};
   std::array<std::atomic<size_t>, kBrickWorkKinds> work_n{};
   std::array<std::atomic<int64_t>, kBrickWorkKinds> work_ns{};
 
@@ -421,6 +422,8 @@ struct PlanCounters {
     stats.bricks_skipped = skipped;
     stats.detail_bricks = detail_done;
     stats.active_voxels = active;
+    stats.noise_cached = noise_cached;
+    stats.noise_evaluated = noise_evaluated;
     for (int k = 0; k < kBrickWorkKinds; ++k) {
       stats.work_bricks[k] = work_n[k];
       stats.work_seconds[k] = work_ns[k] * 1e-9;
@@ -440,14 +443,91 @@ struct DetailBlocks {
   size_t index(uint32_t kx, uint32_t ky, uint32_t kz) const { return (size_t(kz) * n[1] + ky) * n[0] + kx; }
 };
 
+}  // namespace
+
+// The cache's stores: one per channel noise (its parameters and the volume's size, the text of
+// cache_key), one slot per box: a whole brick for the density channel, a detail block (kBlock,
+// up to kBlocksPerBrick per brick) for a detail channel. A run touches only its bricks' slots and
+// each brick is one worker's, so workers write slots without locking; the map itself changes only
+// before and after the parallel part.
+constexpr size_t kBlocksPerBrick = size_t(kBrick / kBlock[0]) * (kBrick / kBlock[1]) * (kBrick / kBlock[2]);
+
+struct NoiseCache::Impl {
+  struct Store {
+    std::vector<std::vector<float>> boxes;  // slot -> the box's raw noise (empty: not evaluated)
+    bool used = false;                      // by the current run
+  };
+  std::map<std::string, Store> stores;
+};
+
+NoiseCache::NoiseCache() : impl_(std::make_unique<Impl>()) {}
+NoiseCache::~NoiseCache() = default;
+
+size_t NoiseCache::bytes() const {
+  size_t b = 0;
+  for (const auto& [key, store] : impl_->stores)
+    for (const std::vector<float>& box : store.boxes) b += box.size() * sizeof(float);
+  return b;
+}
+
+void NoiseCache::clear() { impl_->stores.clear(); }
+
+namespace {
+
+/// What a channel's raw noise depends on: its libnoise3d parameters and the volume's size (the
+/// lattice positions of the voxels), nothing applied after the noise. `boxes`: "brick" or "block".
+std::string cache_key(const noise3d::FractalParams& f, const std::array<uint32_t, 3>& N, const char* boxes) {
+  std::ostringstream o;
+  o << std::hexfloat << boxes << ';' << int(f.kind) << ';' << f.period.x << ',' << f.period.y << ',' << f.period.z
+    << ';' << f.seed << ';' << f.octaves << ';' << f.gain << ';' << f.lacunarity << ';' << f.worley_octaves << ';'
+    << f.blend << ';' << N[0] << ',' << N[1] << ',' << N[2];
+  return o.str();
+}
+
+/// The cache's stores of one run, one per channel (null: not cached), and the drop of the others
+/// when the run ends.
+class CacheRun {
+ public:
+  CacheRun(const Preset& p, const BrickPlan& plan, const GenerateOptions& opt) : cache_(opt.noise_cache) {
+    bool whole = true;
+    for (int a = 0; a < 3; ++a) whole &= plan.region_lo[a] == 0 && plan.region_hi[a] == plan.dims[a];
+    if (!cache_ || !whole || !opt.skip_empty) {
+      cache_ = nullptr;
+      return;
+    }
+    const std::array<uint32_t, 3> N = p.resolution;
+    size_t bricks = 1;
+    for (int a = 0; a < 3; ++a) bricks *= (N[a] + kBrick - 1) / kBrick;
+    auto& stores = cache_->impl().stores;
+    for (auto& [key, store] : stores) store.used = false;
+    for (int c = 0; c < 4; ++c) {
+      if (c > 0 && !(plan.detail && p.channels[c].enabled)) continue;
+      NoiseCache::Impl::Store& st = stores[cache_key(channel_params(p, c), N, c == 0 ? "brick" : "block")];
+      st.boxes.resize(c == 0 ? bricks : bricks * kBlocksPerBrick);
+      st.used = true;
+      store[c] = &st;
+    }
+  }
+  /// Drops the noise this run did not use (an old seed's, another resolution's).
+  ~CacheRun() {
+    if (!cache_) return;
+    auto& stores = cache_->impl().stores;
+    for (auto it = stores.begin(); it != stores.end();) it = it->second.used ? std::next(it) : stores.erase(it);
+  }
+  std::array<NoiseCache::Impl::Store*, 4> store{};
+
+ private:
+  NoiseCache* cache_;
+};
+
 /// One brick of execute_plan: density on the whole brick, then each detail channel on the blocks
 /// the detail rule keeps; the sink receives the part of the brick in the region.
 class BrickWorker {
  public:
   BrickWorker(const Preset& p, const BrickPlan& plan, const GenerateOptions& opt, const BrickSink& sink, size_t n,
-              PlanCounters& counters)
+              PlanCounters& counters, const CacheRun& cache)
       : p_(p), plan_(plan), opt_(opt), sink_(sink), n_(n), c_(counters), N_(p.resolution),
-        rp_(channel_params(p, 0)), shape_(p, opt.threads) {}
+        rp_(channel_params(p, 0)), shape_(p, opt.threads), cache_(cache) {}
 
   /// Generates brick `b` and hands it to the sink; `noise` is the calling thread's scratch.
   void run(size_t b, std::vector<float>& noise) {
@@ -493,13 +573,12 @@ class BrickWorker {
     };
     const Channel& rc = p_.channels[0];
     std::vector<float> dens(wb.count());
-    noise.resize(wb.count());
-    noise3d::evaluate_grid(rp_, grid_of(N_, wb), noise.data(), {1});
+    const float* raw = noise_of(rp_, cache_.store[0], brick_slot(wb), grid_of(N_, wb), wb.count(), noise);
     size_t q = 0;
     for (uint32_t z = wb.lo[2]; z < wb.hi[2]; ++z)
       for (uint32_t y = wb.lo[1]; y < wb.hi[1]; ++y)
         for (uint32_t x = wb.lo[0]; x < wb.hi[0]; ++x, ++q)
-          dens[q] = shape_.finish(channel_value(rc, noise[q]), shape_(x, y, z));
+          dens[q] = shape_.finish(channel_value(rc, raw[q]), shape_(x, y, z));
     size_t k = 0, act = 0;
     for (uint32_t z = bx.lo[2]; z < bx.hi[2]; ++z)
       for (uint32_t y = bx.lo[1]; y < bx.hi[1]; ++y)
@@ -569,6 +648,7 @@ class BrickWorker {
       return (size_t(z - bx.lo[2]) * bh + (y - bx.lo[1])) * bw + (x - bx.lo[0]);
     };
     size_t n_kept = 0;
+    std::vector<float> scratch;
     for (uint32_t kz = 0; kz < blocks.n[2]; ++kz)
       for (uint32_t ky = 0; ky < blocks.n[1]; ++ky)
         for (uint32_t kx = 0; kx < blocks.n[0]; ++kx) {
@@ -582,8 +662,8 @@ class BrickWorker {
           if (blk.lo[0] >= blk.hi[0] || blk.lo[1] >= blk.hi[1] || blk.lo[2] >= blk.hi[2]) continue;
           ++n_kept;
           if (opt_.skip_empty) {
-            std::vector<float> part(blk.count());
-            noise3d::evaluate_grid(cp, grid_of(N_, blk), part.data(), {1});
+            const float* part = noise_of(cp, cache_.store[c], brick_slot(wb) * kBlocksPerBrick + blocks.index(kx, ky, kz),
+                                         grid_of(N_, blk), blk.count(), scratch);
             size_t k = 0;
             for (uint32_t z = blk.lo[2]; z < blk.hi[2]; ++z)
               for (uint32_t y = blk.lo[1]; y < blk.hi[1]; ++y)
@@ -599,6 +679,27 @@ class BrickWorker {
     if (!n_kept) out.clear();
   }
 
+  /// The brick's index in the volume's brick grid (x fastest): its slot in the cache.
+  size_t brick_slot(const PlannedBrick& wb) const {
+    const size_t nx = (N_[0] + kBrick - 1) / kBrick, ny = (N_[1] + kBrick - 1) / kBrick;
+    return (size_t(wb.lo[2] / kBrick) * ny + wb.lo[1] / kBrick) * nx + wb.lo[0] / kBrick;
+  }
+
+  /// The raw noise of `f` over box `g` (n values): the cache's slot when it holds it, else
+  /// evaluated, into the slot (cached) or into `scratch`.
+  const float* noise_of(const noise3d::FractalParams& f, NoiseCache::Impl::Store* store, size_t slot,
+                        const noise3d::GridRegion& g, size_t n, std::vector<float>& scratch) const {
+    std::vector<float>& box = store ? store->boxes[slot] : scratch;
+    if (store && box.size() == n) {
+      ++c_.noise_cached;
+      return box.data();
+    }
+    box.resize(n);
+    noise3d::evaluate_grid(f, g, box.data(), {1});
+    if (store) ++c_.noise_evaluated;
+    return box.data();
+  }
+
   const Preset& p_;
   const BrickPlan& plan_;
   const GenerateOptions& opt_;
@@ -608,6 +709,7 @@ class BrickWorker {
   const std::array<uint32_t, 3> N_;
   const noise3d::FractalParams rp_;
   const Shape shape_;
+  const CacheRun& cache_;
 };
 
 }  // namespace
@@ -618,7 +720,8 @@ void execute_plan(const Preset& p, const BrickPlan& plan, const std::vector<size
   if (plan.dims != p.resolution) throw Error("execute_plan: the plan was made for another resolution");
   const size_t n = which ? which->size() : plan.bricks.size();
   PlanCounters counters;
-  BrickWorker worker(p, plan, opt, sink, n, counters);
+  const CacheRun cache(p, plan, opt);
+  BrickWorker worker(p, plan, opt, sink, n, counters, cache);
   in_arena(opt.threads, [&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1), [&](const tbb::blocked_range<size_t>& r) {
       std::vector<float> noise;

@@ -308,7 +308,7 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
   const uint32_t level = choose_input_lod(o, out);  // at the window's size and starting camera
   RenderSettings settings = o.settings;
   RenderSettings good_settings = settings;  // the last settings a frame took (make_frame_or_keep)
-  Session session(o.input, settings, level);  // load first, so a bad input fails before a window opens
+  Session session(o.input, settings, level, PresetSource{o.preset_sets, nullptr});  // load first, so a bad input fails before a window opens
   Glfw glfw;
   Window win(o.width, o.height);
   GLFWwindow* window = win.w;
