@@ -278,15 +278,22 @@ void add_options(CLI::App& app, Options& o, CliText& t) {
   app.add_flag("--keys-markdown", t.keys_md, "the window's parameter key bindings as Markdown (docs/reference/viewer-params.md)");
 }
 
-// A --set or --edit key of the preset rather than of the viewer: not render.*, atmosphere.* or
-// motion.*, not a bare render key, and its first part a top-level key of the preset table.
-bool is_preset_key(const std::string& assignment) {
-#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+// A key of the viewer's settings: render.*, atmosphere.*, motion.* or a bare render key.
+bool is_viewer_key(const std::string& assignment) {
   const std::string key = assignment.substr(0, assignment.find('='));
   for (const char* prefix : {"render.", "atmosphere.", "motion."})
-    if (key.rfind(prefix, 0) == 0) return false;
+    if (key.rfind(prefix, 0) == 0) return true;
   for (const ParamDef& p : render_params())
-    if (p.key == key) return false;
+    if (p.key == key) return true;
+  return false;
+}
+
+// A --set key of the preset rather than of the viewer: not a viewer key, and its first part a
+// top-level key of the preset table.
+bool is_preset_key(const std::string& assignment) {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+  if (is_viewer_key(assignment)) return false;
+  const std::string key = assignment.substr(0, assignment.find('='));
   const std::string top = key.substr(0, key.find('.'));
   for (const cloudgen::ParamInfo& p : cloudgen::params())
     if (p.pointer.substr(1, p.pointer.find('/', 1) - 1) == top) return true;
@@ -316,7 +323,7 @@ void check_edits(const Options& o) {
   std::vector<std::string> sets = o.preset_sets;
   for (const std::string& e : o.edits) {
     if (e.find('=') == std::string::npos) throw InputError("--edit " + e + ": expected KEY=VALUE");
-    if (!is_preset_key(e))
+    if (is_viewer_key(e))  // anything else goes to the preset reader (unknown keys: a did-you-mean)
       throw InputError("--edit " + e + ": not a preset key (--edit takes the preset's keys, as cloudgen generate "
                        "--set spells them; render.*, atmosphere.* and motion.* go with --set)");
     if (e.rfind("view.", 0) == 0) throw InputError("--edit " + e + ": the view is not an edit of the volume; use --set");
