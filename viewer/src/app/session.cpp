@@ -33,10 +33,15 @@ void Session::stop_renderer() {
 }
 
 void Session::reopen(const std::string& input, const RenderSettings& s, InputTiming* timing, double* upload_s) {
-  vol_ = open_input(input, s, lod_level_, preset_, timing);
+  PreparedVolume v = open_input(input, s, lod_level_, preset_, timing);
   const auto t0 = std::chrono::steady_clock::now();
-  if (renderer_) renderer_->set_volume(vol_), uploaded_ = &vol_;
+  adopt(std::move(v));
   if (upload_s) *upload_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void Session::adopt(PreparedVolume v) {
+  vol_ = std::move(v);
+  if (renderer_) renderer_->set_volume(vol_), uploaded_ = &vol_;
 }
 
 void Session::show(const PreparedVolume& v) {

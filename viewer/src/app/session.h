@@ -36,8 +36,13 @@ class Session {
   /// uploads it (the window's reload, an --edit); the old volume stays on failure. `timing`: where
   /// the time went, the upload's in `upload_s`.
   void reopen(const std::string& input, const RenderSettings& s, InputTiming* timing = nullptr, double* upload_s = nullptr);
+  /// Shows `v` from now on and uploads it: a volume opened elsewhere (off the GL thread, with
+  /// lod_level() and preset()).
+  void adopt(PreparedVolume v);
   /// How a preset input is generated: an edit adds to its sets, then reopen.
   PresetSource& preset() { return preset_; }
+  const PresetSource& preset() const { return preset_; }
+  uint32_t lod_level() const { return lod_level_; }
   /// Uploads `v` (the volume, or a copy of it at other occupancy and field settings) unless it is
   /// the one the renderer holds.
   void show(const PreparedVolume& v);

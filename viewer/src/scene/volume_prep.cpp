@@ -1,6 +1,7 @@
 // Densifying: a cloudgen::Volume into the interleaved RGBA floats and the occupancy grid both
 // renderers sample, with the memory it needs estimated first.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -8,6 +9,9 @@
 #include <string>
 
 #include <unistd.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "cloudviewer/errors.h"
 #include "cloudviewer/scene.h"
@@ -268,13 +272,22 @@ PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_p
       throw InputError("volume detail channel " + std::to_string(c) + " has the wrong size");
     if (v.detail[size_t(c)].empty()) p.has_detail = false;
   }
-  p.rgba.assign(n * 4, 0.f);
-  for (size_t i = 0; i < n; ++i) {
-    float d = v.density[i];
-    if (!std::isfinite(d)) throw InputError("volume density has a non-finite value at voxel " + std::to_string(i));
-    p.rgba[i * 4] = std::max(d, 0.f);
-    for (int c = 0; c < 3; ++c) p.rgba[i * 4 + 1 + size_t(c)] = v.detail[size_t(c)].empty() ? 0.f : v.detail[size_t(c)][i];
-  }
+  p.rgba.resize(n * 4);
+  // Interleaved on all cores (an edit's regeneration waits for it: about 0.2 s for 256^3 on one);
+  // the first non-finite voxel is found again in order, so the message does not depend on them.
+  std::atomic<bool> nonfinite{false};
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, size_t(1) << 16), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const float d = v.density[i];
+      if (!std::isfinite(d)) nonfinite = true;
+      p.rgba[i * 4] = std::max(d, 0.f);
+      for (int c = 0; c < 3; ++c) p.rgba[i * 4 + 1 + size_t(c)] = v.detail[size_t(c)].empty() ? 0.f : v.detail[size_t(c)][i];
+    }
+  });
+  if (nonfinite)
+    for (size_t i = 0; i < n; ++i)
+      if (!std::isfinite(v.density[i]))
+        throw InputError("volume density has a non-finite value at voxel " + std::to_string(i));
   // The volume's own grid when it was built for this cell and padding over these dims (cloudgen
   // builds it with the same function); otherwise build it here.
   bool reuse = !v.occupancy.empty() && int(v.occupancy_cell) == occ_cell && int(v.occupancy_padding) == occ_padding;
