@@ -9,24 +9,29 @@ namespace cloudgen {
 
 void dilate_occupancy(std::vector<uint8_t>& raw, const std::array<uint32_t, 3>& od, uint32_t padding, bool tiles_xz) {
   // Separable dilation by `padding` cells per axis (a box dilation: the union over the
-  // (2p+1)^3 neighbourhood), wrapping in x and z for tiling volumes.
+  // (2p+1)^3 neighbourhood), wrapping in x and z for tiling volumes. A cell takes the first
+  // non-zero neighbour value in the order d = -p .. p. Whole runs of `stride` cells move together
+  // (one line of cells per neighbour offset), so no cell divides its index into coordinates.
   const int pad = int(padding);
   std::vector<uint8_t> tmp(raw.size());
   for (int a = 0; a < 3; ++a) {
     const bool wrap = tiles_xz && a != 1;
     const int n = int(od[a]);
     const size_t stride = a == 0 ? 1 : a == 1 ? od[0] : size_t(od[0]) * od[1];
-    for (size_t i = 0; i < raw.size(); ++i) {
-      const int coord = int(i / stride % od[a]);
-      uint8_t on = 0;
-      for (int d = -pad; d <= pad && !on; ++d) {
-        int q = coord + d;
-        if (wrap) q = ((q % n) + n) % n;
-        else if (q < 0 || q >= n) continue;
-        on = raw[i + (int64_t(q) - coord) * int64_t(stride)];
+    const size_t outer = n > 0 ? raw.size() / (size_t(n) * stride) : 0;
+    for (size_t o = 0; o < outer; ++o)
+      for (int c = 0; c < n; ++c) {
+        uint8_t* dst = &tmp[(o * n + c) * stride];
+        std::fill(dst, dst + stride, uint8_t(0));
+        for (int d = -pad; d <= pad; ++d) {
+          int q = c + d;
+          if (wrap) q = ((q % n) + n) % n;
+          else if (q < 0 || q >= n) continue;
+          const uint8_t* src = &raw[(o * n + size_t(q)) * stride];
+          for (size_t k = 0; k < stride; ++k)
+            if (!dst[k]) dst[k] = src[k];
+        }
       }
-      tmp[i] = on;
-    }
     raw.swap(tmp);
   }
 }
