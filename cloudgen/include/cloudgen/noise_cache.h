@@ -10,6 +10,8 @@
 
 namespace cloudgen {
 
+struct Volume;
+
 class NoiseCache {
  public:
   NoiseCache();
@@ -21,6 +23,10 @@ class NoiseCache {
   size_t bytes() const;
   /// Drops everything.
   void clear();
+  /// Takes back a volume a generate() with this cache returned, once its values are no longer
+  /// needed: the next generate() fills its channels' memory instead of new memory (a 256^3 volume's
+  /// fresh pages cost about as much as recombining it). Only the memory is reused, never a value.
+  void recycle(Volume&& v);
 
   struct Impl;  ///< generate.cpp's; one store per channel's noise parameters, one slot per box
   Impl& impl() { return *impl_; }

@@ -458,6 +458,7 @@ struct NoiseCache::Impl {
     bool used = false;                      // by the current run
   };
   std::map<std::string, Store> stores;
+  std::vector<float> spare[4];  // channel buffers of a returned volume (recycle), reused by the next run
 };
 
 NoiseCache::NoiseCache() : impl_(std::make_unique<Impl>()) {}
@@ -470,7 +471,15 @@ size_t NoiseCache::bytes() const {
   return b;
 }
 
-void NoiseCache::clear() { impl_->stores.clear(); }
+void NoiseCache::clear() {
+  impl_->stores.clear();
+  for (std::vector<float>& s : impl_->spare) s = {};
+}
+
+void NoiseCache::recycle(Volume&& v) {
+  impl_->spare[0] = std::move(v.density);
+  for (int c = 0; c < 3; ++c) impl_->spare[c + 1] = std::move(v.detail[c]);
+}
 
 namespace {
 
@@ -735,10 +744,16 @@ Volume generate(const Preset& p, const GenerateOptions& opt, GenerateStats* stat
   const auto t_start = std::chrono::steady_clock::now();
   const BrickPlan plan = plan_bricks(p, opt);
   Volume v = volume_header(p, plan);
+  if (opt.noise_cache) {  // the memory of a volume handed back (recycle): no fresh pages to fault in
+    std::vector<float>* spare = opt.noise_cache->impl().spare;
+    v.density = std::move(spare[0]);
+    for (int c = 0; c < 3; ++c) v.detail[c] = std::move(spare[c + 1]);
+    for (int c = 0; c < 4; ++c) spare[c] = {};
+  }
   v.density.assign(v.voxel_count(), 0.0f);
-  if (plan.detail)
-    for (int c = 1; c < 4; ++c)
-      if (p.channels[c].enabled) v.detail[c - 1].assign(v.voxel_count(), 0.0f);
+  for (int c = 1; c < 4; ++c)
+    if (plan.detail && p.channels[c].enabled) v.detail[c - 1].assign(v.voxel_count(), 0.0f);
+    else v.detail[c - 1] = {};
   const std::array<uint32_t, 3> r0 = plan.region_lo;
   // Bricks are disjoint, so workers write their boxes of the dense channels without locking.
   auto into_volume = [&](size_t b, BrickResult& res) {

@@ -17,6 +17,7 @@
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
 #if __has_include("cloudgen/generate.h")
 #include "cloudgen/generate.h"
+#include "cloudgen/noise_cache.h"
 #include "cloudgen/preset.h"
 #define CLOUDVIEWER_HAS_GENERATE 1
 #endif
@@ -167,6 +168,9 @@ PreparedVolume open_input(const std::string& input, const RenderSettings& s, uin
   } else {
     prepared = prepare_dense(v, input, s);
   }
+#ifdef CLOUDVIEWER_HAS_GENERATE
+  if (preset.noise_cache) preset.noise_cache->recycle(std::move(v));  // the next edit fills its memory
+#endif
   if (timing) timing->prepare_s = seconds_since(t0);
   return prepared;
 #else
