@@ -23,6 +23,9 @@ struct PresetSource {
   /// The channels' noise kept between generations (cloudviewer --edit): an edit that changes only
   /// what is applied after the noise recombines it. Null: nothing kept.
   cloudgen::NoiseCache* noise_cache = nullptr;
+  /// Memory for the prepared dense channels (a prepared volume no longer drawn: Session keeps the
+  /// one an edit replaced), taken by prepare_volume. Null: fresh memory.
+  std::vector<float>* spare_rgba = nullptr;
 };
 
 /// Where open_input's time went (the generation's noise figures for a preset INPUT).

@@ -9,7 +9,9 @@
 namespace cloudviewer {
 
 Session::Session(const std::string& input, const RenderSettings& s, uint32_t lod_level, PresetSource preset)
-    : vol_(open_input(input, s, lod_level, preset)), lod_level_(lod_level), preset_(std::move(preset)) {}
+    : vol_(open_input(input, s, lod_level, preset)), lod_level_(lod_level), preset_(std::move(preset)) {
+  if (preset_.noise_cache) preset_.spare_rgba = &spare_rgba_;  // an edited preset reuses the memory
+}
 
 Session::~Session() { stop_renderer(); }
 
@@ -40,8 +42,10 @@ void Session::reopen(const std::string& input, const RenderSettings& s, InputTim
 }
 
 void Session::adopt(PreparedVolume v) {
+  std::vector<float> old = std::move(vol_.rgba);
   vol_ = std::move(v);
   if (renderer_) renderer_->set_volume(vol_), uploaded_ = &vol_;
+  if (preset_.spare_rgba) spare_rgba_ = std::move(old);  // for the next edit (nothing draws it now)
 }
 
 void Session::show(const PreparedVolume& v) {

@@ -37,7 +37,7 @@ class Session {
   /// the time went, the upload's in `upload_s`.
   void reopen(const std::string& input, const RenderSettings& s, InputTiming* timing = nullptr, double* upload_s = nullptr);
   /// Shows `v` from now on and uploads it: a volume opened elsewhere (off the GL thread, with
-  /// lod_level() and preset()).
+  /// lod_level() and preset()). With a noise cache the old volume's memory is kept for the next.
   void adopt(PreparedVolume v);
   /// How a preset input is generated: an edit adds to its sets, then reopen.
   PresetSource& preset() { return preset_; }
@@ -59,6 +59,7 @@ class Session {
   PreparedVolume vol_;
   uint32_t lod_level_ = 0;  // the .vdb level of detail drawn (reopen keeps it)
   PresetSource preset_;
+  std::vector<float> spare_rgba_;  // the dense channels of the volume an edit replaced (preset_.spare_rgba)
   std::unique_ptr<HeadlessContext> context_;  // declared first: it outlives the renderer
   std::unique_ptr<GlRenderer> renderer_;
   const PreparedVolume* uploaded_ = nullptr;  // what the renderer holds

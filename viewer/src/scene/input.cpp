@@ -104,7 +104,8 @@ namespace {
 std::string mib(uint64_t bytes) { return std::to_string((bytes + (1u << 20) - 1) >> 20) + " MiB"; }
 
 /// The dense path under render.dense_budget: refuses, naming the setting, what would not fit.
-PreparedVolume prepare_dense(const cloudgen::Volume& v, const std::string& input, const RenderSettings& s) {
+PreparedVolume prepare_dense(const cloudgen::Volume& v, const std::string& input, const RenderSettings& s,
+                             std::vector<float>* spare = nullptr) {
   const uint64_t need = prepared_bytes(v.voxel_count());
   if (s.dense_budget > 0 && need > dense_budget_bytes(s))
     throw InputError("input '" + input + "': the dense volume (" + std::to_string(v.dims[0]) + "x" +
@@ -112,7 +113,7 @@ PreparedVolume prepare_dense(const cloudgen::Volume& v, const std::string& input
                      ", more than render.dense_budget=" + mib(dense_budget_bytes(s)) +
                      "; use render.volume=nanovdb or auto, or raise the budget");
   const int cell = occupancy_cell_for(s.occupancy_cell, v.dims[0], v.dims[1], v.dims[2]);
-  return prepare_volume(v, cell, s.occupancy_padding, &s);  // the field these settings need
+  return prepare_volume(v, cell, s.occupancy_padding, &s, spare);  // the field these settings need
 }
 
 }  // namespace
@@ -166,7 +167,7 @@ PreparedVolume open_input(const std::string& input, const RenderSettings& s, uin
     o.vdb_up = 'y';
     prepared = sparse(cloudgen::nano_from_volume(v, o));
   } else {
-    prepared = prepare_dense(v, input, s);
+    prepared = prepare_dense(v, input, s, preset.spare_rgba);
   }
 #ifdef CLOUDVIEWER_HAS_GENERATE
   if (preset.noise_cache) preset.noise_cache->recycle(std::move(v));  // the next edit fills its memory

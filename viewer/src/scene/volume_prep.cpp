@@ -238,7 +238,8 @@ void check_memory(const std::string& what, uint64_t bytes) {
                      " is available (use a smaller resolution)");
 }
 
-PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_padding, const RenderSettings* fit) {
+PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_padding, const RenderSettings* fit,
+                              std::vector<float>* spare) {
   PreparedVolume p;
   for (int i = 0; i < 3; ++i) {
     if (v.dims[size_t(i)] > 4096)
@@ -272,6 +273,7 @@ PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_p
       throw InputError("volume detail channel " + std::to_string(c) + " has the wrong size");
     if (v.detail[size_t(c)].empty()) p.has_detail = false;
   }
+  if (spare) p.rgba = std::move(*spare), *spare = {};  // no fresh pages to fault in; every value is written below
   p.rgba.resize(n * 4);
   // Interleaved on all cores (an edit's regeneration waits for it: about 0.2 s for 256^3 on one);
   // the first non-finite voxel is found again in order, so the message does not depend on them.
