@@ -84,6 +84,9 @@ cloudgen::Volume load_volume(const std::string& input, const PresetSource& src, 
                  cloudgen::memory_estimate(preset, true) + prepared_bytes(voxels));
     cloudgen::GenerateOptions go;
     go.noise_cache = src.noise_cache;
+    // No occupancy grid: prepare_volume builds the viewer's, at render.occupancy_cell, with the
+    // same function (the preset's cell, a different one for every shipped preset, went unused).
+    go.occupancy = false;
     cloudgen::GenerateStats stats;
     cloudgen::Volume v = cloudgen::generate(preset, go, &stats);
     if (timing) timing->noise_cached = stats.noise_cached, timing->noise_evaluated = stats.noise_evaluated;
