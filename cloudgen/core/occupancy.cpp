@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <vector>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include "cloudgen/volume.h"
 
 namespace cloudgen {
@@ -42,13 +45,16 @@ void build_occupancy(Volume& v) {
   for (int a = 0; a < 3; ++a) od[a] = (v.dims[a] + c - 1) / c;
   const size_t ncells = size_t{od[0]} * od[1] * od[2];
   std::vector<uint8_t> raw(ncells, 0);
-  for (uint32_t z = 0; z < v.dims[2]; ++z)
-    for (uint32_t y = 0; y < v.dims[1]; ++y) {
-      const float* row = &v.density[v.index(0, y, z)];
-      uint8_t* orow = &raw[(size_t(z / c) * od[1] + y / c) * od[0]];
-      for (uint32_t x = 0; x < v.dims[0]; ++x)
-        if (row[x] > 0) orow[x / c] = 1;
-    }
+  // One slab of cells (c voxel planes in z) per task: no two tasks write the same cell.
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, od[2]), [&](const tbb::blocked_range<uint32_t>& slabs) {
+    for (uint32_t z = slabs.begin() * c; z < std::min(v.dims[2], slabs.end() * c); ++z)
+      for (uint32_t y = 0; y < v.dims[1]; ++y) {
+        const float* row = &v.density[v.index(0, y, z)];
+        uint8_t* orow = &raw[(size_t(z / c) * od[1] + y / c) * od[0]];
+        for (uint32_t x = 0; x < v.dims[0]; ++x)
+          if (row[x] > 0) orow[x / c] = 1;
+      }
+  });
   dilate_occupancy(raw, od, v.occupancy_padding, v.tiles_xz);
   v.occupancy_dims = od;
   v.occupancy = std::move(raw);

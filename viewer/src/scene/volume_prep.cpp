@@ -94,34 +94,37 @@ void build_distance_field(PreparedVolume& p, FieldRule rule) {  // by value: cal
 #endif
   const bool eroded = rule.erosion > 0 && p.has_detail;
   if (eroded) p.dist_rule = rule;
-  for (int z = 0; z < p.dims[2]; ++z)
-    for (int y = 0; y < p.dims[1]; ++y) {
-      // The heights the texels of this row are seen at: their trilinear reach (a voxel either side
-      // of the centre), in the layer's or the box's height fractions, widened by the slack.
-      double h0 = 0, h1 = 0;
-      if (eroded) {
-        if (rule.layer) {
-          h0 = (y - 0.5) / p.dims[1], h1 = (y + 1.5) / p.dims[1];
-        } else {
-          h0 = (p.origin.y + (y - 0.5) * p.voxel_size - p.height_min) / p.height_size;
-          h1 = (p.origin.y + (y + 1.5) * p.voxel_size - p.height_min) / p.height_size;
-        }
-        h0 -= rule.height_slack, h1 += rule.height_slack;
-      }
-      const float* row = &p.rgba[((size_t(z) * p.dims[1] + y) * p.dims[0]) * 4];
-      uint8_t* cells = &holds[(size_t(z / c) * p.occ_dims[1] + y / c) * p.occ_dims[0]];
-      for (int x = 0; x < p.dims[0]; ++x) {
-        const float* t = row + size_t(x) * 4;
-        const double base = t[0];
-        if (!(base > 0)) continue;
+  // One slab of cells (c voxel planes in z) per task: no two tasks write the same cell.
+  tbb::parallel_for(tbb::blocked_range<int>(0, p.occ_dims[2]), [&](const tbb::blocked_range<int>& slabs) {
+    for (int z = slabs.begin() * c; z < std::min(p.dims[2], slabs.end() * c); ++z)
+      for (int y = 0; y < p.dims[1]; ++y) {
+        // The heights the texels of this row are seen at: their trilinear reach (a voxel either side
+        // of the centre), in the layer's or the box's height fractions, widened by the slack.
+        double h0 = 0, h1 = 0;
         if (eroded) {
-          namespace eg = cloudgen::erosion_glsl;
-          const double bound = eg::erosion_bound(base, eg::erosion_detail(t[1], t[2], t[3]), h0, h1, rule.erosion);
-          if (bound < -kErosionBoundMargin * (1.0 + base)) continue;
+          if (rule.layer) {
+            h0 = (y - 0.5) / p.dims[1], h1 = (y + 1.5) / p.dims[1];
+          } else {
+            h0 = (p.origin.y + (y - 0.5) * p.voxel_size - p.height_min) / p.height_size;
+            h1 = (p.origin.y + (y + 1.5) * p.voxel_size - p.height_min) / p.height_size;
+          }
+          h0 -= rule.height_slack, h1 += rule.height_slack;
         }
-        cells[x / c] = 1;
+        const float* row = &p.rgba[((size_t(z) * p.dims[1] + y) * p.dims[0]) * 4];
+        uint8_t* cells = &holds[(size_t(z / c) * p.occ_dims[1] + y / c) * p.occ_dims[0]];
+        for (int x = 0; x < p.dims[0]; ++x) {
+          const float* t = row + size_t(x) * 4;
+          const double base = t[0];
+          if (!(base > 0)) continue;
+          if (eroded) {
+            namespace eg = cloudgen::erosion_glsl;
+            const double bound = eg::erosion_bound(base, eg::erosion_detail(t[1], t[2], t[3]), h0, h1, rule.erosion);
+            if (bound < -kErosionBoundMargin * (1.0 + base)) continue;
+          }
+          cells[x / c] = 1;
+        }
       }
-    }
+  });
   p.dist = occupancy_distance(holds, p.occ_dims, p.tiles, p.dims, p.occ_cell);
   p.moved_near_sat = moved_near_table(p, moved_reach_cells(p));
 }
