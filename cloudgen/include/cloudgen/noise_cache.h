@@ -3,6 +3,8 @@
 // height-profile or tower edit recombines the cached noise; only a change of a channel's noise
 // parameters (seed, kind, period, octaves, gain, lacunarity, ...) or of the resolution evaluates
 // it again. The values after the noise are computed as in a cold run, so the bytes are the same.
+// The noise-free shape factor (profile, towers, coverage or shape sources) is kept per brick as
+// well, for the edits that do not change it (threshold, density, a channel's remap).
 #pragma once
 
 #include <cstddef>

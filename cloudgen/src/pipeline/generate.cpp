@@ -516,6 +516,17 @@ class CacheRun {
       st.used = true;
       store[c] = &st;
     }
+    // The noise-free shape (Shape::operator()) of each brick: everything but what the shape does
+    // not read (the channels, the threshold, the density), through the one hash of the fields
+    // that change generated values, so a threshold or density edit keeps it.
+    Preset q = p;
+    q.channels = Preset{}.channels;
+    q.threshold = Preset{}.threshold;
+    q.density_scale = Preset{}.density_scale;
+    NoiseCache::Impl::Store& st = stores["shape;" + preset_hash(q)];
+    st.boxes.resize(bricks);
+    st.used = true;
+    shape = &st;
   }
   /// Drops the noise this run did not use (an old seed's, another resolution's).
   ~CacheRun() {
@@ -524,6 +535,7 @@ class CacheRun {
     for (auto it = stores.begin(); it != stores.end();) it = it->second.used ? std::next(it) : stores.erase(it);
   }
   std::array<NoiseCache::Impl::Store*, 4> store{};
+  NoiseCache::Impl::Store* shape = nullptr;  ///< the shape factor per brick
 
  private:
   NoiseCache* cache_;
@@ -583,11 +595,23 @@ class BrickWorker {
     const Channel& rc = p_.channels[0];
     std::vector<float> dens(wb.count());
     const float* raw = noise_of(rp_, cache_.store[0], brick_slot(wb), grid_of(N_, wb), wb.count(), noise);
-    size_t q = 0;
-    for (uint32_t z = wb.lo[2]; z < wb.hi[2]; ++z)
-      for (uint32_t y = wb.lo[1]; y < wb.hi[1]; ++y)
-        for (uint32_t x = wb.lo[0]; x < wb.hi[0]; ++x, ++q)
-          dens[q] = shape_.finish(channel_value(rc, raw[q]), shape_(x, y, z));
+    if (cache_.shape) {  // the shape factor kept per brick (the same values as shape_(x, y, z))
+      std::vector<float>& shp = cache_.shape->boxes[brick_slot(wb)];
+      if (shp.size() != wb.count()) {
+        shp.resize(wb.count());
+        size_t q = 0;
+        for (uint32_t z = wb.lo[2]; z < wb.hi[2]; ++z)
+          for (uint32_t y = wb.lo[1]; y < wb.hi[1]; ++y)
+            for (uint32_t x = wb.lo[0]; x < wb.hi[0]; ++x, ++q) shp[q] = shape_(x, y, z);
+      }
+      for (size_t q = 0; q < dens.size(); ++q) dens[q] = shape_.finish(channel_value(rc, raw[q]), shp[q]);
+    } else {
+      size_t q = 0;
+      for (uint32_t z = wb.lo[2]; z < wb.hi[2]; ++z)
+        for (uint32_t y = wb.lo[1]; y < wb.hi[1]; ++y)
+          for (uint32_t x = wb.lo[0]; x < wb.hi[0]; ++x, ++q)
+            dens[q] = shape_.finish(channel_value(rc, raw[q]), shape_(x, y, z));
+    }
     size_t k = 0, act = 0;
     for (uint32_t z = bx.lo[2]; z < bx.hi[2]; ++z)
       for (uint32_t y = bx.lo[1]; y < bx.hi[1]; ++y)
