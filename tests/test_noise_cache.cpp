@@ -124,3 +124,22 @@ TEST(NoiseCache, RegionsAndSkipOffRunWithoutIt) {
   EXPECT_EQ(cache.bytes(), 0u);
   EXPECT_TRUE(same_bytes(v.density, generate(p, plain).density));
 }
+
+TEST(NoiseCache, ShapeSourcesAndEditsOfThemKeepTheColdBytes) {
+  // A preset with shape sources (their base density replaces profile, towers and coverage): the
+  // shape kept per brick is reused by a threshold edit and dropped by an edit of a source.
+  auto shaped = [](const std::vector<std::string>& sets) {
+    Preset p = load_preset(testutil::kPresets + "cumulus-shaped.json", sets);
+    rescale(p, 48);
+    return p;
+  };
+  NoiseCache cache;
+  generate_with(shaped({}), &cache);
+  for (const std::vector<std::string>& sets :
+       {std::vector<std::string>{"threshold=0.25"}, {"threshold=0.25", "shape.falloff=150"}, {"density_scale=0.7"}}) {
+    const Preset p = shaped(sets);
+    const Generated warm = generate_with(p, &cache);
+    expect_same_volume(warm.v, generate_with(p, nullptr).v, sets.back());
+    EXPECT_GT(warm.stats.noise_cached, 0u) << sets.back();
+  }
+}
