@@ -556,6 +556,44 @@ TEST(Pipeline, OccupancyIsConservative) {
   }
 }
 
+TEST(Pipeline, OccupancyDilationEqualsTheNeighbourhoodRule) {
+  // dilate_occupancy against the rule written out cell by cell: each axis in turn, a cell takes
+  // the first non-zero value of its neighbours d = -p .. p (wrapping in x and z when tiling), on
+  // grids with odd sizes, values other than 0/1, and paddings beyond the grid.
+  uint32_t h = 12345;
+  auto next = [&] { return (h = h * 1664525u + 1013904223u) >> 8; };
+  for (int trial = 0; trial < 24; ++trial) {
+    const std::array<uint32_t, 3> od{1 + next() % 9, 1 + next() % 7, 1 + next() % 8};
+    const uint32_t pad = next() % 4;
+    const bool tiles = trial % 2 == 1;
+    std::vector<uint8_t> grid(static_cast<size_t>(od[0]) * od[1] * od[2]);
+    for (uint8_t& g : grid) g = next() % 7 == 0 ? uint8_t(1 + next() % 3) : 0;
+    std::vector<uint8_t> want = grid;
+    for (int a = 0; a < 3; ++a) {
+      std::vector<uint8_t> next_grid(want.size());
+      const int n = int(od[a]);
+      for (uint32_t z = 0; z < od[2]; ++z)
+        for (uint32_t y = 0; y < od[1]; ++y)
+          for (uint32_t x = 0; x < od[0]; ++x) {
+            int p[3] = {int(x), int(y), int(z)};
+            const int c = p[a];
+            uint8_t on = 0;
+            for (int d = -int(pad); d <= int(pad) && !on; ++d) {
+              int q = c + d;
+              if (tiles && a != 1) q = ((q % n) + n) % n;
+              else if (q < 0 || q >= n) continue;
+              p[a] = q;
+              on = want[(size_t(p[2]) * od[1] + p[1]) * od[0] + p[0]];
+            }
+            next_grid[(size_t(z) * od[1] + y) * od[0] + x] = on;
+          }
+      want.swap(next_grid);
+    }
+    dilate_occupancy(grid, od, pad, tiles);
+    EXPECT_EQ(grid, want) << "trial " << trial << ": " << od[0] << "x" << od[1] << "x" << od[2] << " pad " << pad;
+  }
+}
+
 TEST(Pipeline, GoldenChecksumOfTheTinyPreset) {
   // FNV-1a of the tiny preset's density bytes: any change to noise, pipeline or defaults shows up.
   Volume v = generate(preset("tiny"));

@@ -3,30 +3,38 @@
 #include <algorithm>
 #include <vector>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include "cloudgen/volume.h"
 
 namespace cloudgen {
 
 void dilate_occupancy(std::vector<uint8_t>& raw, const std::array<uint32_t, 3>& od, uint32_t padding, bool tiles_xz) {
   // Separable dilation by `padding` cells per axis (a box dilation: the union over the
-  // (2p+1)^3 neighbourhood), wrapping in x and z for tiling volumes.
+  // (2p+1)^3 neighbourhood), wrapping in x and z for tiling volumes. A cell takes the first
+  // non-zero neighbour value in the order d = -p .. p. Whole runs of `stride` cells move together
+  // (one line of cells per neighbour offset), so no cell divides its index into coordinates.
   const int pad = int(padding);
   std::vector<uint8_t> tmp(raw.size());
   for (int a = 0; a < 3; ++a) {
     const bool wrap = tiles_xz && a != 1;
     const int n = int(od[a]);
     const size_t stride = a == 0 ? 1 : a == 1 ? od[0] : size_t(od[0]) * od[1];
-    for (size_t i = 0; i < raw.size(); ++i) {
-      const int coord = int(i / stride % od[a]);
-      uint8_t on = 0;
-      for (int d = -pad; d <= pad && !on; ++d) {
-        int q = coord + d;
-        if (wrap) q = ((q % n) + n) % n;
-        else if (q < 0 || q >= n) continue;
-        on = raw[i + (int64_t(q) - coord) * int64_t(stride)];
+    const size_t outer = n > 0 ? raw.size() / (size_t(n) * stride) : 0;
+    for (size_t o = 0; o < outer; ++o)
+      for (int c = 0; c < n; ++c) {
+        uint8_t* dst = &tmp[(o * n + c) * stride];
+        std::fill(dst, dst + stride, uint8_t(0));
+        for (int d = -pad; d <= pad; ++d) {
+          int q = c + d;
+          if (wrap) q = ((q % n) + n) % n;
+          else if (q < 0 || q >= n) continue;
+          const uint8_t* src = &raw[(o * n + size_t(q)) * stride];
+          for (size_t k = 0; k < stride; ++k)
+            if (!dst[k]) dst[k] = src[k];
+        }
       }
-      tmp[i] = on;
-    }
     raw.swap(tmp);
   }
 }
@@ -37,13 +45,16 @@ void build_occupancy(Volume& v) {
   for (int a = 0; a < 3; ++a) od[a] = (v.dims[a] + c - 1) / c;
   const size_t ncells = size_t{od[0]} * od[1] * od[2];
   std::vector<uint8_t> raw(ncells, 0);
-  for (uint32_t z = 0; z < v.dims[2]; ++z)
-    for (uint32_t y = 0; y < v.dims[1]; ++y) {
-      const float* row = &v.density[v.index(0, y, z)];
-      uint8_t* orow = &raw[(size_t(z / c) * od[1] + y / c) * od[0]];
-      for (uint32_t x = 0; x < v.dims[0]; ++x)
-        if (row[x] > 0) orow[x / c] = 1;
-    }
+  // One slab of cells (c voxel planes in z) per task: no two tasks write the same cell.
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, od[2]), [&](const tbb::blocked_range<uint32_t>& slabs) {
+    for (uint32_t z = slabs.begin() * c; z < std::min(v.dims[2], slabs.end() * c); ++z)
+      for (uint32_t y = 0; y < v.dims[1]; ++y) {
+        const float* row = &v.density[v.index(0, y, z)];
+        uint8_t* orow = &raw[(size_t(z / c) * od[1] + y / c) * od[0]];
+        for (uint32_t x = 0; x < v.dims[0]; ++x)
+          if (row[x] > 0) orow[x / c] = 1;
+      }
+  });
   dilate_occupancy(raw, od, v.occupancy_padding, v.tiles_xz);
   v.occupancy_dims = od;
   v.occupancy = std::move(raw);

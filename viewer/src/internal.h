@@ -20,7 +20,9 @@ struct Options {
   std::optional<Camera> camera;
   double fov = 60;
   std::optional<Sun> sun;
-  std::vector<std::string> sets;
+  std::vector<std::string> sets;         ///< --set render.*, atmosphere.*, motion.* (run() sorts them out)
+  std::vector<std::string> preset_sets;  ///< --set of a preset INPUT's own keys (threshold=0.4)
+  std::vector<std::string> edits;        ///< --edit: preset keys applied one after another, headless
   std::string out;
   std::string backend = "gl";
   std::string shader_dir;

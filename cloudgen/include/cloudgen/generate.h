@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "cloudgen/noise_cache.h"
 #include "cloudgen/preset.h"
 #include "cloudgen/volume.h"
 
@@ -35,6 +36,11 @@ struct GenerateOptions {
   std::array<uint32_t, 3> region_extent{{0, 0, 0}};
   std::function<void(double fraction)> progress;  ///< called from worker threads, in [0, 1]
   const std::atomic<bool>* cancel = nullptr;
+  /// Raw channel noise kept between runs (noise_cache.h): a brick or detail block found there is
+  /// not evaluated again, one not there is evaluated and kept. Null: nothing kept. Used only for
+  /// whole-volume runs with skip_empty; the bytes are the same either way. Noise of parameters
+  /// this run does not use is dropped at its end.
+  NoiseCache* noise_cache = nullptr;
 };
 
 /// What a brick of a plan turned out to need, for the per-brick cost figures of --stats.
@@ -55,6 +61,9 @@ struct GenerateStats {
   /// Bricks of each BrickWork kind and the thread-seconds spent on them.
   std::array<size_t, kBrickWorkKinds> work_bricks{};
   std::array<double, kBrickWorkKinds> work_seconds{};
+  /// With GenerateOptions::noise_cache: channel boxes (a brick of density noise, a detail block of a
+  /// detail channel) taken from the cache, and evaluated (and kept).
+  size_t noise_cached = 0, noise_evaluated = 0;
 };
 
 // ---- Brick plans -------------------------------------------------------------------------------

@@ -26,6 +26,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <sstream>
 
 namespace cloudgen {
@@ -412,7 +413,7 @@ noise3d::GridRegion grid_of(const std::array<uint32_t, 3>& N, const PlannedBrick
 
 /// What execute_plan's workers count, together (they run in parallel).
 struct PlanCounters {
-  std::atomic<size_t> done{0}, skipped{0}, detail_done{0}, active{0};
+  std::atomic<size_t> done{0}, skipped{0}, detail_done{0}, active{0}, noise_cached{0}, noise_evaluated{0};
   std::array<std::atomic<size_t>, kBrickWorkKinds> work_n{};
   std::array<std::atomic<int64_t>, kBrickWorkKinds> work_ns{};
 
@@ -421,6 +422,8 @@ struct PlanCounters {
     stats.bricks_skipped = skipped;
     stats.detail_bricks = detail_done;
     stats.active_voxels = active;
+    stats.noise_cached = noise_cached;
+    stats.noise_evaluated = noise_evaluated;
     for (int k = 0; k < kBrickWorkKinds; ++k) {
       stats.work_bricks[k] = work_n[k];
       stats.work_seconds[k] = work_ns[k] * 1e-9;
@@ -440,14 +443,112 @@ struct DetailBlocks {
   size_t index(uint32_t kx, uint32_t ky, uint32_t kz) const { return (size_t(kz) * n[1] + ky) * n[0] + kx; }
 };
 
+}  // namespace
+
+// The cache's stores: one per channel noise (its parameters and the volume's size, the text of
+// cache_key), one slot per box: a whole brick for the density channel, a detail block (kBlock,
+// up to kBlocksPerBrick per brick) for a detail channel. A run touches only its bricks' slots and
+// each brick is one worker's, so workers write slots without locking; the map itself changes only
+// before and after the parallel part.
+constexpr size_t kBlocksPerBrick = size_t(kBrick / kBlock[0]) * (kBrick / kBlock[1]) * (kBrick / kBlock[2]);
+
+struct NoiseCache::Impl {
+  struct Store {
+    std::vector<std::vector<float>> boxes;  // slot -> the box's raw noise (empty: not evaluated)
+    bool used = false;                      // by the current run
+  };
+  std::map<std::string, Store> stores;
+  std::vector<float> spare[4];  // channel buffers of a returned volume (recycle), reused by the next run
+};
+
+NoiseCache::NoiseCache() : impl_(std::make_unique<Impl>()) {}
+NoiseCache::~NoiseCache() = default;
+
+size_t NoiseCache::bytes() const {
+  size_t b = 0;
+  for (const auto& [key, store] : impl_->stores)
+    for (const std::vector<float>& box : store.boxes) b += box.size() * sizeof(float);
+  return b;
+}
+
+void NoiseCache::clear() {
+  impl_->stores.clear();
+  for (std::vector<float>& s : impl_->spare) s = {};
+}
+
+void NoiseCache::recycle(Volume&& v) {
+  impl_->spare[0] = std::move(v.density);
+  for (int c = 0; c < 3; ++c) impl_->spare[c + 1] = std::move(v.detail[c]);
+}
+
+namespace {
+
+/// What a channel's raw noise depends on: its libnoise3d parameters and the volume's size (the
+/// lattice positions of the voxels), nothing applied after the noise. `boxes`: "brick" or "block".
+std::string cache_key(const noise3d::FractalParams& f, const std::array<uint32_t, 3>& N, const char* boxes) {
+  std::ostringstream o;
+  o << std::hexfloat << boxes << ';' << int(f.kind) << ';' << f.period.x << ',' << f.period.y << ',' << f.period.z
+    << ';' << f.seed << ';' << f.octaves << ';' << f.gain << ';' << f.lacunarity << ';' << f.worley_octaves << ';'
+    << f.blend << ';' << N[0] << ',' << N[1] << ',' << N[2];
+  return o.str();
+}
+
+/// The cache's stores of one run, one per channel (null: not cached), and the drop of the others
+/// when the run ends.
+class CacheRun {
+ public:
+  CacheRun(const Preset& p, const BrickPlan& plan, const GenerateOptions& opt) : cache_(opt.noise_cache) {
+    bool whole = true;
+    for (int a = 0; a < 3; ++a) whole &= plan.region_lo[a] == 0 && plan.region_hi[a] == plan.dims[a];
+    if (!cache_ || !whole || !opt.skip_empty) {
+      cache_ = nullptr;
+      return;
+    }
+    const std::array<uint32_t, 3> N = p.resolution;
+    size_t bricks = 1;
+    for (int a = 0; a < 3; ++a) bricks *= (N[a] + kBrick - 1) / kBrick;
+    auto& stores = cache_->impl().stores;
+    for (auto& [key, store] : stores) store.used = false;
+    for (int c = 0; c < 4; ++c) {
+      if (c > 0 && !(plan.detail && p.channels[c].enabled)) continue;
+      NoiseCache::Impl::Store& st = stores[cache_key(channel_params(p, c), N, c == 0 ? "brick" : "block")];
+      st.boxes.resize(c == 0 ? bricks : bricks * kBlocksPerBrick);
+      st.used = true;
+      store[c] = &st;
+    }
+    // The noise-free shape (Shape::operator()) of each brick: everything but what the shape does
+    // not read (the channels, the threshold, the density), through the one hash of the fields
+    // that change generated values, so a threshold or density edit keeps it.
+    Preset q = p;
+    q.channels = Preset{}.channels;
+    q.threshold = Preset{}.threshold;
+    q.density_scale = Preset{}.density_scale;
+    NoiseCache::Impl::Store& st = stores["shape;" + preset_hash(q)];
+    st.boxes.resize(bricks);
+    st.used = true;
+    shape = &st;
+  }
+  /// Drops the noise this run did not use (an old seed's, another resolution's).
+  ~CacheRun() {
+    if (!cache_) return;
+    auto& stores = cache_->impl().stores;
+    for (auto it = stores.begin(); it != stores.end();) it = it->second.used ? std::next(it) : stores.erase(it);
+  }
+  std::array<NoiseCache::Impl::Store*, 4> store{};
+  NoiseCache::Impl::Store* shape = nullptr;  ///< the shape factor per brick
+
+ private:
+  NoiseCache* cache_;
+};
+
 /// One brick of execute_plan: density on the whole brick, then each detail channel on the blocks
 /// the detail rule keeps; the sink receives the part of the brick in the region.
 class BrickWorker {
  public:
   BrickWorker(const Preset& p, const BrickPlan& plan, const GenerateOptions& opt, const BrickSink& sink, size_t n,
-              PlanCounters& counters)
+              PlanCounters& counters, const CacheRun& cache)
       : p_(p), plan_(plan), opt_(opt), sink_(sink), n_(n), c_(counters), N_(p.resolution),
-        rp_(channel_params(p, 0)), shape_(p, opt.threads) {}
+        rp_(channel_params(p, 0)), shape_(p, opt.threads), cache_(cache) {}
 
   /// Generates brick `b` and hands it to the sink; `noise` is the calling thread's scratch.
   void run(size_t b, std::vector<float>& noise) {
@@ -493,13 +594,24 @@ class BrickWorker {
     };
     const Channel& rc = p_.channels[0];
     std::vector<float> dens(wb.count());
-    noise.resize(wb.count());
-    noise3d::evaluate_grid(rp_, grid_of(N_, wb), noise.data(), {1});
-    size_t q = 0;
-    for (uint32_t z = wb.lo[2]; z < wb.hi[2]; ++z)
-      for (uint32_t y = wb.lo[1]; y < wb.hi[1]; ++y)
-        for (uint32_t x = wb.lo[0]; x < wb.hi[0]; ++x, ++q)
-          dens[q] = shape_.finish(channel_value(rc, noise[q]), shape_(x, y, z));
+    const float* raw = noise_of(rp_, cache_.store[0], brick_slot(wb), grid_of(N_, wb), wb.count(), noise);
+    if (cache_.shape) {  // the shape factor kept per brick (the same values as shape_(x, y, z))
+      std::vector<float>& shp = cache_.shape->boxes[brick_slot(wb)];
+      if (shp.size() != wb.count()) {
+        shp.resize(wb.count());
+        size_t q = 0;
+        for (uint32_t z = wb.lo[2]; z < wb.hi[2]; ++z)
+          for (uint32_t y = wb.lo[1]; y < wb.hi[1]; ++y)
+            for (uint32_t x = wb.lo[0]; x < wb.hi[0]; ++x, ++q) shp[q] = shape_(x, y, z);
+      }
+      for (size_t q = 0; q < dens.size(); ++q) dens[q] = shape_.finish(channel_value(rc, raw[q]), shp[q]);
+    } else {
+      size_t q = 0;
+      for (uint32_t z = wb.lo[2]; z < wb.hi[2]; ++z)
+        for (uint32_t y = wb.lo[1]; y < wb.hi[1]; ++y)
+          for (uint32_t x = wb.lo[0]; x < wb.hi[0]; ++x, ++q)
+            dens[q] = shape_.finish(channel_value(rc, raw[q]), shape_(x, y, z));
+    }
     size_t k = 0, act = 0;
     for (uint32_t z = bx.lo[2]; z < bx.hi[2]; ++z)
       for (uint32_t y = bx.lo[1]; y < bx.hi[1]; ++y)
@@ -569,6 +681,7 @@ class BrickWorker {
       return (size_t(z - bx.lo[2]) * bh + (y - bx.lo[1])) * bw + (x - bx.lo[0]);
     };
     size_t n_kept = 0;
+    std::vector<float> scratch;
     for (uint32_t kz = 0; kz < blocks.n[2]; ++kz)
       for (uint32_t ky = 0; ky < blocks.n[1]; ++ky)
         for (uint32_t kx = 0; kx < blocks.n[0]; ++kx) {
@@ -582,8 +695,8 @@ class BrickWorker {
           if (blk.lo[0] >= blk.hi[0] || blk.lo[1] >= blk.hi[1] || blk.lo[2] >= blk.hi[2]) continue;
           ++n_kept;
           if (opt_.skip_empty) {
-            std::vector<float> part(blk.count());
-            noise3d::evaluate_grid(cp, grid_of(N_, blk), part.data(), {1});
+            const float* part = noise_of(cp, cache_.store[c], brick_slot(wb) * kBlocksPerBrick + blocks.index(kx, ky, kz),
+                                         grid_of(N_, blk), blk.count(), scratch);
             size_t k = 0;
             for (uint32_t z = blk.lo[2]; z < blk.hi[2]; ++z)
               for (uint32_t y = blk.lo[1]; y < blk.hi[1]; ++y)
@@ -599,6 +712,27 @@ class BrickWorker {
     if (!n_kept) out.clear();
   }
 
+  /// The brick's index in the volume's brick grid (x fastest): its slot in the cache.
+  size_t brick_slot(const PlannedBrick& wb) const {
+    const size_t nx = (N_[0] + kBrick - 1) / kBrick, ny = (N_[1] + kBrick - 1) / kBrick;
+    return (size_t(wb.lo[2] / kBrick) * ny + wb.lo[1] / kBrick) * nx + wb.lo[0] / kBrick;
+  }
+
+  /// The raw noise of `f` over box `g` (n values): the cache's slot when it holds it, else
+  /// evaluated, into the slot (cached) or into `scratch`.
+  const float* noise_of(const noise3d::FractalParams& f, NoiseCache::Impl::Store* store, size_t slot,
+                        const noise3d::GridRegion& g, size_t n, std::vector<float>& scratch) const {
+    std::vector<float>& box = store ? store->boxes[slot] : scratch;
+    if (store && box.size() == n) {
+      ++c_.noise_cached;
+      return box.data();
+    }
+    box.resize(n);
+    noise3d::evaluate_grid(f, g, box.data(), {1});
+    if (store) ++c_.noise_evaluated;
+    return box.data();
+  }
+
   const Preset& p_;
   const BrickPlan& plan_;
   const GenerateOptions& opt_;
@@ -608,6 +742,7 @@ class BrickWorker {
   const std::array<uint32_t, 3> N_;
   const noise3d::FractalParams rp_;
   const Shape shape_;
+  const CacheRun& cache_;
 };
 
 }  // namespace
@@ -618,7 +753,8 @@ void execute_plan(const Preset& p, const BrickPlan& plan, const std::vector<size
   if (plan.dims != p.resolution) throw Error("execute_plan: the plan was made for another resolution");
   const size_t n = which ? which->size() : plan.bricks.size();
   PlanCounters counters;
-  BrickWorker worker(p, plan, opt, sink, n, counters);
+  const CacheRun cache(p, plan, opt);
+  BrickWorker worker(p, plan, opt, sink, n, counters, cache);
   in_arena(opt.threads, [&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1), [&](const tbb::blocked_range<size_t>& r) {
       std::vector<float> noise;
@@ -632,10 +768,16 @@ Volume generate(const Preset& p, const GenerateOptions& opt, GenerateStats* stat
   const auto t_start = std::chrono::steady_clock::now();
   const BrickPlan plan = plan_bricks(p, opt);
   Volume v = volume_header(p, plan);
+  if (opt.noise_cache) {  // the memory of a volume handed back (recycle): no fresh pages to fault in
+    std::vector<float>* spare = opt.noise_cache->impl().spare;
+    v.density = std::move(spare[0]);
+    for (int c = 0; c < 3; ++c) v.detail[c] = std::move(spare[c + 1]);
+    for (int c = 0; c < 4; ++c) spare[c] = {};
+  }
   v.density.assign(v.voxel_count(), 0.0f);
-  if (plan.detail)
-    for (int c = 1; c < 4; ++c)
-      if (p.channels[c].enabled) v.detail[c - 1].assign(v.voxel_count(), 0.0f);
+  for (int c = 1; c < 4; ++c)
+    if (plan.detail && p.channels[c].enabled) v.detail[c - 1].assign(v.voxel_count(), 0.0f);
+    else v.detail[c - 1] = {};
   const std::array<uint32_t, 3> r0 = plan.region_lo;
   // Bricks are disjoint, so workers write their boxes of the dense channels without locking.
   auto into_volume = [&](size_t b, BrickResult& res) {

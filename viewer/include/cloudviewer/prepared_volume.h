@@ -86,8 +86,10 @@ struct PreparedVolume {
 /// the next cell).
 /// With `fit`, the distance field is built once for the rule those settings need (field_rule), as
 /// fit_distance_field would rebuild it; without, for the base alone.
+/// `spare`: memory to put the interleaved channels in (a volume no longer drawn; its values are
+/// all overwritten), taken when given.
 PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_padding = 2,
-                              const RenderSettings* fit = nullptr);
+                              const RenderSettings* fit = nullptr, std::vector<float>* spare = nullptr);
 /// Rebuilds only the occupancy grid with another cell size / padding (cloudgen::build_occupancy).
 void build_occupancy(PreparedVolume& p, int occ_cell, int occ_padding);
 /// The most coarse cells render.occupancy_cell gets below 4 voxels: 2^23 (8 M). Opening a volume and

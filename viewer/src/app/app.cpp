@@ -24,6 +24,10 @@
 #include "cloudviewer/errors.h"
 #include "cloudgen/view.h"
 #include "cloudviewer/lod.h"
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+#include "cloudgen/noise_cache.h"
+#include "cloudgen/preset.h"
+#endif
 #include "scene/default_view.h"
 #include "app/session.h"
 #include "internal.h"
@@ -232,7 +236,13 @@ void add_options(CLI::App& app, Options& o, CliText& t) {
   app.add_option("--camera", t.camera, "camera EX,EY,EZ:TX,TY,TZ in world metres (default: frames the volume)");
   app.add_option("--fov", t.fov, "vertical field of view in degrees, 1..170 (default 60)");
   app.add_option("--sun", t.sun, "sun AZIMUTH,ELEVATION in degrees (azimuth clockwise from -z; default behind the viewer)");
-  app.add_option("--set", o.sets, "render.KEY=VALUE, atmosphere.KEY=VALUE or motion.KEY=VALUE (see --help-params)")->take_all();
+  app.add_option("--set", o.sets, "render.KEY=VALUE, atmosphere.KEY=VALUE or motion.KEY=VALUE (see --help-params); "
+                 "with a preset .json INPUT also the preset's own keys as `cloudgen generate --set` spells them "
+                 "(threshold=0.4, coverage.low=0.2), applied before it is generated")->take_all();
+  app.add_option("--edit", o.edits, "headless, a preset INPUT: a preset KEY=VALUE (as --set) applied after the first "
+                 "generation, the edits one after another, each regeneration timed; the noise is kept, so a threshold, "
+                 "coverage, density, height or tower edit does not evaluate it again. The image is the last edit's "
+                 "(the same as --set of all of them)")->take_all();
   app.add_option("--dump-lut", t.dump_lut, "write an atmosphere LUT read through the shaders' lookup to --out as CSV (no INPUT needed)")
       ->check(CLI::IsMember({"transmittance"}));
   app.add_flag("--stats", o.stats,
@@ -266,6 +276,67 @@ void add_options(CLI::App& app, Options& o, CliText& t) {
   app.add_flag("--atmosphere-markdown", t.atmo_md, "the atmosphere.KEY table as Markdown (docs/reference/viewer-params.md)");
   app.add_flag("--motion-markdown", t.motion_md, "the motion.KEY table as Markdown (docs/reference/viewer-params.md)");
   app.add_flag("--keys-markdown", t.keys_md, "the window's parameter key bindings as Markdown (docs/reference/viewer-params.md)");
+}
+
+// A key of the viewer's settings: render.*, atmosphere.*, motion.* or a bare render key.
+bool is_viewer_key(const std::string& assignment) {
+  const std::string key = assignment.substr(0, assignment.find('='));
+  for (const char* prefix : {"render.", "atmosphere.", "motion."})
+    if (key.rfind(prefix, 0) == 0) return true;
+  for (const ParamDef& p : render_params())
+    if (p.key == key) return true;
+  return false;
+}
+
+// A --set key of the preset rather than of the viewer: not a viewer key, and its first part a
+// top-level key of the preset table.
+bool is_preset_key(const std::string& assignment) {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+  if (is_viewer_key(assignment)) return false;
+  const std::string key = assignment.substr(0, assignment.find('='));
+  const std::string top = key.substr(0, key.find('.'));
+  for (const cloudgen::ParamInfo& p : cloudgen::params())
+    if (p.pointer.substr(1, p.pointer.find('/', 1) - 1) == top) return true;
+#else
+  (void)assignment;
+#endif
+  return false;
+}
+
+// --set's preset keys go to the preset (checked when it is loaded), the others to the settings.
+void sort_sets(Options& o) {
+  std::vector<std::string> viewer;
+  for (std::string& a : o.sets) (is_preset_key(a) ? o.preset_sets : viewer).push_back(std::move(a));
+  o.sets = std::move(viewer);
+}
+
+// --edit, before anything is generated: headless, a preset INPUT, and every edit in turn a valid
+// preset (the message names the edit, the key, the value and what is allowed).
+void check_edits(const Options& o) {
+  if (o.edits.empty()) return;
+  if (!o.headless) throw InputError("--edit needs --headless (it times regenerations and writes the last image)");
+  if (!o.bench.empty()) throw InputError("--edit and --bench do not go together");
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+  std::string ext = std::filesystem::path(o.input).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext != ".json") throw InputError("--edit " + o.edits.front() + ": the input '" + o.input + "' is not a preset .json");
+  std::vector<std::string> sets = o.preset_sets;
+  for (const std::string& e : o.edits) {
+    if (e.find('=') == std::string::npos) throw InputError("--edit " + e + ": expected KEY=VALUE");
+    if (is_viewer_key(e))  // anything else goes to the preset reader (unknown keys: a did-you-mean)
+      throw InputError("--edit " + e + ": not a preset key (--edit takes the preset's keys, as cloudgen generate "
+                       "--set spells them; render.*, atmosphere.* and motion.* go with --set)");
+    if (e.rfind("view.", 0) == 0) throw InputError("--edit " + e + ": the view is not an edit of the volume; use --set");
+    sets.push_back(e);
+    try {
+      cloudgen::load_preset(o.input, sets);
+    } catch (const cloudgen::InputError& x) {
+      throw InputError("--edit " + e + ": " + x.what());
+    }
+  }
+#else
+  throw InputError("--edit: this cloudviewer was built without the cloudgen library");
+#endif
 }
 
 // --help-params and the Markdown tables: printed, and true, when one was asked for.
@@ -423,12 +494,40 @@ std::string stage_frame(const Options& o, int i, const FrameImages& img, const I
   return "wrote " + cloudgen::printable(path) + "\n";
 }
 
+std::string milliseconds(double seconds) {
+  std::ostringstream os;
+  os.setf(std::ios::fixed);
+  os.precision(1);
+  os << seconds * 1e3 << " ms";
+  return os.str();
+}
+
+// --edit: each edit joins the preset's sets, the volume is generated again from the kept noise,
+// prepared and uploaded; one line each, with where the time went under --stats.
+void apply_edits(const Options& o, Session& session, std::ostream& out) {
+  for (size_t i = 0; i < o.edits.size(); ++i) {
+    session.preset().sets.push_back(o.edits[i]);
+    InputTiming t;
+    double upload_s = 0;
+    const auto t0 = std::chrono::steady_clock::now();
+    session.reopen(o.input, o.settings, &t, &upload_s);
+    out << "edit " << i + 1 << "/" << o.edits.size() << " " << cloudgen::printable(o.edits[i]) << ": regenerated in "
+        << milliseconds(seconds_since(t0));
+    if (o.stats)
+      out << " (generate " << milliseconds(t.load_s) << ", prepare " << milliseconds(t.prepare_s) << ", upload "
+          << milliseconds(upload_s) << "; noise boxes " << t.noise_cached << " cached, " << t.noise_evaluated
+          << " evaluated)";
+    out << "\n";
+  }
+}
+
 // --headless --out: --frames frames, each written (a pattern) or only the last (a plain name).
 int render_headless(const Options& o, Session& session, std::ostream& out, std::ostream& err) {
+  if (o.backend == "gl") out << session.start_headless(o.shader_dir) << "\n";
+  apply_edits(o, session, out);  // before the camera: the default framing follows the volume
   Camera cam = resolve_camera(o, session.volume(), o.width, o.height);
   Sun sun = resolve_sun(o, cam);
   const bool pattern = o.out.find('%') != std::string::npos;
-  if (o.backend == "gl") out << session.start_headless(o.shader_dir) << "\n";
   RenderSettings s = o.settings;
   HeadlessState state;
   ImageBatch batch;  // every frame staged, then all published or none (docs/robustness.md)
@@ -477,17 +576,24 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   cloudgen::protect_input(o.input, "the input " + o.input);
   if (!o.bench.empty()) cloudgen::protect_input(o.bench, "the bench track " + o.bench);
   if (!o.mie_table.empty()) cloudgen::protect_input(o.mie_table, "the Mie table " + o.mie_table);
+  sort_sets(o);
   for (const std::string& s : o.sets) apply_setting(o.settings, s);
   validate_atmosphere(o.settings.atmosphere);
   if (!text.dump_lut.empty()) return dump_atmosphere_lut(o, out);
   if (o.input.empty()) throw InputError("no INPUT given (try --help)");
   resolve_view_options(o, text, app.count("--fov") > 0);
   if (!text.lighting_json.empty()) return write_lighting_json(o, text.lighting_json, out);
+  check_edits(o);
   if (!o.headless) return run_window(o, out, err);
   check_headless_out(o);
   auto t0 = std::chrono::steady_clock::now();
   const uint32_t level = choose_input_lod(o, out);
-  Session session(o.input, o.settings, level);
+  PresetSource preset{o.preset_sets, nullptr};
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+  cloudgen::NoiseCache noise;  // kept from the first generation for the edits
+  if (!o.edits.empty()) preset.noise_cache = &noise;
+#endif
+  Session session(o.input, o.settings, level, preset);
   report_volume(o, session.volume(), seconds_since(t0), out);
   if (!o.bench.empty()) return run_bench(o, session, out, err);
   return render_headless(o, session, out, err);

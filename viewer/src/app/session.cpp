@@ -1,5 +1,6 @@
 #include "app/session.h"
 
+#include <chrono>
 #include <utility>
 
 #include "cloudviewer/distance_field.h"
@@ -7,8 +8,10 @@
 
 namespace cloudviewer {
 
-Session::Session(const std::string& input, const RenderSettings& s, uint32_t lod_level)
-    : vol_(open_input(input, s, lod_level)), lod_level_(lod_level) {}
+Session::Session(const std::string& input, const RenderSettings& s, uint32_t lod_level, PresetSource preset)
+    : vol_(open_input(input, s, lod_level, preset)), lod_level_(lod_level), preset_(std::move(preset)) {
+  if (preset_.noise_cache) preset_.spare_rgba = &spare_rgba_;  // an edited preset reuses the memory
+}
 
 Session::~Session() { stop_renderer(); }
 
@@ -31,9 +34,18 @@ void Session::stop_renderer() {
   uploaded_ = nullptr;
 }
 
-void Session::reopen(const std::string& input, const RenderSettings& s) {
-  vol_ = open_input(input, s, lod_level_);
+void Session::reopen(const std::string& input, const RenderSettings& s, InputTiming* timing, double* upload_s) {
+  PreparedVolume v = open_input(input, s, lod_level_, preset_, timing);
+  const auto t0 = std::chrono::steady_clock::now();
+  adopt(std::move(v));
+  if (upload_s) *upload_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void Session::adopt(PreparedVolume v) {
+  std::vector<float> old = std::move(vol_.rgba);
+  vol_ = std::move(v);
   if (renderer_) renderer_->set_volume(vol_), uploaded_ = &vol_;
+  if (preset_.spare_rgba) spare_rgba_ = std::move(old);  // for the next edit (nothing draws it now)
 }
 
 void Session::show(const PreparedVolume& v) {

@@ -14,8 +14,9 @@ namespace cloudviewer {
 
 class Session {
  public:
-  /// Opens `input` (open_input): a bad input fails here, before any OpenGL.
-  Session(const std::string& input, const RenderSettings& s, uint32_t lod_level = 0);
+  /// Opens `input` (open_input, a preset generated as `preset` says): a bad input fails here,
+  /// before any OpenGL.
+  Session(const std::string& input, const RenderSettings& s, uint32_t lod_level = 0, PresetSource preset = {});
   ~Session();
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;
@@ -31,9 +32,17 @@ class Session {
   /// The renderer, or null before start_renderer (the CPU backends).
   GlRenderer* renderer() const { return renderer_.get(); }
 
-  /// Opens the input again (at the same level of detail) and uploads it (the window's reload); the
-  /// old volume stays on failure.
-  void reopen(const std::string& input, const RenderSettings& s);
+  /// Opens the input again (at the same level of detail, the preset's sets as they are now) and
+  /// uploads it (the window's reload, an --edit); the old volume stays on failure. `timing`: where
+  /// the time went, the upload's in `upload_s`.
+  void reopen(const std::string& input, const RenderSettings& s, InputTiming* timing = nullptr, double* upload_s = nullptr);
+  /// Shows `v` from now on and uploads it: a volume opened elsewhere (off the GL thread, with
+  /// lod_level() and preset()). With a noise cache the old volume's memory is kept for the next.
+  void adopt(PreparedVolume v);
+  /// How a preset input is generated: an edit adds to its sets, then reopen.
+  PresetSource& preset() { return preset_; }
+  const PresetSource& preset() const { return preset_; }
+  uint32_t lod_level() const { return lod_level_; }
   /// Uploads `v` (the volume, or a copy of it at other occupancy and field settings) unless it is
   /// the one the renderer holds.
   void show(const PreparedVolume& v);
@@ -49,6 +58,8 @@ class Session {
  private:
   PreparedVolume vol_;
   uint32_t lod_level_ = 0;  // the .vdb level of detail drawn (reopen keeps it)
+  PresetSource preset_;
+  std::vector<float> spare_rgba_;  // the dense channels of the volume an edit replaced (preset_.spare_rgba)
   std::unique_ptr<HeadlessContext> context_;  // declared first: it outlives the renderer
   std::unique_ptr<GlRenderer> renderer_;
   const PreparedVolume* uploaded_ = nullptr;  // what the renderer holds

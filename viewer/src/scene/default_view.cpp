@@ -18,14 +18,15 @@ glm::dvec3 vec(const cloudgen::Vec3& v) { return glm::dvec3(v[0], v[1], v[2]); }
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
 /// The input's view and the centre of the box it is framed on (the camera target when the view
 /// gives an eye alone).
-bool read_view(const std::string& input, cloudgen::View& view, glm::dvec3& centre) {
+bool read_view(const std::string& input, const std::vector<std::string>& preset_sets, cloudgen::View& view,
+               glm::dvec3& centre) {
   std::error_code ec;
   if (input.rfind("synthetic:", 0) == 0 || !std::filesystem::is_regular_file(input, ec)) return false;
   std::string ext = std::filesystem::path(input).extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
   if (ext == ".json") {
     try {
-      const cloudgen::Preset p = cloudgen::load_preset(input);
+      const cloudgen::Preset p = cloudgen::load_preset(input, preset_sets);
       view = p.view;
       centre = vec(p.origin) + 0.5 * glm::dvec3(p.resolution[0], p.resolution[1], p.resolution[2]) * p.voxel_size;
       return true;
@@ -54,7 +55,7 @@ bool read_view(const std::string& input, cloudgen::View& view, glm::dvec3& centr
 void apply_input_view(Options& o, bool fov_given) {
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
   glm::dvec3 centre(0.0);
-  if (!read_view(o.input, o.view, centre) || o.view.empty()) return;
+  if (!read_view(o.input, o.preset_sets, o.view, centre) || o.view.empty()) return;
   RenderSettings s;
   for (const auto& [k, v] : o.view.render) {
     try {
