@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <csetjmp>
 #include <filesystem>
 #include <cstdio>
 #include <cstring>
@@ -17,6 +16,7 @@
 #include "noise3d/noise3d.h"
 #include "cloudgen/volume.h"
 #include "cloudgen/input_scope.h"
+#include "cloudgen/png_read.h"
 
 namespace cloudgen {
 namespace {
@@ -24,24 +24,6 @@ namespace {
 // A flow map is a few hundred texels a side; 4096 bounds what a mistaken file can make us allocate
 // (4096^2 texels: 256 MiB of dvec2) before libpng reads a row.
 constexpr int kMaxSide = kFlowMapMaxSide;
-
-struct PngRead {
-  png_structp png = nullptr;
-  png_infop info = nullptr;
-  FILE* file = nullptr;
-  ~PngRead() {
-    if (png) png_destroy_read_struct(&png, info ? &info : nullptr, nullptr);
-    if (file) std::fclose(file);
-  }
-};
-
-// libpng reports errors through longjmp; the message is kept for the InputError thrown afterwards.
-void on_error(png_structp png, png_const_charp msg) {
-  auto* text = static_cast<std::string*>(png_get_error_ptr(png));
-  *text = msg ? msg : "unknown libpng error";
-  png_longjmp(png, 1);
-}
-void on_warning(png_structp, png_const_charp) {}
 
 }  // namespace
 
@@ -63,60 +45,30 @@ std::shared_ptr<const FlowMap> load_flow_map(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw InputError(what + ": no such file");
   if (!std::filesystem::is_regular_file(path, ec)) throw InputError(what + ": not a regular file");
-  protect_input(path, "the flow map " + path);
-  PngRead r;
-  r.file = std::fopen(path.c_str(), "rb");
-  if (!r.file) throw InputError(what + ": cannot open the file");
-  unsigned char sig[8] = {};
-  if (std::fread(sig, 1, 8, r.file) != 8 || png_sig_cmp(sig, 0, 8) != 0)
+  // 4096^2 RGBA at 16 bits, uncompressed, is 128 MiB; a PNG bigger than that is not a flow map.
+  const std::vector<uint8_t> bytes = read_input_bytes(path, "the flow map " + path, what, size_t(1) << 28);
+  if (!is_png(bytes.data(), bytes.size()))
     throw InputError(what + ": not a PNG file (a flow map is a PNG: R = up, G = forward, 0.5 = no flow)");
-  // On the heap: libpng's longjmp leaves automatic objects changed after setjmp indeterminate.
-  auto message = std::make_unique<std::string>();
-  r.png = png_create_read_struct(PNG_LIBPNG_VER_STRING, message.get(), on_error, on_warning);
-  if (!r.png) throw InputError(what + ": libpng could not start");
-  r.info = png_create_info_struct(r.png);
-  if (!r.info) throw InputError(what + ": libpng could not start");
+  const PngPixels px = decode_png(bytes.data(), bytes.size(), what, [&](const PngHeader& h) {
+    if (h.width > uint32_t(kMaxSide) || h.height > uint32_t(kMaxSide))
+      throw InputError(what + ": " + std::to_string(h.width) + " x " + std::to_string(h.height) +
+                       " texels; a flow map may have at most " + std::to_string(kMaxSide) +
+                       " a side (a few hundred is plenty: it is one flow cycle by the layer's height)");
+    if (!h.colour)
+      throw InputError(what + ": a grey image has one value per texel; a flow map needs two (R = up, G = forward)");
+  });
   auto map = std::make_shared<FlowMap>();
   map->path = path;
-  std::vector<png_byte> pixels;
-  std::vector<png_bytep> rows;
-  png_uint_32 w = 0, h = 0;
-  int depth = 0, color = 0, channels = 0;
-  if (setjmp(png_jmpbuf(r.png))) throw InputError(what + ": " + *message);
-  png_init_io(r.png, r.file);
-  png_set_sig_bytes(r.png, 8);
-  png_read_info(r.png, r.info);
-  w = png_get_image_width(r.png, r.info);
-  h = png_get_image_height(r.png, r.info);
-  depth = png_get_bit_depth(r.png, r.info);
-  color = png_get_color_type(r.png, r.info);
-  if (w > png_uint_32(kMaxSide) || h > png_uint_32(kMaxSide))
-    throw InputError(what + ": " + std::to_string(w) + " x " + std::to_string(h) + " texels; a flow map may have at most " +
-                     std::to_string(kMaxSide) + " a side (a few hundred is plenty: it is one flow cycle by the layer's height)");
-  if (!(color & PNG_COLOR_MASK_COLOR))
-    throw InputError(what + ": a grey image has one value per texel; a flow map needs two (R = up, G = forward)");
-  // Values as stored: palettes expanded to RGB, no gamma or colour-space conversion.
-  if (color == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(r.png);
-  png_read_update_info(r.png, r.info);
-  channels = png_get_channels(r.png, r.info);
-  depth = png_get_bit_depth(r.png, r.info);
-  const size_t row_bytes = png_get_rowbytes(r.png, r.info);
-  pixels.resize(row_bytes * h);
-  rows.resize(h);
-  for (png_uint_32 j = 0; j < h; ++j) rows[j] = pixels.data() + row_bytes * j;
-  png_read_image(r.png, rows.data());
-  png_read_end(r.png, nullptr);
-
+  const uint32_t w = px.width, h = px.height;
   map->width = int(w), map->height = int(h);
   map->texels.resize(size_t(w) * h);
-  const double full = depth == 16 ? 65535.0 : 255.0;
+  const double full = px.depth == 16 ? 65535.0 : 255.0;
   uint64_t fnv = 1469598103934665603ull;
-  for (png_uint_32 j = 0; j < h; ++j)
-    for (png_uint_32 i = 0; i < w; ++i) {
+  for (uint32_t j = 0; j < h; ++j)
+    for (uint32_t i = 0; i < w; ++i) {
       double v[2];
       for (int c = 0; c < 2; ++c) {
-        const png_byte* px = rows[j] + (size_t(i) * channels + c) * (depth == 16 ? 2 : 1);
-        const unsigned value = depth == 16 ? (unsigned(px[0]) << 8) | px[1] : px[0];
+        const unsigned value = px.value(i, j, c);
         for (int b = 0; b < 2; ++b) fnv = (fnv ^ ((value >> (8 * b)) & 0xff)) * 1099511628211ull;
         v[c] = double(value) / full * 2.0 - 1.0;
       }

@@ -1,17 +1,17 @@
-// Painted weather maps: the PNG reader (libpng from memory, errors through longjmp as in
-// core/flow_map.cpp), the bilinear per-column lookup and the 16-bit writer.
+// Painted weather maps: the PNG reader (cloudgen/png_read.h, shared with the flow maps), the
+// bilinear per-column lookup and the 16-bit writer.
 #include "cloudgen/weather_map.h"
 
 #include <png.h>
 
 #include <algorithm>
 #include <cmath>
-#include <csetjmp>
 #include <cstring>
 #include <filesystem>
 
 #include "cloudgen/generate.h"
 #include "cloudgen/output.h"
+#include "cloudgen/png_read.h"
 
 namespace cloudgen {
 namespace {
@@ -19,56 +19,28 @@ namespace {
 const char* const kAllowed = "a weather map is an 8- or 16-bit grey, RGB or RGBA PNG (R = coverage, G = cloud type, "
                              "B = cloud-top height; grey = coverage only)";
 
-struct PngRead {
-  png_structp png = nullptr;
-  png_infop info = nullptr;
-  ~PngRead() {
-    if (png) png_destroy_read_struct(&png, info ? &info : nullptr, nullptr);
-  }
-};
-
-struct Source {
-  const uint8_t* data;
-  size_t size, at;
-};
-
-void on_error(png_structp png, png_const_charp msg) {
-  auto* text = static_cast<std::string*>(png_get_error_ptr(png));
-  *text = msg ? msg : "unknown libpng error";
-  png_longjmp(png, 1);
-}
-void on_warning(png_structp, png_const_charp) {}
-
-void on_read(png_structp png, png_bytep out, png_size_t n) {
-  auto* s = static_cast<Source*>(png_get_io_ptr(png));
-  if (n > s->size - s->at) png_error(png, "the file ends early (truncated PNG)");
-  std::memcpy(out, s->data + s->at, n);
-  s->at += n;
-}
-
 /// Checks the header: size within the limit, 8 or 16 bits, not a palette.
-void check_header(const std::string& what, png_uint_32 w, png_uint_32 h, int depth, int color) {
-  if (w == 0 || h == 0) throw InputError(what + ": the image is empty (0 texels); " + kAllowed);
-  if (w > png_uint_32(kWeatherMapMaxSide) || h > png_uint_32(kWeatherMapMaxSide))
-    throw InputError(what + ": " + std::to_string(w) + " x " + std::to_string(h) + " texels; a weather map may have at most " +
-                     std::to_string(kWeatherMapMaxSide) + " a side");
-  if (color == PNG_COLOR_TYPE_PALETTE) throw InputError(what + ": a palette image; " + kAllowed);
-  if (depth != 8 && depth != 16)
-    throw InputError(what + ": " + std::to_string(depth) + "-bit samples; " + kAllowed);
+void check_header(const std::string& what, const PngHeader& h) {
+  if (h.width == 0 || h.height == 0) throw InputError(what + ": the image is empty (0 texels); " + kAllowed);
+  if (h.width > uint32_t(kWeatherMapMaxSide) || h.height > uint32_t(kWeatherMapMaxSide))
+    throw InputError(what + ": " + std::to_string(h.width) + " x " + std::to_string(h.height) +
+                     " texels; a weather map may have at most " + std::to_string(kWeatherMapMaxSide) + " a side");
+  if (h.palette) throw InputError(what + ": a palette image; " + kAllowed);
+  if (h.depth != 8 && h.depth != 16)
+    throw InputError(what + ": " + std::to_string(h.depth) + "-bit samples; " + kAllowed);
 }
 
-/// The decoded rows into map (values / full scale, FNV-1a of the stored values).
-void take_pixels(WeatherMap& map, const std::vector<png_byte>& pixels, size_t row_bytes, int stored, int depth) {
+/// The decoded texels into map (values / full scale, FNV-1a of the stored values).
+void take_pixels(WeatherMap& map, const PngPixels& px) {
   const size_t w = size_t(map.width), h = size_t(map.height);
   const int nc = map.channels;
   map.texels.resize(w * h * size_t(nc));
-  const double full = depth == 16 ? 65535.0 : 255.0;
+  const double full = px.depth == 16 ? 65535.0 : 255.0;
   uint64_t fnv = 1469598103934665603ull;
   for (size_t j = 0; j < h; ++j)
     for (size_t i = 0; i < w; ++i)
       for (int c = 0; c < nc; ++c) {
-        const png_byte* px = pixels.data() + j * row_bytes + (i * size_t(stored) + size_t(c)) * (depth == 16 ? 2 : 1);
-        const unsigned value = depth == 16 ? (unsigned(px[0]) << 8) | px[1] : px[0];
+        const unsigned value = px.value(i, j, c);
         for (int b = 0; b < 2; ++b) fnv = (fnv ^ ((value >> (8 * b)) & 0xff)) * 1099511628211ull;
         map.texels[(j * w + i) * size_t(nc) + size_t(c)] = float(double(value) / full);
       }
@@ -103,34 +75,14 @@ float sample(const WeatherMap& m, int c, double u, double v, bool wrap) {
 
 std::shared_ptr<const WeatherMap> read_weather_map_png(const uint8_t* data, size_t size, const std::string& path) {
   const std::string what = "coverage.file " + path;
-  if (size < 8 || png_sig_cmp(data, 0, 8) != 0) throw InputError(what + ": not a PNG file; " + kAllowed);
-  PngRead r;
-  auto message = std::make_unique<std::string>();  // on the heap: longjmp and automatic objects
-  r.png = png_create_read_struct(PNG_LIBPNG_VER_STRING, message.get(), on_error, on_warning);
-  if (!r.png) throw InputError(what + ": libpng could not start");
-  r.info = png_create_info_struct(r.png);
-  if (!r.info) throw InputError(what + ": libpng could not start");
-  auto src = std::make_unique<Source>(Source{data, size, 0});
+  if (!is_png(data, size)) throw InputError(what + ": not a PNG file; " + kAllowed);
+  const PngPixels px =
+      decode_png(data, size, what, [&](const PngHeader& h) { check_header(what, h); }, std::string("; ") + kAllowed);
   auto map = std::make_shared<WeatherMap>();
   map->path = path;
-  std::vector<png_byte> pixels;
-  std::vector<png_bytep> rows;
-  if (setjmp(png_jmpbuf(r.png))) throw InputError(what + ": " + *message + "; " + kAllowed);
-  png_set_read_fn(r.png, src.get(), on_read);
-  png_read_info(r.png, r.info);
-  const png_uint_32 w = png_get_image_width(r.png, r.info), h = png_get_image_height(r.png, r.info);
-  const int depth = png_get_bit_depth(r.png, r.info), color = png_get_color_type(r.png, r.info);
-  check_header(what, w, h, depth, color);
-  const int stored = png_get_channels(r.png, r.info);
-  const size_t row_bytes = png_get_rowbytes(r.png, r.info);
-  pixels.resize(row_bytes * h);
-  rows.resize(h);
-  for (png_uint_32 j = 0; j < h; ++j) rows[j] = pixels.data() + row_bytes * j;
-  png_read_image(r.png, rows.data());
-  png_read_end(r.png, nullptr);
-  map->width = int(w), map->height = int(h);
-  map->channels = (color & PNG_COLOR_MASK_COLOR) ? 3 : 1;
-  take_pixels(*map, pixels, row_bytes, stored, depth);
+  map->width = int(px.width), map->height = int(px.height);
+  map->channels = px.channels >= 3 ? 3 : 1;
+  take_pixels(*map, px);
   return map;
 }
 
