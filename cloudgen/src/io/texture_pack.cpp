@@ -89,6 +89,21 @@ json texture_json(const MipTexture& t, const std::string& role, const std::array
   return j;
 }
 
+// What the base texture's channels hold: R the shaped density, G/B/A the preset's detail channels
+// (0 where the preset leaves one out).
+json base_channels(const Preset& p) {
+  json j;
+  j["r"] = "shaped density: the " + std::string(noise3d::kind_name(p.channels[0].kind)) +
+           " channel after height profile, towers, coverage and threshold";
+  const char* keys[3] = {"g", "b", "a"};
+  for (int c = 1; c < 4; ++c)
+    j[keys[c - 1]] = p.channels[size_t(c)].enabled
+                         ? "detail " + std::string(noise3d::kind_name(p.channels[size_t(c)].kind)) + " fBm (preset channel " +
+                               keys[c - 1] + ", period " + std::to_string(p.channels[size_t(c)].period[0]) + " cells)"
+                         : std::string("0 (the preset has no channel ") + keys[c - 1] + ")";
+  return j;
+}
+
 }  // namespace
 
 uint32_t full_mip_count(const std::array<uint32_t, 3>& dims) {
@@ -238,10 +253,7 @@ void stage_texture_pack(const TexturePack& pk, const std::string& dir, const std
                                            {extent[0], extent[0], 0},
                                            {extent[0], extent[2], 0}};
   const json channels[4] = {
-      {{"r", "shaped density: the Perlin-Worley channel after height profile, towers, coverage and threshold"},
-       {"g", "detail Worley fBm (preset channel g)"},
-       {"b", "detail Worley fBm (preset channel b)"},
-       {"a", "detail Worley fBm (preset channel a)"}},
+      base_channels(pk.preset),
       {{"r", "Worley fBm, 3 octaves at 4, 8, 16 cells a tile: the viewer's render.detail texture"},
        {"g", "Worley, 8 cells a tile"},
        {"b", "Worley, 16 cells a tile"}},
