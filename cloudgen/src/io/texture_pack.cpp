@@ -276,11 +276,13 @@ void stage_texture_pack(const TexturePack& pk, const std::string& dir, const std
       {"density_scale", look.density},
       {"detail_strength", 0.0},
       {"formula",
-       "h = height fraction in the box (0 bottom, 1 top); base = R; d = 0.625 G + 0.25 B + 0.125 A; "
+       "h = height fraction in the box (0 bottom, 1 top); base = R (trilinear); when G, B and A are all present: "
+       "d = 0.625 G + 0.25 B + 0.125 A; "
        "e = erosion * mix(1 - d, d, clamp(5 h, 0, 1)); density = clamp((base - e) / max(1 - e, 1e-4), 0, 1); "
        "then, with render-time detail of strength s > 0: f = detail.R at world position / detail period_m, "
        "e2 = s * mix(1 - f, f, clamp(5 h, 0, 1)), density = clamp((density - e2) / max(1 - e2, 1e-4), 0, 1); "
-       "finally density *= density_scale. R already holds coverage, height profile and towers (box presets); "
+       "finally density *= density_scale, extinction = density * sigma_t (1/m; the viewer's default 0.5 / voxel size). "
+       "R already holds coverage, height profile and towers (box presets); "
        "the weather and curl textures are for engines that shape or distort at render time"},
       {"glsl",
        {"viewer/shaders/medium.glsl cloud_density_seen", "cloudgen/include/cloudgen/erosion.glsl erosion_detail",
