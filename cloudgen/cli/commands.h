@@ -39,6 +39,7 @@ std::string resolve_preset_path(const std::string& preset);
 /// `cloudgen generate`'s options (generate_cmd.cpp parses them).
 struct GenerateArgs {
   std::string preset, format, region, max_memory = "16G", seed, up, lod, voxel_budget;
+  std::string texture_pack;  ///< --texture-pack DIR (texture_pack.h)
   std::vector<std::string> outputs, sets;
   uint32_t resolution = 0;
   int threads = 0;

@@ -1,6 +1,7 @@
 // `cloudgen generate`: a preset into one volume, exported to every -o file in one batch (or to a VDB
 // sequence with --frames, or over MPI ranks with --mpi).
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -14,6 +15,7 @@
 #include "cloudgen/io.h"
 #include "cloudgen/motion.h"
 #include "cloudgen/preset.h"
+#include "cloudgen/texture_pack.h"
 #include "cloudgen/view.h"
 #include "cloudgen/weather_map.h"
 #include "commands.h"
@@ -50,8 +52,11 @@ void run_generate(const GenerateArgs& a) {
   if (!budget_note.empty() && (sequence || mpi_requested(a.mpi)))
     throw InputError("--voxel-budget works in one process without --frames for now: run it once to see the voxel "
                      "size it prints, then give that with --resolution N");
+  const bool pack = !a.texture_pack.empty();
+  if (pack && (sequence || mpi_requested(a.mpi) || !a.region.empty()))
+    throw InputError("--texture-pack works with a whole volume in one process: leave out --frames, --mpi and --region");
   if (sequence) return run_generate_sequence(p, path, a);
-  if (a.outputs.empty()) throw InputError("-o/--output: give at least one output file (.vdb, .nvdb, .raw, .ktx2, .png, .exr)");
+  if (a.outputs.empty() && !pack) throw InputError("-o/--output: give at least one output file (.vdb, .nvdb, .raw, .ktx2, .png, .exr)");
   const ExportOptions& eo = p.export_options;
   std::vector<Format> formats;
   bool detail = false;
@@ -65,6 +70,18 @@ void run_generate(const GenerateArgs& a) {
     formats.push_back(f);
     detail |= needs_detail(f, eo);
     for (const OutputFile& of : output_files(o, f, true)) batch.claim(of.path, of.role);
+  }
+  // The pack's folder is made now if absent (its files are staged inside it) and removed again,
+  // if still empty, when anything fails before the batch is committed: all or nothing.
+  struct RemoveIfEmpty {
+    std::string dir;
+    ~RemoveIfEmpty() {
+      if (!dir.empty()) ::rmdir(dir.c_str());
+    }
+  } made_dir;
+  if (pack) {
+    if (prepare_texture_pack_dir(a.texture_pack)) made_dir.dir = a.texture_pack;
+    for (const std::string& f : texture_pack_files(a.texture_pack)) batch.claim(f, "the texture pack's " + f);
   }
   const bool mpi = mpi_requested(a.mpi);  // ranks hold sparse bricks, not the dense volume
   const uint64_t need = memory_estimate(p, detail), limit = parse_bytes(a.max_memory, "--max-memory");
@@ -102,7 +119,7 @@ void run_generate(const GenerateArgs& a) {
   }
   if (mpi) return run_generate_mpi(p, go, a.outputs, formats, a.quiet, a.stats);
   GenerateStats st;
-  Volume v = generate(p, go, &st);
+  Volume v = a.outputs.empty() ? Volume() : generate(p, go, &st);
   // The budget that chose the voxel size travels with the file (the size is the grid's transform).
   if (!budget_note.empty()) v.metadata.push_back({"voxel_budget", budget_note});
   const auto t0 = std::chrono::steady_clock::now();
@@ -110,12 +127,19 @@ void run_generate(const GenerateArgs& a) {
     if (g_cancel) throw Cancelled();
     write_volume(v, a.outputs[i], formats[i], eo, batch);
   }
+  if (pack) {
+    if (g_cancel) throw Cancelled();
+    stage_texture_pack(make_texture_pack(p, a.threads), a.texture_pack, path, batch);
+  }
   test_hold("commit");
   if (g_cancel) throw Cancelled();
   batch.commit();
+  made_dir.dir.clear();  // committed: the folder stays
   if (!a.quiet)
     for (size_t i = 0; i < a.outputs.size(); ++i)
       std::fprintf(stderr, "wrote %s (%s)\n", printable(a.outputs[i]).c_str(), format_name(formats[i]));
+  if (!a.quiet && pack) std::fprintf(stderr, "wrote texture pack %s/pack.json\n", printable(a.texture_pack).c_str());
+  if (a.outputs.empty()) return;
   const double write_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!a.quiet || a.stats) {
     struct rusage ru;
@@ -139,7 +163,10 @@ void add_generate_command(CLI::App& app, std::function<void()>& run) {
   auto ga = std::make_shared<GenerateArgs>();
   CLI::App* gen = app.add_subcommand("generate", "Generate a cloud volume from a preset and export it.");
   gen->add_option("preset", ga->preset, "Preset file, or the name of a shipped preset (see `cloudgen presets`)")->required();
-  gen->add_option("-o,--output", ga->outputs, "Output file; repeat for several formats from one generation")->required();
+  gen->add_option("-o,--output", ga->outputs, "Output file; repeat for several formats from one generation");
+  gen->add_option("--texture-pack", ga->texture_pack,
+                  "Also write a game-engine texture pack into this folder: base 128 RGBA8, detail 32^3, curl 128^2, "
+                  "weather map, each with mips, as KTX2 and raw, and pack.json (docs/textures.md)");
   gen->add_option("--format", ga->format, "vdb | nvdb | raw | ktx2 | atlas-png | atlas-exr (default: from each extension)");
   gen->add_option("--seed", ga->seed, "Override the preset's seed: an integer in [0, 2^53]");
   gen->add_option("--up", ga->up, "VDB up axis: z (Blender, default) or y (Houdini, Maya); = --set export.vdb.up=...");

@@ -2,10 +2,13 @@
 // voxel size, origin, tiling, channel names and metadata travel in the key/value data under the key
 // "cloudgen.volume" (a JSON object), so a KTX2 file reads back as the volume that was written.
 #include <algorithm>
+#include <array>
 #include <cstring>
+#include <stdexcept>
 
 #include "cloudgen/io.h"
 #include "cloudgen/json_checked.h"
+#include "cloudgen/texture_pack.h"
 #include "io/format_internal.h"
 
 namespace cloudgen {
@@ -182,6 +185,141 @@ Volume parse_ktx2(const std::vector<uint8_t>& b, const std::string& name, uint64
   }
   build_occupancy(v);
   return v;
+}
+
+// ---- 8-bit textures with their mip chains (texture packs, texture_pack.h) ------------------------
+
+namespace {
+
+constexpr uint32_t kVkUnorm8[5] = {0, 9, 16, 23, 37};  // VK_FORMAT_R8_UNORM .. R8G8B8A8_UNORM by channels
+
+// Basic DFD of `channels` 8-bit UNORM samples (R, G, B, A), linear transfer.
+std::vector<uint8_t> ktx_dfd_unorm8(int channels) {
+  std::vector<uint8_t> d;
+  const uint32_t block = 24 + 16 * uint32_t(channels);
+  put<uint32_t>(d, 4 + block);
+  put<uint32_t>(d, 0);
+  put<uint32_t>(d, 2u | (block << 16));
+  put<uint32_t>(d, 1u | (1u << 8) | (1u << 16));
+  put<uint32_t>(d, 0);
+  put<uint32_t>(d, uint32_t(channels));
+  put<uint32_t>(d, 0);
+  const uint8_t ids[4] = {0, 1, 2, 15};
+  for (int c = 0; c < channels; ++c) {
+    put<uint32_t>(d, uint32_t(c * 8) | (7u << 16) | (uint32_t(ids[c]) << 24));
+    put<uint32_t>(d, 0);
+    put<uint32_t>(d, 0);
+    put<uint32_t>(d, 255);
+  }
+  return d;
+}
+
+// Level data alignment: lcm(texel size, 4) (KTX2 section 3.9.7, no supercompression).
+uint64_t level_alignment(int channels) { return channels == 3 ? 12 : 4; }
+
+}  // namespace
+
+std::vector<uint8_t> ktx2_bytes(const MipTexture& t, const std::string& volume_json) {
+  if (t.channels < 1 || t.channels > 4 || t.levels.empty())
+    throw std::invalid_argument("ktx2_bytes: channels 1..4 and at least one level");
+  const uint32_t levels = uint32_t(t.levels.size());
+  const std::vector<uint8_t> dfd = ktx_dfd_unorm8(t.channels);
+  std::vector<uint8_t> kvd;
+  put_kv(kvd, "KTXwriter", std::string("cloudgen ") + CLOUDGEN_VERSION);
+  if (!volume_json.empty()) put_kv(kvd, kVolumeKey, volume_json);
+  const uint32_t dfd_off = 80 + 24 * levels, kvd_off = dfd_off + uint32_t(dfd.size());
+  const uint64_t align = level_alignment(t.channels);
+  // Level data from the smallest level to the largest (the specification's order).
+  std::vector<uint64_t> off(levels);
+  uint64_t at = kvd_off + kvd.size();
+  for (uint32_t l = levels; l-- > 0;) {
+    at = (at + align - 1) / align * align;
+    off[l] = at;
+    at += t.levels[l].size();
+  }
+  std::vector<uint8_t> b(kKtx2Id, kKtx2Id + 12);
+  put<uint32_t>(b, kVkUnorm8[t.channels]);
+  put<uint32_t>(b, 1);  // typeSize
+  put<uint32_t>(b, t.dims[0]);
+  put<uint32_t>(b, t.dims[1]);
+  put<uint32_t>(b, t.is_3d ? t.dims[2] : 0);
+  put<uint32_t>(b, 0);  // layerCount
+  put<uint32_t>(b, 1);  // faceCount
+  put<uint32_t>(b, levels);
+  put<uint32_t>(b, 0);  // supercompressionScheme
+  put<uint32_t>(b, dfd_off);
+  put<uint32_t>(b, uint32_t(dfd.size()));
+  put<uint32_t>(b, kvd_off);
+  put<uint32_t>(b, uint32_t(kvd.size()));
+  put<uint64_t>(b, 0);
+  put<uint64_t>(b, 0);
+  for (uint32_t l = 0; l < levels; ++l) {
+    put<uint64_t>(b, off[l]);
+    put<uint64_t>(b, t.levels[l].size());
+    put<uint64_t>(b, t.levels[l].size());
+  }
+  b.insert(b.end(), dfd.begin(), dfd.end());
+  b.insert(b.end(), kvd.begin(), kvd.end());
+  b.resize(at, 0);
+  for (uint32_t l = 0; l < levels; ++l) std::copy(t.levels[l].begin(), t.levels[l].end(), b.begin() + off[l]);
+  return b;
+}
+
+MipTexture parse_ktx2_mips(const std::vector<uint8_t>& b, const std::string& name, uint64_t max_bytes) {
+  const std::string where = printable(name);
+  if (b.size() < 80 || std::memcmp(b.data(), kKtx2Id, 12) != 0) throw InputError(where + ": not a KTX2 file");
+  MipTexture t;
+  const uint32_t vk = get<uint32_t>(b, 12);
+  t.channels = 0;
+  for (int c = 1; c <= 4; ++c)
+    if (vk == kVkUnorm8[c]) t.channels = c;
+  if (!t.channels)
+    throw InputError(where + ": KTX2 vkFormat " + std::to_string(vk) +
+                     " is not one of R8_UNORM (9), R8G8_UNORM (16), R8G8B8_UNORM (23), R8G8B8A8_UNORM (37)");
+  if (get<uint32_t>(b, 16) != 1) throw InputError(where + ": KTX2 typeSize " + std::to_string(get<uint32_t>(b, 16)) + " is not 1 (8-bit texels)");
+  const char* axis[3] = {"pixelWidth", "pixelHeight", "pixelDepth"};
+  for (int a = 0; a < 3; ++a) {
+    const uint32_t d = get<uint32_t>(b, 20 + 4 * a);
+    if (a == 2 && d == 0) {
+      t.is_3d = false;
+      t.dims[2] = 1;
+      continue;
+    }
+    if (d < 1 || d > detail::kMaxEdge)
+      throw InputError(where + ": KTX2 " + axis[a] + " " + std::to_string(d) + " is outside [1, " +
+                       std::to_string(detail::kMaxEdge) + "]" + (a == 2 ? " (or 0 for a 2D texture)" : ""));
+    t.dims[a] = d;
+  }
+  if (get<uint32_t>(b, 32) != 0) throw InputError(where + ": KTX2 texture arrays (layerCount > 0) are not supported");
+  if (get<uint32_t>(b, 36) != 1) throw InputError(where + ": KTX2 cube maps (faceCount != 1) are not supported");
+  if (get<uint32_t>(b, 44) != 0) throw InputError(where + ": KTX2 supercompression is not supported");
+  const uint32_t levels = get<uint32_t>(b, 40), most = full_mip_count(t.dims);
+  if (levels < 1 || levels > most)
+    throw InputError(where + ": KTX2 levelCount " + std::to_string(levels) + " is outside [1, " + std::to_string(most) +
+                     "] for a " + std::to_string(t.dims[0]) + "x" + std::to_string(t.dims[1]) + "x" +
+                     std::to_string(t.dims[2]) + " texture");
+  if (b.size() < 80 + 24 * uint64_t(levels))
+    throw InputError(where + ": KTX2 level index of " + std::to_string(levels) + " levels runs past the file's " +
+                     std::to_string(b.size()) + " bytes");
+  uint64_t voxels = 0;
+  if (!detail::checked_volume(t.dims[0], t.dims[1], t.dims[2], detail::kMaxVoxels, &voxels) ||
+      voxels * uint64_t(t.channels) > max_bytes)
+    throw InputError(where + ": KTX2 level 0 holds more texel bytes than the " + std::to_string(max_bytes) + " allowed");
+  const uint64_t align = level_alignment(t.channels);
+  for (uint32_t l = 0; l < levels; ++l) {
+    const std::array<uint32_t, 3> d = mip_dims(t.dims, l);
+    const uint64_t want = uint64_t(d[0]) * d[1] * d[2] * uint64_t(t.channels);
+    const size_t e = 80 + 24 * size_t(l);
+    const uint64_t off = get<uint64_t>(b, e), len = get<uint64_t>(b, e + 8), ulen = get<uint64_t>(b, e + 16);
+    if (len != want || ulen != want || off % align != 0 || off > b.size() || len > b.size() - off)
+      throw InputError(where + ": KTX2 level " + std::to_string(l) + " (byteLength " + std::to_string(len) +
+                       ", uncompressedByteLength " + std::to_string(ulen) + " at byteOffset " + std::to_string(off) +
+                       ") does not hold the " + std::to_string(d[0]) + "x" + std::to_string(d[1]) + "x" +
+                       std::to_string(d[2]) + " level's " + std::to_string(want) + " bytes, aligned to " +
+                       std::to_string(align) + ", inside the file's " + std::to_string(b.size()) + " bytes");
+    t.levels.emplace_back(b.begin() + off, b.begin() + off + len);
+  }
+  return t;
 }
 
 Volume read_ktx2(const std::string& path, uint64_t max_bytes) {

@@ -8,6 +8,7 @@
 
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
 #include "cloudgen/preset.h"
+#include "cloudgen/texture_pack.h"
 #endif
 
 namespace cloudviewer {
@@ -36,7 +37,9 @@ bool read_view(const std::string& input, const std::vector<std::string>& preset_
   }
   cloudgen::SceneInfo info;
   try {
-    info = cloudgen::read_scene_info(input);
+    // A texture pack's view and box are those of its base texture.
+    const std::string base = ext == ".json" ? cloudgen::texture_pack_base(input) : "";
+    info = cloudgen::read_scene_info(base.empty() ? input : base);
   } catch (const cloudgen::Error&) {
     return false;  // load_volume reports what is wrong with the file
   }

@@ -19,6 +19,7 @@
 #include "cloudgen/generate.h"
 #include "cloudgen/noise_cache.h"
 #include "cloudgen/preset.h"
+#include "cloudgen/texture_pack.h"
 #define CLOUDVIEWER_HAS_GENERATE 1
 #endif
 #endif
@@ -64,6 +65,15 @@ cloudgen::Volume load_volume(const std::string& input, const PresetSource& src, 
   // error (exit 2), a file that is not a volume an input error (exit 1).
 #ifdef CLOUDVIEWER_HAS_GENERATE
   if (ext == ".json") {
+    // A texture pack's pack.json (cloudgen generate --texture-pack): its base texture, rendered by
+    // the viewer's own formula; every texture of the pack and its mips are checked on the way.
+    if (std::filesystem::file_size(input, ec) <= (1u << 20) && !ec) {
+      const std::vector<uint8_t> text = cloudgen::read_file_bytes(input, size_t(1) << 20);
+      if (cloudgen::is_pack_json(std::string(text.begin(), text.end()))) {
+        refuse_preset_sets(input, src);
+        return cloudgen::read_texture_pack(input);
+      }
+    }
     // A raw texture's sidecar is also .json: cloudgen's reader tells them apart; try it first.
     cloudgen::Volume raw;
     bool is_raw = true;
