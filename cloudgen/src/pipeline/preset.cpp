@@ -19,6 +19,7 @@
 #include "cloudgen/io.h"
 #include "cloudgen/json_checked.h"
 #include "cloudgen/param_group.h"
+#include "cloudgen/preset_save.h"
 #include "cloudgen/schema.h"
 #include "cloudgen/input_scope.h"
 #include "cloudgen/printable.h"
@@ -623,6 +624,37 @@ Preset parse_preset(const std::string& text, const std::string& source, const st
     throw InputError(all);
   }
   return p;
+}
+
+std::string edited_preset_text(const std::string& path, const std::vector<std::string>& sets, const std::string& to) {
+  namespace fs = std::filesystem;
+  Reader r(path);
+  json doc = parse_json_checked(read_text_input(path, "the input preset " + printable(path), path), path);
+  if (!doc.is_object()) throw InputError(path + ": the preset must be a JSON object");
+  for (const std::string& ov : sets) apply_override(doc, ov, r);
+  if (!r.problems().empty()) {
+    std::string all;
+    for (const auto& m : r.problems()) all += (all.empty() ? "" : "\n") + m;
+    throw InputError(all);
+  }
+  // A file named relative to the preset's folder (from a set: to the current folder) is named
+  // relative to the new file's folder, so the saved preset finds it.
+  for (const char* ptr : {"/coverage/file", "/motion/flow_map"}) {
+    const json::json_pointer at(ptr);
+    if (!doc.contains(at) || !doc[at].is_string()) continue;
+    const std::string name = doc[at].get<std::string>();
+    if (name.empty() || name == "procedural" || fs::path(name).is_absolute()) continue;
+    std::string key = std::string(ptr).substr(1);
+    std::replace(key.begin(), key.end(), '/', '.');
+    const bool from_set = std::any_of(sets.begin(), sets.end(), [&](const std::string& s) { return s.rfind(key + "=", 0) == 0; });
+    const fs::path base = from_set ? fs::current_path() : fs::absolute(path).parent_path();
+    const fs::path file = (base / name).lexically_normal();
+    const fs::path rel = file.lexically_relative(fs::absolute(to).parent_path());
+    doc[at] = (rel.empty() ? file : rel).generic_string();
+  }
+  std::string text = doc.dump(2) + "\n";
+  parse_preset(text, to);  // what is saved reads back as a valid preset where it goes
+  return text;
 }
 
 Preset load_preset(const std::string& path, const std::vector<std::string>& overrides) {

@@ -506,7 +506,7 @@ std::string milliseconds(double seconds) {
 // prepared and uploaded; one line each, with where the time went under --stats.
 void apply_edits(const Options& o, Session& session, std::ostream& out) {
   for (size_t i = 0; i < o.edits.size(); ++i) {
-    session.preset().sets.push_back(o.edits[i]);
+    session.edit_preset(o.edits[i]);  // the panel's edit too
     InputTiming t;
     double upload_s = 0;
     const auto t0 = std::chrono::steady_clock::now();
