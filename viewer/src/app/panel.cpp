@@ -6,6 +6,7 @@
 #include "app/panel.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -144,9 +145,37 @@ void atmosphere_widget(RenderSettings& s, const std::string& key) {
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", tip.c_str());
 }
 
+// A path field over a std::string.
+void path_field(const char* label, std::string& path) {
+  char buf[1024];
+  std::snprintf(buf, sizeof buf, "%s", path.c_str());
+  if (ImGui::InputText(label, buf, sizeof buf)) path = buf;
+}
+
+// Save preset as, Export and Open in Blender, with their paths, progress and outcome.
+void file_actions(PanelFile& f) {
+  if (!ImGui::CollapsingHeader("Preset file", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  ImGui::PushItemWidth(200);
+  path_field("##save", f.save_path);
+  ImGui::SameLine();
+  if (ImGui::Button("Save preset as")) f.save = true;
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Ctrl+S: the preset with the panel's edits, as JSON (atomic; never into presets/)");
+  path_field("##export", f.export_path);
+  ImGui::SameLine();
+  ImGui::BeginDisabled(f.busy);
+  if (ImGui::Button("Export")) f.export_vdb = true;
+  if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled)) ImGui::SetTooltip("Ctrl+E: generate and write the VDB as `cloudgen generate` does");
+  if (ImGui::Button("Open in Blender")) f.blender = true;
+  if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled)) ImGui::SetTooltip("Ctrl+B: `cloudgen blender` of the exported VDB");
+  ImGui::EndDisabled();
+  ImGui::PopItemWidth();
+  if (f.busy && f.progress >= 0) ImGui::ProgressBar(f.progress, ImVec2(-1, 0));
+  if (!f.status.empty()) ImGui::TextWrapped("%s", f.status.c_str());
+}
+
 }  // namespace
 
-void Panel::draw(RenderSettings& s, const GpuTimings& t, const std::string& hint) {
+void Panel::draw(RenderSettings& s, const GpuTimings& t, const std::string& hint, PanelFile* file) {
   if (!visible) return;
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
@@ -159,6 +188,7 @@ void Panel::draw(RenderSettings& s, const GpuTimings& t, const std::string& hint
     for (const auto& p : t.passes) ImGui::Text("%-14s %8.2f ms", p.first.c_str(), p.second);
     ImGui::Text("%-14s %8.2f ms", "total", t.total_ms);
   }
+  if (file && file->preset) file_actions(*file);
   if (t.atmosphere_ms > 0.01) last_lut_ms_ = t.atmosphere_ms;
   // The groups of the parameter tables (panel_groups), in their order; the engineering switches of
   // each under its own Advanced fold.

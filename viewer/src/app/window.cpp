@@ -3,6 +3,8 @@
 // and the table's key bindings, GPU frame time in the title bar, F12 saves PNG + EXR, the input
 // preset regenerates when its file changes, shaders hot-reload from --shader-dir.
 #include <algorithm>
+#include <atomic>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -21,6 +23,7 @@
 #include "cloudgen/noise_cache.h"
 #endif
 #include "internal.h"
+#include "app/authoring.h"
 #include "app/panel.h"
 #include "app/session.h"
 
@@ -63,6 +66,7 @@ struct ViewState {
   Sun* sun = nullptr;
   std::ostream* out = nullptr;
   Panel* panel = nullptr;
+  PanelFile* file = nullptr;  // a preset INPUT's file actions
 };
 
 glm::dvec3 forward_of(double yaw_deg, double pitch_deg) {
@@ -98,6 +102,9 @@ const char* kWindowKeys =
     "| `Backspace` | motion time back to `--time` |\n"
     "| `R` | reload shaders (from `--shader-dir`) and the input |\n"
     "| `F12` | save `cloudviewer_N.png` (tone-mapped) and `cloudviewer_N.exr` (linear HDR) |\n"
+    "| `Ctrl+S` | a preset INPUT: save it with the panel's edits as the panel's file (atomic; never into presets/) |\n"
+    "| `Ctrl+E` | a preset INPUT: export its VDB with the edits (as `cloudgen generate`) |\n"
+    "| `Ctrl+B` | a preset INPUT: open the exported VDB in Blender (`cloudgen blender`; the .blend's path shown) |\n"
     "| `H`, `Esc` | this list, quit |\n";
 
 std::string format_scale(double v) {
@@ -110,6 +117,12 @@ void on_key(GLFWwindow* w, int key, int, int action, int mods) {
   if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
   auto* v = static_cast<ViewState*>(glfwGetWindowUserPointer(w));
   if (v->panel && v->panel->visible && Panel::wants_keyboard()) return;  // typing into the panel
+  if ((mods & GLFW_MOD_CONTROL) && v->file && v->file->preset) {  // the preset's file actions
+    if (key == GLFW_KEY_S) v->file->save = true;
+    if (key == GLFW_KEY_E) v->file->export_vdb = true;
+    if (key == GLFW_KEY_B) v->file->blender = true;
+    return;
+  }
   RenderSettings& s = *v->settings;
   Sun& sun = *v->sun;
   if (key == GLFW_KEY_KP_ADD) key = GLFW_KEY_EQUAL;
@@ -138,7 +151,6 @@ void on_key(GLFWwindow* w, int key, int, int action, int mods) {
     case GLFW_KEY_H: *v->out << kWindowKeys << key_help_markdown(); break;
     default: break;
   }
-  (void)mods;
 }
 
 void on_button(GLFWwindow* w, int button, int action, int) {
@@ -289,6 +301,71 @@ class Watcher {
   std::future<PreparedVolume> job_;  // (its destructor waits for a reload in flight)
 };
 
+// The panel's file actions on a preset INPUT: Save preset as at once (a small JSON file), Export
+// and Open in Blender on a worker thread, one at a time, while the window keeps drawing.
+class FileActions {
+ public:
+  FileActions(const Options& o, PanelFile& f) : f_(f) {
+    std::string ext = fs::path(o.input).extension().string();
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+    f.preset = ext == ".json";
+#endif
+    f.save_path = edited_name(o.input, ".json");
+    f.export_path = edited_name(o.input, ".vdb");
+  }
+  /// Every frame, on the GL thread: starts what the panel or the keys asked for, collects a finished job.
+  void run(const Session& session, std::ostream& out) {
+    if (f_.save) {
+      f_.save = false;
+      try {
+        session.save_preset_as(f_.save_path);
+        f_.status = "saved " + cloudgen::printable(f_.save_path) + " (" + std::to_string(session.preset().sets.size()) +
+                    " edits)";
+      } catch (const std::exception& e) {
+        f_.status = std::string("not saved: ") + e.what();
+      }
+      out << f_.status << "\n";
+    }
+    if ((f_.export_vdb || f_.blender) && !job_.valid()) {
+      const bool blender = f_.blender;
+      f_.export_vdb = f_.blender = false;
+      f_.busy = true;
+      f_.progress = blender ? -1.f : 0.f;
+      progress_ = 0;
+      f_.status = blender ? "making the Blender scene..." : "exporting " + cloudgen::printable(f_.export_path) + "...";
+      const std::string vdb = f_.export_path, blend = fs::path(vdb).replace_extension(".blend").string();
+      job_ = std::async(std::launch::async, [this, blender, vdb, blend, input = session.input(), sets = session.preset().sets] {
+        if (blender) {
+          std::error_code ec;
+          if (!fs::is_regular_file(vdb, ec)) throw InputError("no " + vdb + " yet: Export first (Ctrl+E)");
+          return "Blender scene " + open_in_blender(vdb, blend);
+        }
+        export_preset_files(input, sets, {vdb}, [this](double x) { progress_ = float(x); });
+        return "exported " + vdb;
+      });
+    }
+    f_.export_vdb = f_.blender = false;  // asked while busy: ignored
+    if (job_.valid()) {
+      f_.progress = f_.progress < 0 ? -1.f : progress_.load();
+      if (job_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+        try {
+          f_.status = job_.get();
+        } catch (const std::exception& e) {
+          f_.status = std::string("failed: ") + e.what();
+        }
+        f_.busy = false;
+        out << f_.status << "\n";
+      }
+    }
+  }
+
+ private:
+  PanelFile& f_;
+  std::atomic<float> progress_{0};
+  std::future<std::string> job_;  // (its destructor waits for a job in flight)
+};
+
 std::string panel_hint(const ViewState& view, const RenderSettings& settings, const Sun& sun) {
   std::ostringstream hint;
   hint.precision(3);
@@ -367,6 +444,9 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
   // After our callbacks: ImGui chains to them.
   Panel panel(window);
   view.panel = &panel;
+  PanelFile file;
+  FileActions actions(o, file);
+  view.file = &file;
   out << "window: " << renderer.renderer_string() << " (press H for keys, F1 for the panel)\n";
 
   Watcher watcher(o);
@@ -405,7 +485,8 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
     GpuTimings t;
     renderer.render(fs, &t);
     renderer.present(fw, fh);
-    panel.draw(settings, t, panel_hint(view, settings, sun));
+    panel.draw(settings, t, panel_hint(view, settings, sun), &file);
+    actions.run(session, out);
     if (auto_frames > 0 && frame + 1 == auto_frames) {  // what the window shows, read from its back buffer before the swap
       std::string shot = fs::path(o.out).replace_extension("").string() + ".window.png";
       write_png(shot, renderer.read_window(fw, fh));
