@@ -6,12 +6,14 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
 #include "../viewer/src/app/authoring.h"
 #include "../viewer/src/app/session.h"
 #include "cloudgen/errors.h"
+#include "cloudgen/preset_fields.h"
 #include "cloudgen/preset_save.h"
 #include "cloudviewer/errors.h"
 #include "cloudviewer/input.h"
@@ -122,4 +124,23 @@ TEST(ViewerAuthoring, OpenInBlenderMakesTheSceneOfTheExportedVolume) {
   export_preset_files(input, {"threshold=0.45"}, {dir / "cloud.vdb"});
   EXPECT_EQ(open_in_blender(dir / "cloud.vdb", dir / "cloud.blend"), dir / "cloud.blend");
   EXPECT_GT(fs::file_size(dir / "cloud.blend"), 1000u);
+}
+
+// The panel's preset fields: every key of the preset table without a list index has a value (the
+// file's, an edit's, else the table's default) and a group; an edit shows in them.
+TEST(ViewerAuthoring, PanelShowsEveryPresetFieldWithItsValue) {
+  const std::map<std::string, std::string> v = cloudgen::preset_values(kTiny, {"threshold=0.45", "coverage.low=0.2"});
+  size_t plain = 0;
+  for (const cloudgen::PresetField& f : cloudgen::preset_fields()) {
+    EXPECT_NE(f.place.group, cloudgen::ParamGroup::Unset) << f.key;
+    if (f.key.find('*') != std::string::npos) continue;
+    ++plain;
+    ASSERT_EQ(v.count(f.key), 1u) << f.key;
+  }
+  EXPECT_EQ(v.size(), plain);
+  EXPECT_EQ(v.at("threshold"), "0.45");
+  EXPECT_EQ(v.at("coverage.low"), "0.2");
+  EXPECT_EQ(v.at("seed"), "3");                                      // the file's
+  EXPECT_EQ(v.at("density_scale"), "1.0");                            // the table's default
+  EXPECT_EQ(v.at("name"), "\"tiny\"");
 }

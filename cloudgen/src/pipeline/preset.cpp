@@ -19,6 +19,7 @@
 #include "cloudgen/io.h"
 #include "cloudgen/json_checked.h"
 #include "cloudgen/param_group.h"
+#include "cloudgen/preset_fields.h"
 #include "cloudgen/preset_save.h"
 #include "cloudgen/schema.h"
 #include "cloudgen/input_scope.h"
@@ -655,6 +656,39 @@ std::string edited_preset_text(const std::string& path, const std::vector<std::s
   std::string text = doc.dump(2) + "\n";
   parse_preset(text, to);  // what is saved reads back as a valid preset where it goes
   return text;
+}
+
+const std::vector<PresetField>& preset_fields() {
+  static const std::vector<PresetField> fields = [] {
+    std::vector<PresetField> v;
+    for (const Spec& s : table()) {
+      PresetField f;
+      f.pointer = s.field.name;
+      f.key = f.pointer.substr(1);
+      std::replace(f.key.begin(), f.key.end(), '/', '.');
+      f.type = s.field.type;
+      f.default_value = s.field.default_value;
+      f.lo = s.field.lo, f.hi = s.field.hi;
+      f.choices = s.field.choices;
+      f.range = s.field.range();
+      f.doc = s.field.doc;
+      f.place = s.place;
+      v.push_back(std::move(f));
+    }
+    return v;
+  }();
+  return fields;
+}
+
+std::map<std::string, std::string> preset_values(const std::string& path, const std::vector<std::string>& sets) {
+  const json doc = json::parse(edited_preset_text(path, sets, path));
+  std::map<std::string, std::string> out;
+  for (const PresetField& f : preset_fields()) {
+    if (f.pointer.find('*') != std::string::npos) continue;
+    const json::json_pointer at(f.pointer);
+    out[f.key] = doc.contains(at) ? doc[at].dump() : f.default_value;
+  }
+  return out;
 }
 
 Preset load_preset(const std::string& path, const std::vector<std::string>& overrides) {

@@ -15,8 +15,13 @@
 #include <backends/imgui_impl_glfw.h>
 #include <backends/imgui_impl_opengl3.h>
 
+#include <nlohmann/json.hpp>
+
 #include "cloudviewer/controls.h"
 #include "cloudviewer/errors.h"
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+#include "cloudgen/preset_fields.h"
+#endif
 
 namespace cloudviewer {
 
@@ -145,6 +150,100 @@ void atmosphere_widget(RenderSettings& s, const std::string& key) {
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", tip.c_str());
 }
 
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+// One preset key (cloudgen's preset table): a slider, drag, checkbox or list by its type, within
+// its range; a change asks for the edit KEY=VALUE. Lists, objects, free text and unset values are
+// shown, not edited.
+void preset_widget(const cloudgen::PresetField& f, PanelFile& pf) {
+  const auto it = pf.values.find(f.key);
+  if (it == pf.values.end()) return;
+  const nlohmann::json v = nlohmann::json::parse(it->second, nullptr, false);
+  const std::string tip = f.doc + " (" + f.type + ", " + f.range + ", default " + f.default_value + ")";
+  const char* label = f.key.c_str();
+  auto edit = [&](const std::string& value) { pf.edits.push_back(f.key + "=" + value); };
+  const double span = f.hi - f.lo;
+  if (f.type == "bool" && v.is_boolean()) {
+    bool b = v.get<bool>();
+    if (ImGui::Checkbox(label, &b)) edit(b ? "true" : "false");
+  } else if ((f.type == "integer" || (f.type == "period" && v.is_number())) && v.is_number()) {
+    if (span <= 4096) {
+      int x = v.get<int>();
+      if (ImGui::SliderInt(label, &x, int(f.lo), int(f.hi))) edit(std::to_string(x));
+    } else {
+      long long x = v.get<long long>();
+      if (ImGui::InputScalar(label, ImGuiDataType_S64, &x, nullptr, nullptr, "%lld", ImGuiInputTextFlags_EnterReturnsTrue))
+        edit(std::to_string(std::clamp<long long>(x, (long long)f.lo, (long long)f.hi)));
+    }
+  } else if (f.type == "number" && v.is_number()) {
+    float x = v.get<float>();
+    const bool log_scale = f.lo > 0 && f.hi / f.lo > 1e3;
+    if (span <= 1000 && !log_scale) {
+      if (ImGui::SliderFloat(label, &x, float(f.lo), float(f.hi), "%.4g")) edit(text(x));
+    } else {
+      const float speed = std::max(std::abs(x) * 0.005f, 1e-3f);
+      if (ImGui::DragFloat(label, &x, speed, float(f.lo), float(f.hi), "%.4g", ImGuiSliderFlags_AlwaysClamp)) edit(text(x));
+    }
+  } else if (f.type == "string" && !f.choices.empty() && v.is_string()) {
+    int index = -1;
+    for (size_t i = 0; i < f.choices.size(); ++i)
+      if (f.choices[i] == v.get<std::string>()) index = int(i);
+    std::vector<const char*> items;
+    for (const std::string& c : f.choices) items.push_back(c.c_str());
+    if (ImGui::Combo(label, &index, items.data(), int(items.size())) && index >= 0) edit(f.choices[size_t(index)]);
+  } else if ((f.type == "vec2" || f.type == "vec3" || f.type == "ivec3" || f.type == "period") && v.is_array() &&
+             (v.size() == 2 || v.size() == 3)) {
+    const int n = int(v.size());
+    const bool ints = f.type == "ivec3" || f.type == "period";
+    float x[3] = {0, 0, 0};
+    int xi[3] = {0, 0, 0};
+    float largest = 0;
+    for (int a = 0; a < n; ++a) {
+      x[a] = v[size_t(a)].get<float>(), xi[a] = int(x[a]);
+      largest = std::max(largest, std::abs(x[a]));
+    }
+    bool changed = false;
+    if (ints) changed = ImGui::DragScalarN(label, ImGuiDataType_S32, xi, n, 0.2f, nullptr, nullptr, "%d");
+    else
+      changed = ImGui::DragScalarN(label, ImGuiDataType_Float, x, n, std::max(largest * 0.005f, 1e-3f), nullptr, nullptr,
+                                   "%.4g");
+    if (changed) {
+      std::string value = "[";
+      for (int a = 0; a < n; ++a) {
+        const double c = std::clamp(ints ? double(xi[a]) : double(x[a]), f.lo, f.hi);
+        value += (a ? "," : "") + (ints ? std::to_string((long long)c) : text(c));
+      }
+      edit(value + "]");
+    }
+  } else {
+    std::string shown = it->second.size() > 40 ? it->second.substr(0, 37) + "..." : it->second;
+    ImGui::TextDisabled("%s = %s", label, shown.c_str());
+  }
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", tip.c_str());
+}
+
+// The preset's keys of group `g` (advanced or not); true when there is any.
+bool preset_widgets(cloudgen::ParamGroup g, bool advanced, PanelFile* pf) {
+  if (!pf || !pf->preset) return false;
+  bool any = false;
+  for (const cloudgen::PresetField& f : cloudgen::preset_fields()) {
+    if (f.place.group != g || f.place.advanced != advanced || !pf->values.count(f.key)) continue;
+    if (!any) ImGui::TextDisabled(advanced ? "preset (advanced)" : "preset");
+    any = true;
+    preset_widget(f, *pf);
+  }
+  return any;
+}
+bool has_preset_widgets(cloudgen::ParamGroup g, bool advanced, const PanelFile* pf) {
+  if (!pf || !pf->preset) return false;
+  for (const cloudgen::PresetField& f : cloudgen::preset_fields())
+    if (f.place.group == g && f.place.advanced == advanced && pf->values.count(f.key)) return true;
+  return false;
+}
+#else
+bool preset_widgets(cloudgen::ParamGroup, bool, PanelFile*) { return false; }
+bool has_preset_widgets(cloudgen::ParamGroup, bool, const PanelFile*) { return false; }
+#endif
+
 // A path field over a std::string.
 void path_field(const char* label, std::string& path) {
   char buf[1024];
@@ -193,16 +292,28 @@ void Panel::draw(RenderSettings& s, const GpuTimings& t, const std::string& hint
   // The groups of the parameter tables (panel_groups), in their order; the engineering switches of
   // each under its own Advanced fold.
   static const std::vector<PanelGroup> groups = panel_groups();
+  if (file && file->preset && !file->edit_status.empty()) ImGui::TextWrapped("%s", file->edit_status.c_str());
   ImGui::PushItemWidth(150);
-  for (const PanelGroup& g : groups) {
-    const bool open_at_start = g.group == cloudgen::ParamGroup::Shape || g.group == cloudgen::ParamGroup::LightAndSky;
-    if (!ImGui::CollapsingHeader(g.name.c_str(), open_at_start ? ImGuiTreeNodeFlags_DefaultOpen : 0)) continue;
-    ImGui::PushID(g.name.c_str());
+  for (cloudgen::ParamGroup group : cloudgen::kParamGroups) {
+    static const PanelGroup none;
+    const PanelGroup* found = &none;
+    for (const PanelGroup& g : groups)
+      if (g.group == group) found = &g;
+    const PanelGroup& g = *found;
+    const bool preset_basic = has_preset_widgets(group, false, file), preset_advanced = has_preset_widgets(group, true, file);
+    const bool advanced = !g.render_advanced.empty() || !g.atmosphere_advanced.empty() || preset_advanced;
+    if (g.render.empty() && g.atmosphere.empty() && !preset_basic && !advanced) continue;
+    const bool open_at_start = group == cloudgen::ParamGroup::Shape || group == cloudgen::ParamGroup::LightAndSky;
+    const char* name = cloudgen::param_group_name(group);
+    if (!ImGui::CollapsingHeader(name, open_at_start ? ImGuiTreeNodeFlags_DefaultOpen : 0)) continue;
+    ImGui::PushID(name);
+    if (preset_widgets(group, false, file) && !g.render.empty()) ImGui::TextDisabled("render");
     for (const PanelWidget& w : g.render) render_widget(s, w);
     if (!g.atmosphere.empty() || !g.atmosphere_advanced.empty())
       ImGui::Text("atmosphere LUTs (last run) %8.2f ms", last_lut_ms_);
     for (const std::string& k : g.atmosphere) atmosphere_widget(s, k);
-    if ((!g.render_advanced.empty() || !g.atmosphere_advanced.empty()) && ImGui::TreeNode("Advanced")) {
+    if (advanced && ImGui::TreeNode("Advanced")) {
+      if (preset_widgets(group, true, file) && !g.render_advanced.empty()) ImGui::TextDisabled("render");
       for (const PanelWidget& w : g.render_advanced) render_widget(s, w);
       for (const std::string& k : g.atmosphere_advanced) atmosphere_widget(s, k);
       ImGui::TreePop();

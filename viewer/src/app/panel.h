@@ -1,8 +1,10 @@
 // The window's on-screen panel (Dear ImGui): one control per render.* key, built from the
 // parameter table by panel_widgets() (settings.h), plus the GPU time of every pass. Internal.
 #pragma once
+#include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "cloudviewer/controls.h"
 #include "cloudviewer/renderer.h"
@@ -22,6 +24,10 @@ struct PanelFile {
   bool busy = false;       ///< an export or a Blender scene is being made
   float progress = -1;     ///< the export's generation, [0, 1], while busy
   std::string status;      ///< the last action's outcome (the .blend's path, an error)
+  /// The preset's fields (cloudgen::preset_values: KEY -> JSON text), drawn in their groups.
+  std::map<std::string, std::string> values;
+  std::vector<std::string> edits;  ///< KEY=VALUE the user asked for this frame (Session::edit_preset)
+  std::string edit_status;         ///< the last refused edit's reason
 };
 
 class Panel {

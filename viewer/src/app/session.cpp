@@ -42,7 +42,11 @@ void Session::stop_renderer() {
 
 void Session::edit_preset(const std::string& assignment) {
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
-  std::vector<std::string> sets = preset_.sets;
+  // A later value of the same key replaces the earlier one (a dragged slider makes many).
+  const std::string key = assignment.substr(0, assignment.find('=') + 1);
+  std::vector<std::string> sets;
+  for (const std::string& s : preset_.sets)
+    if (key.size() < 2 || s.rfind(key, 0) != 0) sets.push_back(s);
   sets.push_back(assignment);
   try {
     cloudgen::load_preset(input_, sets);  // the same check as loading: key, value, range, cross-checks

@@ -46,7 +46,8 @@ class Session {
   /// The INPUT as given.
   const std::string& input() const { return input_; }
   /// A preset INPUT: checks KEY=VALUE (a preset key, as `cloudgen generate --set` spells it) against
-  /// the preset with the edits so far and adds it to them; the caller regenerates (reopen, or the
+  /// the preset with the edits so far and adds it to them (in place of an earlier value of the same
+  /// key); the caller regenerates (reopen, or the
   /// window's worker). What the panel and `--edit` call. InputError, nothing changed, on a bad edit.
   void edit_preset(const std::string& assignment);
   /// A preset INPUT: writes it with the edits so far to `target` (cloudgen::save_preset_as: atomic,

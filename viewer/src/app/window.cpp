@@ -21,6 +21,7 @@
 #include "cloudviewer/errors.h"
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
 #include "cloudgen/noise_cache.h"
+#include "cloudgen/preset_fields.h"
 #endif
 #include "internal.h"
 #include "app/authoring.h"
@@ -269,6 +270,15 @@ class Watcher {
     if (pending_ && !job_.valid()) start(session, settings);
   }
 
+  /// An edit of the preset (the panel): regenerate now, or as soon as the reload in flight ends.
+  void request(const Session& session, const RenderSettings& settings) {
+    pending_ = true;
+    if (!job_.valid()) start(session, settings);
+  }
+
+  /// No reload in flight or waiting.
+  bool idle() const { return !pending_ && !job_.valid(); }
+
   /// Every frame: a finished reload replaces the volume (the upload happens here, on the GL thread).
   void collect(Session& session, std::ostream& out, std::ostream& err) {
     if (!job_.valid() || job_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
@@ -314,6 +324,30 @@ class FileActions {
     f.save_path = edited_name(o.input, ".json");
     f.export_path = edited_name(o.input, ".vdb");
   }
+  /// Every frame, on the GL thread: the panel's preset edits (checked and added to the session's,
+  /// then regenerated on the watcher's worker); true when there was one.
+  bool edit(Session& session) {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+    if (f_.preset && f_.values.empty()) f_.values = cloudgen::preset_values(session.input(), session.preset().sets);
+#endif
+    if (f_.edits.empty()) return false;
+    bool changed = false;
+    for (const std::string& e : f_.edits) {
+      try {
+        session.edit_preset(e);
+        changed = true;
+        f_.edit_status.clear();
+      } catch (const Error& x) {
+        f_.edit_status = x.what();
+      }
+    }
+    f_.edits.clear();
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+    if (changed) f_.values = cloudgen::preset_values(session.input(), session.preset().sets);
+#endif
+    return changed;
+  }
+
   /// Every frame, on the GL thread: starts what the panel or the keys asked for, collects a finished job.
   void run(const Session& session, std::ostream& out) {
     if (f_.save) {
@@ -454,7 +488,11 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
   auto last_frame = last_poll;
   int frame = 0, saved = 0;
   double gpu_ms_avg = 0, cloud_ms_avg = 0;
-  const int auto_frames = o.out.empty() ? 0 : 3;  // with --out: render a few frames, save, exit
+  // With --out: render a few frames, save, exit. --edit (a preset) goes through the panel's own
+  // edit path after the first frame; the frames count from 0 again once its regeneration is shown,
+  // so the saved frame is the one a fresh --set of the same keys saves.
+  const int auto_frames = o.out.empty() ? 0 : 3;
+  bool edits_sent = false, edits_waiting = false;
   while (!glfwWindowShouldClose(window)) {
     glfwPollEvents();
     auto now = std::chrono::steady_clock::now();
@@ -469,7 +507,13 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
       watcher.poll(session, settings, view.reload_requested, out, err);
       view.reload_requested = false;
     }
+    if (auto_frames > 0 && frame == 1 && !o.edits.empty() && !edits_sent) {
+      file.edits = o.edits;
+      edits_sent = edits_waiting = true;
+    }
+    if (actions.edit(session)) watcher.request(session, settings);
     watcher.collect(session, out, err);
+    if (edits_waiting && watcher.idle()) edits_waiting = false, frame = 0;
     int fw = 0, fh = 0;
     glfwGetFramebufferSize(window, &fw, &fh);
     if (fw < 1 || fh < 1) continue;
@@ -487,7 +531,7 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
     renderer.present(fw, fh);
     panel.draw(settings, t, panel_hint(view, settings, sun), &file);
     actions.run(session, out);
-    if (auto_frames > 0 && frame + 1 == auto_frames) {  // what the window shows, read from its back buffer before the swap
+    if (auto_frames > 0 && !edits_waiting && frame + 1 == auto_frames) {  // what the window shows, read from its back buffer before the swap
       std::string shot = fs::path(o.out).replace_extension("").string() + ".window.png";
       write_png(shot, renderer.read_window(fw, fh));
       out << "wrote " << cloudgen::printable(shot) << " (window back buffer " << fw << "x" << fh << ")\n";
@@ -497,7 +541,7 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
     cloud_ms_avg = frame == 0 ? t.cloud_ms : cloud_ms_avg * 0.9 + t.cloud_ms * 0.1;
     ++frame;
     if (frame % 4 == 1) glfwSetWindowTitle(window, window_title(view, settings, sun, gpu_ms_avg, cloud_ms_avg).c_str());
-    const bool auto_save = auto_frames > 0 && frame == auto_frames;
+    const bool auto_save = auto_frames > 0 && !edits_waiting && frame == auto_frames;
     if (view.save_requested || auto_save) {
       view.save_requested = false;
       save_frame(o, window, renderer, auto_save, frame, saved, t, out);
