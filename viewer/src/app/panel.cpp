@@ -303,7 +303,7 @@ void Panel::draw(RenderSettings& s, const GpuTimings& t, const std::string& hint
     const bool preset_basic = has_preset_widgets(group, false, file), preset_advanced = has_preset_widgets(group, true, file);
     const bool advanced = !g.render_advanced.empty() || !g.atmosphere_advanced.empty() || preset_advanced;
     if (g.render.empty() && g.atmosphere.empty() && !preset_basic && !advanced) continue;
-    const bool open_at_start = group == cloudgen::ParamGroup::Shape || group == cloudgen::ParamGroup::LightAndSky;
+    const bool open_at_start = group == cloudgen::ParamGroup::Shape;  // the others folded: every header in view
     const char* name = cloudgen::param_group_name(group);
     if (!ImGui::CollapsingHeader(name, open_at_start ? ImGuiTreeNodeFlags_DefaultOpen : 0)) continue;
     ImGui::PushID(name);
