@@ -1,6 +1,7 @@
 #include "app/authoring.h"
 
 #include <fcntl.h>
+#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -53,17 +54,23 @@ std::string open_in_blender(const std::string& vdb, const std::string& blend) {
   std::vector<char*> argv;
   for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
+  // posix_spawn, not fork: the window has threads (a fork child may only exec), and the output
+  // goes to a pipe that this thread reads.
   int pipe_fd[2];
   if (pipe(pipe_fd) != 0) throw cloudgen::IoError("open in Blender: pipe: " + std::string(std::strerror(errno)));
-  const pid_t pid = fork();
-  if (pid < 0) throw cloudgen::IoError("open in Blender: fork: " + std::string(std::strerror(errno)));
-  if (pid == 0) {  // the child: its output into the pipe, then cloudgen
-    dup2(pipe_fd[1], 1);
-    dup2(pipe_fd[1], 2);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_adddup2(&fa, pipe_fd[1], 1);
+  posix_spawn_file_actions_adddup2(&fa, pipe_fd[1], 2);
+  posix_spawn_file_actions_addclose(&fa, pipe_fd[0]);
+  posix_spawn_file_actions_addclose(&fa, pipe_fd[1]);
+  pid_t pid = 0;
+  const int spawned = posix_spawnp(&pid, argv[0], &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (spawned != 0) {
     close(pipe_fd[0]);
     close(pipe_fd[1]);
-    execvp(argv[0], argv.data());
-    _exit(127);
+    throw InputError("open in Blender: cannot run " + args[0] + ": " + std::strerror(spawned));
   }
   close(pipe_fd[1]);
   std::string output;
@@ -80,7 +87,6 @@ std::string open_in_blender(const std::string& vdb, const std::string& blend) {
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
     throw InputError("open in Blender: `" + args[0] + " blender " + cloudgen::printable(vdb) + " -o " +
                      cloudgen::printable(blend) + "` failed" +
-                     (WIFEXITED(status) && WEXITSTATUS(status) == 127 ? " (cloudgen not found)" : "") +
                      (output.empty() ? "" : ": " + output));
   return blend;
 }

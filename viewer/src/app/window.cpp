@@ -324,28 +324,32 @@ class FileActions {
     f.save_path = edited_name(o.input, ".json");
     f.export_path = edited_name(o.input, ".vdb");
   }
-  /// Every frame, on the GL thread: the panel's preset edits (checked and added to the session's,
-  /// then regenerated on the watcher's worker); true when there was one.
+  /// Every frame, on the GL thread: the panel's preset edits, checked and added to the session's;
+  /// true when one changes the volume (the caller regenerates it on the watcher's worker).
   bool edit(Session& session) {
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
     if (f_.preset && f_.values.empty()) f_.values = cloudgen::preset_values(session.input(), session.preset().sets);
 #endif
     if (f_.edits.empty()) return false;
-    bool changed = false;
+    bool applied = false, regenerate = false;
     for (const std::string& e : f_.edits) {
       try {
         session.edit_preset(e);
-        changed = true;
-        f_.edit_status.clear();
+        applied = true;
+        // The view, the export options and the names go with Save as and Export; the volume stays.
+        bool volume = true;
+        for (const char* kept : {"view.", "export.", "name=", "description="}) volume = volume && e.rfind(kept, 0) != 0;
+        regenerate = regenerate || volume;
+        f_.edit_status = volume ? "" : "kept for Save preset as and Export: " + e;
       } catch (const Error& x) {
         f_.edit_status = x.what();
       }
     }
     f_.edits.clear();
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
-    if (changed) f_.values = cloudgen::preset_values(session.input(), session.preset().sets);
+    if (applied) f_.values = cloudgen::preset_values(session.input(), session.preset().sets);
 #endif
-    return changed;
+    return regenerate;
   }
 
   /// Every frame, on the GL thread: starts what the panel or the keys asked for, collects a finished job.
