@@ -244,6 +244,29 @@ bool preset_widgets(cloudgen::ParamGroup, bool, PanelFile*) { return false; }
 bool has_preset_widgets(cloudgen::ParamGroup, bool, const PanelFile*) { return false; }
 #endif
 
+// The key list's Markdown table rows as plain lines ("F1  the panel on / off"), headers dropped.
+std::string plain_key_list(const std::string& md) {
+  std::string out, row;
+  for (size_t i = 0; i <= md.size(); ++i) {
+    if (i < md.size() && md[i] != '\n') {
+      row += md[i];
+      continue;
+    }
+    if (!row.empty() && row.rfind("|---", 0) != 0 && row.rfind("| key", 0) != 0) {
+      std::string plain;
+      for (size_t k = 0; k < row.size(); ++k) {
+        if (row[k] == '`') continue;
+        if (row[k] == '\\' && k + 1 < row.size() && row[k + 1] == '|') plain += row[++k];  // an escaped |
+        else if (row[k] == '|') plain += plain.empty() ? "" : "  ";
+        else plain += row[k];
+      }
+      out += plain + "\n";
+    }
+    row.clear();
+  }
+  return out;
+}
+
 // A path field over a std::string.
 void path_field(const char* label, std::string& path) {
   char buf[1024];
@@ -287,6 +310,7 @@ void Panel::draw(RenderSettings& s, const GpuTimings& t, const std::string& hint
     for (const auto& p : t.passes) ImGui::Text("%-14s %8.2f ms", p.first.c_str(), p.second);
     ImGui::Text("%-14s %8.2f ms", "total", t.total_ms);
   }
+  if (!help.empty() && ImGui::CollapsingHeader("Keys")) ImGui::TextUnformatted(plain_key_list(help).c_str());
   if (file && file->preset) file_actions(*file);
   if (t.atmosphere_ms > 0.01) last_lut_ms_ = t.atmosphere_ms;
   // The groups of the parameter tables (panel_groups), in their order; the engineering switches of

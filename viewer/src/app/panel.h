@@ -45,6 +45,8 @@ class Panel {
   static bool wants_keyboard();
   static bool wants_mouse();
   bool visible = true;
+  /// The window's key list (Markdown table rows, as H prints it), shown under "Keys".
+  std::string help;
 
  private:
   double last_lut_ms_ = 0;  ///< GPU time of the last atmosphere LUT recompute

@@ -481,6 +481,7 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
   GlRenderer& renderer = session.start_renderer(o.shader_dir);
   // After our callbacks: ImGui chains to them.
   Panel panel(window);
+  panel.help = std::string(kWindowKeys) + key_help_markdown();
   view.panel = &panel;
   PanelFile file;
   FileActions actions(o, file);
