@@ -7,6 +7,7 @@
 #include <cctype>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <future>
 #include <map>
@@ -404,6 +405,9 @@ class FileActions {
   std::future<std::string> job_;  // (its destructor waits for a job in flight)
 };
 
+// A file action asked for or in flight.
+bool automating_action(const PanelFile& f) { return f.busy || f.save || f.export_vdb || f.blender; }
+
 std::string panel_hint(const ViewState& view, const RenderSettings& settings, const Sun& sun) {
   std::ostringstream hint;
   hint.precision(3);
@@ -498,6 +502,15 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
   // so the saved frame is the one a fresh --set of the same keys saves.
   const int auto_frames = o.out.empty() ? 0 : 3;
   bool edits_sent = false, edits_waiting = false;
+  // CLOUDVIEWER_WINDOW_ACTIONS="save export blender" (with --out; tests/window_edit.sh): the panel's
+  // file actions, one after another once the edits are shown, as the buttons ask for them.
+  std::vector<std::string> todo;
+  if (const char* a = std::getenv("CLOUDVIEWER_WINDOW_ACTIONS"); a && auto_frames > 0) {
+    std::istringstream words(a);
+    for (std::string w; words >> w;) todo.push_back(w);
+  }
+  auto automating = [&] { return edits_waiting || !todo.empty() || automating_action(file); };
+  bool was_automating = false;
   while (!glfwWindowShouldClose(window)) {
     glfwPollEvents();
     auto now = std::chrono::steady_clock::now();
@@ -518,7 +531,13 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
     }
     if (actions.edit(session)) watcher.request(session, settings);
     watcher.collect(session, out, err);
-    if (edits_waiting && watcher.idle()) edits_waiting = false, frame = 0;
+    if (edits_waiting && watcher.idle()) edits_waiting = false;
+    if (!edits_waiting && frame >= 1 && !todo.empty() && !automating_action(file)) {
+      (todo.front() == "save" ? file.save : todo.front() == "export" ? file.export_vdb : file.blender) = true;
+      todo.erase(todo.begin());
+    }
+    if (was_automating && !automating()) frame = 0;  // the saved frame is then a fresh run's frame
+    was_automating = automating();
     int fw = 0, fh = 0;
     glfwGetFramebufferSize(window, &fw, &fh);
     if (fw < 1 || fh < 1) continue;
@@ -536,7 +555,7 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
     renderer.present(fw, fh);
     panel.draw(settings, t, panel_hint(view, settings, sun), &file);
     actions.run(session, out);
-    if (auto_frames > 0 && !edits_waiting && frame + 1 == auto_frames) {  // what the window shows, read from its back buffer before the swap
+    if (auto_frames > 0 && !was_automating && !automating() && frame + 1 == auto_frames) {  // what the window shows, read from its back buffer before the swap
       std::string shot = fs::path(o.out).replace_extension("").string() + ".window.png";
       write_png(shot, renderer.read_window(fw, fh));
       out << "wrote " << cloudgen::printable(shot) << " (window back buffer " << fw << "x" << fh << ")\n";
@@ -546,7 +565,7 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
     cloud_ms_avg = frame == 0 ? t.cloud_ms : cloud_ms_avg * 0.9 + t.cloud_ms * 0.1;
     ++frame;
     if (frame % 4 == 1) glfwSetWindowTitle(window, window_title(view, settings, sun, gpu_ms_avg, cloud_ms_avg).c_str());
-    const bool auto_save = auto_frames > 0 && !edits_waiting && frame == auto_frames;
+    const bool auto_save = auto_frames > 0 && !was_automating && !automating() && frame == auto_frames;
     if (view.save_requested || auto_save) {
       view.save_requested = false;
       save_frame(o, window, renderer, auto_save, frame, saved, t, out);
