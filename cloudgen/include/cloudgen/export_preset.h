@@ -10,6 +10,7 @@
 
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
+#include "cloudgen/output.h"
 #include "cloudgen/preset.h"
 
 namespace cloudgen {
@@ -22,6 +23,10 @@ struct PresetExport {
   std::string max_memory_text = "the memory limit";  ///< how the refusal names the limit ("--max-memory 8G")
   std::vector<std::pair<std::string, std::string>> metadata;  ///< added to the volume's metadata
   std::function<void()> before_commit;  ///< called with every file staged, none published (a test hold)
+  /// More files of the same batch (a texture pack's): `claim` runs with the outputs' claims, before
+  /// any work; `stage` after the outputs are staged, before the commit. With `stage`, `outputs` may
+  /// be empty (then no volume is generated).
+  std::function<void(OutputBatch&)> claim, stage;
 };
 
 struct ExportedPreset {

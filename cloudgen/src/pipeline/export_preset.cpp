@@ -40,7 +40,7 @@ void set_export_detail(const Preset& p, const std::string& path, const std::vect
 }
 
 ExportedPreset export_preset(const Preset& p, const std::string& path, const PresetExport& e, GenerateOptions go) {
-  if (e.outputs.empty()) throw InputError("export " + path + ": no output file given");
+  if (e.outputs.empty() && !e.stage) throw InputError("export " + path + ": no output file given");
   const ExportOptions& eo = p.export_options;
   ExportedPreset r;
   bool detail = false;
@@ -55,6 +55,7 @@ ExportedPreset export_preset(const Preset& p, const std::string& path, const Pre
     detail |= needs_detail(f, eo);
     for (const OutputFile& of : output_files(o, f, true)) batch.claim(of.path, of.role);
   }
+  if (e.claim) e.claim(batch);
   const uint64_t need = memory_estimate(p, detail);
   if (need > e.max_memory)
     throw InputError(path + ": resolution " + std::to_string(p.resolution[0]) + "x" + std::to_string(p.resolution[1]) + "x" +
@@ -63,13 +64,17 @@ ExportedPreset export_preset(const Preset& p, const std::string& path, const Pre
                      "holds only the bricks with cloud, in one process too)");
   set_export_detail(p, path, r.formats, go);
   auto cancelled = [&] { return go.cancel && go.cancel->load(); };
-  Volume v = generate(p, go, &r.stats);
+  Volume v = e.outputs.empty() ? Volume() : generate(p, go, &r.stats);
   r.dims = v.dims;
   for (const auto& [k, val] : e.metadata) v.metadata.push_back({k, val});
   const auto t0 = std::chrono::steady_clock::now();
   for (size_t i = 0; i < e.outputs.size(); ++i) {
     if (cancelled()) throw Cancelled();
     write_volume(v, e.outputs[i], r.formats[i], eo, batch);
+  }
+  if (e.stage) {
+    if (cancelled()) throw Cancelled();
+    e.stage(batch);
   }
   if (e.before_commit) e.before_commit();
   if (cancelled()) throw Cancelled();
