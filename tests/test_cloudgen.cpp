@@ -20,6 +20,7 @@
 #include "cloudgen/budget.h"
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
+#include "cloudgen/param_group.h"
 #include "cloudgen/preset.h"
 #include "cloudgen/scale.h"
 #include "test_util.h"
@@ -133,6 +134,39 @@ TEST(Presets, RescaleKeepsProportionsAndWorldSize) {
   rescale(p, 128);
   EXPECT_EQ(p.resolution, (std::array<uint32_t, 3>{128, 32, 128}));
   for (int a = 0; a < 3; ++a) EXPECT_NEAR(p.resolution[a] * p.voxel_size, world[a], 1e-9);
+}
+
+// Every preset key has a group (cloudgen/param_group.h) for the panel and the docs; the docs list
+// the groups in their one order, each key under its own group's heading.
+TEST(Presets, EveryKeyHasAGroupAndTheDocsListThem) {
+  const std::string md = params_markdown();
+  for (const auto& pi : params()) {
+    const ParamPlace place = preset_param_place(pi.pointer);
+    ASSERT_NE(place.group, ParamGroup::Unset) << pi.pointer;
+    std::string key = pi.pointer.substr(1);
+    std::replace(key.begin(), key.end(), '/', '.');
+    const std::string heading = std::string(place.advanced ? "### " : "## ") + param_group_name(place.group) +
+                                (place.advanced ? ": advanced" : "") + "\n";
+    const size_t h = md.find(heading), k = md.find("| `" + key + "` |");
+    ASSERT_NE(h, std::string::npos) << heading;
+    ASSERT_NE(k, std::string::npos) << key;
+    EXPECT_GT(k, h) << key;
+    const size_t next = md.find("\n#", h + 1);
+    EXPECT_TRUE(next == std::string::npos || k < next) << key << " is not under " << heading;
+  }
+  EXPECT_EQ(preset_param_place("/threshold").group, ParamGroup::Shape);
+  EXPECT_EQ(preset_param_place("/channels/g/octaves").group, ParamGroup::Detail);
+  EXPECT_EQ(preset_param_place("/view/fov").group, ParamGroup::Camera);
+  EXPECT_EQ(preset_param_place("/motion/flow_map").group, ParamGroup::Animation);
+  EXPECT_TRUE(preset_param_place("/occupancy/cell").advanced);
+  EXPECT_EQ(preset_param_place("/no/such/key").group, ParamGroup::Unset);
+  size_t pos = 0;
+  for (ParamGroup g : kParamGroups) {
+    const size_t at = md.find(std::string("## ") + param_group_name(g) + "\n");
+    ASSERT_NE(at, std::string::npos) << param_group_name(g);
+    EXPECT_GE(at, pos);
+    pos = at;
+  }
 }
 
 TEST(Presets, DocsAreGeneratedFromTheTable) {

@@ -1204,6 +1204,58 @@ TEST(ViewerPanel, OffersExactlyTheParameterTablesKeys) {
   }
 }
 
+// The panel's groups (cloudgen/param_group.h) come from the tables: every render.* and
+// atmosphere.* key in exactly one group, in its table's group and fold, the groups in the one
+// order; the engineering switches the issue names are under Advanced, the everyday keys are not.
+TEST(ViewerPanel, GroupsHoldEveryKeyOnceInTheTablesOrder) {
+  const std::vector<PanelGroup> groups = panel_groups();
+  std::map<std::string, int> seen;
+  int last = -1;
+  for (const PanelGroup& g : groups) {
+    const int at = int(std::find(std::begin(cloudgen::kParamGroups), std::end(cloudgen::kParamGroups), g.group) -
+                       std::begin(cloudgen::kParamGroups));
+    ASSERT_LT(at, int(std::size(cloudgen::kParamGroups))) << g.name;
+    EXPECT_GT(at, last) << g.name << " out of order";
+    last = at;
+    EXPECT_EQ(g.name, cloudgen::param_group_name(g.group));
+    for (bool adv : {false, true}) {
+      for (const PanelWidget& w : adv ? g.render_advanced : g.render) {
+        ++seen["render." + w.key];
+        EXPECT_EQ(render_param(w.key).group, g.group) << w.key;
+        EXPECT_EQ(render_param(w.key).advanced, adv) << w.key;
+      }
+      for (const std::string& k : adv ? g.atmosphere_advanced : g.atmosphere) ++seen["atmosphere." + k];
+    }
+  }
+  for (const ParamDef& p : render_params()) {
+    EXPECT_NE(p.group, cloudgen::ParamGroup::Unset) << p.key;
+    EXPECT_EQ(seen["render." + p.key], 1) << p.key;
+  }
+  for (const AtmosphereParamDef& p : atmosphere_params()) {
+    EXPECT_NE(p.group, cloudgen::ParamGroup::Unset) << p.key;
+    EXPECT_EQ(seen["atmosphere." + p.key], 1) << p.key;
+  }
+  EXPECT_EQ(seen.size(), render_params().size() + atmosphere_params().size());
+  for (const char* k : {"compiled_modes", "occupancy_cell", "eroded_field", "earth_radius"})
+    EXPECT_TRUE(render_param(k).advanced) << k;
+  for (const char* k : {"density", "exposure", "sun_intensity", "steps", "erosion"})
+    EXPECT_FALSE(render_param(k).advanced) << k;
+  EXPECT_EQ(render_param("density").group, cloudgen::ParamGroup::Shape);
+  EXPECT_EQ(render_param("erosion").group, cloudgen::ParamGroup::Detail);
+  EXPECT_EQ(render_param("phase").group, cloudgen::ParamGroup::LightAndSky);
+  EXPECT_EQ(render_param("tonemap").group, cloudgen::ParamGroup::Output);
+  EXPECT_EQ(render_param("steps").group, cloudgen::ParamGroup::Quality);
+  // The reference lists the same groups, in the same order.
+  const std::string md = params_markdown();
+  size_t pos = 0;
+  for (const PanelGroup& g : groups) {
+    const size_t at = md.find("### " + g.name + "\n");
+    ASSERT_NE(at, std::string::npos) << g.name;
+    EXPECT_GT(at + 1, pos) << g.name;
+    pos = at;
+  }
+}
+
 // Key bindings take their limits and defaults from the table: [ and ] stop at 1 and 8192 steps,
 // 3 / 4 at g = -0.99 / 0.99, B switches bloom between 0 and the table's default.
 TEST(ViewerPanel, KeyBindingsUseTheTablesLimitsAndDefaults) {

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <mutex>
 
+#include "cloudgen/preset_save.h"
 #include "commands.h"
 
 namespace fs = std::filesystem;
@@ -33,10 +34,7 @@ std::function<void(double)> progress_bar(const std::string& label, bool quiet) {
   };
 }
 
-std::string preset_dir() {
-  if (const char* e = std::getenv("CLOUDGEN_PRESET_DIR")) return e;
-  return std::string(CLOUD_SOURCE_DIR) + "/presets";
-}
+std::string preset_dir() { return shipped_preset_dir(); }
 
 std::string resolve_preset_path(const std::string& p) {
   if (fs::exists(p)) return p;

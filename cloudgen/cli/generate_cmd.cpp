@@ -11,6 +11,7 @@
 
 #include "cloudgen/budget.h"
 #include "cloudgen/cli_parse.h"
+#include "cloudgen/export_preset.h"
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
 #include "cloudgen/motion.h"
@@ -57,53 +58,18 @@ void run_generate(const GenerateArgs& a) {
     throw InputError("--texture-pack works with a whole volume in one process: leave out --frames, --mpi and --region");
   if (sequence) return run_generate_sequence(p, path, a);
   if (a.outputs.empty() && !pack) throw InputError("-o/--output: give at least one output file (.vdb, .nvdb, .raw, .ktx2, .png, .exr)");
-  const ExportOptions& eo = p.export_options;
-  std::vector<Format> formats;
-  bool detail = false;
-  // Every file of every output is claimed before any work: an output that would replace the
-  // preset, or a sidecar that would collide with another output, is refused up front.
-  OutputBatch batch;
-  batch.protect(path, "the input preset " + path);
-  if (p.weather_map) batch.protect(p.weather_map->path, "the preset's weather map " + p.weather_map->path);
-  for (const auto& o : a.outputs) {
-    Format f = a.format.empty() ? format_from_path(o) : parse_format(a.format);
-    formats.push_back(f);
-    detail |= needs_detail(f, eo);
-    for (const OutputFile& of : output_files(o, f, true)) batch.claim(of.path, of.role);
-  }
-  // The pack's folder is made now if absent (its files are staged inside it) and removed again,
-  // if still empty, when anything fails before the batch is committed: all or nothing.
+  // The pack's folder is made when the batch claims its files, if absent (its files are staged
+  // inside it), and removed again, if still empty, when anything fails before the commit.
   struct RemoveIfEmpty {
     std::string dir;
     ~RemoveIfEmpty() {
       if (!dir.empty()) ::rmdir(dir.c_str());
     }
   } made_dir;
-  if (pack) {
-    if (prepare_texture_pack_dir(a.texture_pack)) made_dir.dir = a.texture_pack;
-    for (const std::string& f : texture_pack_files(a.texture_pack)) batch.claim(f, "the texture pack's " + f);
-  }
   const bool mpi = mpi_requested(a.mpi);  // ranks hold sparse bricks, not the dense volume
-  const uint64_t need = memory_estimate(p, detail), limit = parse_bytes(a.max_memory, "--max-memory");
-  if (!mpi && need > limit)
-    throw InputError(path + ": resolution " + std::to_string(p.resolution[0]) + "x" + std::to_string(p.resolution[1]) + "x" +
-                     std::to_string(p.resolution[2]) + " needs about " + human(need) + ", more than --max-memory " +
-                     a.max_memory + " (lower /resolution, use --resolution N or --voxel-budget N, or add --mpi: the sparse path "
-                     "holds only the bricks with cloud, in one process too)");
+  const uint64_t max_memory = parse_bytes(a.max_memory, "--max-memory");
   GenerateOptions go;
   go.threads = a.threads;
-  go.detail = detail;
-  // Only baked VDB / NanoVDB outputs: the detail channels matter only where the erosion is baked
-  // (all three channels and a non-zero erosion: the viewer's rule), and there only where density
-  // is non-zero. The files' bytes are the same either way.
-  bool baked_only = eo.vdb_detail && eo.vdb_bake_erosion;
-  for (Format f : formats) baked_only = baked_only && (f == Format::Vdb || f == Format::Nvdb);
-  if (baked_only) {
-    const bool erodes = p.channels[1].enabled && p.channels[2].enabled && p.channels[3].enabled &&
-                        look_of_view(p.view, path).erosion > 0;
-    if (erodes) go.detail_only_in_cloud = true;
-    else go.detail = false;
-  }
   go.skip_empty = !a.no_skip;
   go.cancel = &g_cancel;
   auto bar = progress_bar("generate", a.quiet);
@@ -117,38 +83,56 @@ void run_generate(const GenerateArgs& a) {
     go.region_origin = r.origin;
     go.region_extent = r.extent;
   }
-  if (mpi) return run_generate_mpi(p, go, a.outputs, formats, a.quiet, a.stats);
-  GenerateStats st;
-  Volume v = a.outputs.empty() ? Volume() : generate(p, go, &st);
+  if (mpi) {
+    std::vector<Format> formats;
+    OutputBatch batch;  // claimed up front, as export_preset does
+    batch.protect(path, "the input preset " + path);
+    if (p.weather_map) batch.protect(p.weather_map->path, "the preset's weather map " + p.weather_map->path);
+    for (const auto& o : a.outputs) {
+      formats.push_back(a.format.empty() ? format_from_path(o) : parse_format(a.format));
+      for (const OutputFile& of : output_files(o, formats.back(), true)) batch.claim(of.path, of.role);
+    }
+    set_export_detail(p, path, formats, go);
+    return run_generate_mpi(p, go, a.outputs, formats, a.quiet, a.stats);
+  }
+  // The one path of a preset to its files (cloudviewer's Export takes it too).
+  PresetExport e;
+  e.outputs = a.outputs;
+  e.format = a.format;
+  e.max_memory = max_memory;
+  e.max_memory_text = "--max-memory " + a.max_memory;
   // The budget that chose the voxel size travels with the file (the size is the grid's transform).
-  if (!budget_note.empty()) v.metadata.push_back({"voxel_budget", budget_note});
-  const auto t0 = std::chrono::steady_clock::now();
-  for (size_t i = 0; i < a.outputs.size(); ++i) {
-    if (g_cancel) throw Cancelled();
-    write_volume(v, a.outputs[i], formats[i], eo, batch);
-  }
+  if (!budget_note.empty()) e.metadata.push_back({"voxel_budget", budget_note});
+  e.before_commit = [] { test_hold("commit"); };
   if (pack) {
-    if (g_cancel) throw Cancelled();
-    stage_texture_pack(make_texture_pack(p, a.threads), a.texture_pack, path, batch);
+    e.claim = [&](OutputBatch& batch) {
+      if (prepare_texture_pack_dir(a.texture_pack)) made_dir.dir = a.texture_pack;
+      for (const std::string& f : texture_pack_files(a.texture_pack)) batch.claim(f, "the texture pack's " + f);
+    };
+    e.stage = [&](OutputBatch& batch) {
+      if (g_cancel) throw Cancelled();
+      stage_texture_pack(make_texture_pack(p, a.threads), a.texture_pack, path, batch);
+    };
   }
-  test_hold("commit");
-  if (g_cancel) throw Cancelled();
-  batch.commit();
+  const ExportedPreset x = export_preset(p, path, e, go);
   made_dir.dir.clear();  // committed: the folder stays
+  const std::vector<Format>& formats = x.formats;
+  const GenerateStats& st = x.stats;
+  const double write_s = x.write_seconds;
+  const uint64_t voxels = uint64_t(x.dims[0]) * x.dims[1] * x.dims[2];
   if (!a.quiet)
     for (size_t i = 0; i < a.outputs.size(); ++i)
       std::fprintf(stderr, "wrote %s (%s)\n", printable(a.outputs[i]).c_str(), format_name(formats[i]));
   if (!a.quiet && pack) std::fprintf(stderr, "wrote texture pack %s/pack.json\n", printable(a.texture_pack).c_str());
-  if (a.outputs.empty()) return;
-  const double write_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (a.outputs.empty()) return;  // a pack alone: no volume was generated
   if (!a.quiet || a.stats) {
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
     std::fprintf(stderr,
                  "%s: %ux%ux%u voxels, %zu active (%.2f%%), bricks %zu (%zu skipped, %zu with detail), "
                  "generate %.3f s, write %.3f s, peak memory %s\n",
-                 printable(p.name).c_str(), v.dims[0], v.dims[1], v.dims[2], st.active_voxels,
-                 100.0 * st.active_voxels / std::max<size_t>(1, v.voxel_count()), st.bricks, st.bricks_skipped,
+                 printable(p.name).c_str(), x.dims[0], x.dims[1], x.dims[2], st.active_voxels,
+                 100.0 * st.active_voxels / double(std::max<uint64_t>(1, voxels)), st.bricks, st.bricks_skipped,
                  st.detail_bricks, st.seconds, write_s, human(uint64_t(ru.ru_maxrss) * 1024).c_str());
   }
   if (g_cancel) {

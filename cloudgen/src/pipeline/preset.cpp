@@ -18,6 +18,9 @@
 #include "cloudgen/channel.h"
 #include "cloudgen/io.h"
 #include "cloudgen/json_checked.h"
+#include "cloudgen/param_group.h"
+#include "cloudgen/preset_fields.h"
+#include "cloudgen/preset_save.h"
 #include "cloudgen/schema.h"
 #include "cloudgen/input_scope.h"
 #include "cloudgen/printable.h"
@@ -32,6 +35,7 @@ using Index = std::vector<size_t>;
 /// One key of the table: its declaration (schema.h) and what it sets in a Preset.
 struct Spec {
   FieldSpec field;
+  ParamPlace place;  ///< the panel's and the docs' group (param_group.h)
   std::function<void(Preset&, const json&, const Index&)> set;
 };
 
@@ -109,6 +113,9 @@ void add_shape_keys(Add& add, double big) {
 
 std::vector<Spec> build_table() {
   std::vector<Spec> t;
+  // The group of the rows added next (param_group.h): set before each run of rows.
+  ParamPlace place;
+  auto in = [&](ParamGroup g, bool advanced = false) { place = {g, advanced}; };
   auto add = [&](std::string ptr, std::string type, std::string def, double lo, double hi, std::string doc,
                  std::function<void(Preset&, const json&, const Index&)> set, std::vector<std::string> choices = {}) {
     Spec s;
@@ -119,25 +126,31 @@ std::vector<Spec> build_table() {
     s.field.lo = lo, s.field.hi = hi;
     s.field.choices = std::move(choices);
     s.set = std::move(set);
+    s.place = place;
     t.push_back(std::move(s));
   };
   auto v3 = [](const json& j) { return std::array<double, 3>{j[0].get<double>(), j[1].get<double>(), j[2].get<double>()}; };
   const double big = 1e9;
 
+  in(ParamGroup::Output);
   add("/name", "string", "\"untitled\"", 0, 0, "Preset name, stored in the VDB metadata.",
       [](Preset& p, const json& j, const Index&) { p.name = j.get<std::string>(); });
   add("/description", "string", "\"\"", 0, 0, "One line shown by `cloudgen presets`.",
       [](Preset& p, const json& j, const Index&) { p.description = j.get<std::string>(); });
+  in(ParamGroup::Shape);
   add("/seed", "integer", "1", 0, double(kMaxSeed), "Master seed; every noise channel derives its own.",
       [](Preset& p, const json& j, const Index&) { p.seed = j.get<uint64_t>(); });
+  in(ParamGroup::Quality);
   add("/resolution", "ivec3", "[128, 128, 128]", 1, kMaxResolution, "Voxels along x, y (up), z.",
       [](Preset& p, const json& j, const Index&) {
         for (int a = 0; a < 3; ++a) p.resolution[a] = j[a].get<uint32_t>();
       });
+  in(ParamGroup::Shape);
   add("/voxel_size", "number", "10.0", 1e-6, big, "Edge of one voxel in metres.",
       [](Preset& p, const json& j, const Index&) { p.voxel_size = j.get<double>(); });
   add("/origin", "vec3", "[0, 0, 0]", -big, big, "World position (metres) of the volume's min corner.",
       [=](Preset& p, const json& j, const Index&) { p.origin = v3(j); });
+  in(ParamGroup::Shape, true);
   add("/tiling", "bool", "true", 0, 0,
       "The volume wraps seamlessly in x and z (noise periods fit the volume; towers stay off the edges).",
       [](Preset& p, const json& j, const Index&) { p.tiling = j.get<bool>(); });
@@ -146,6 +159,7 @@ std::vector<Spec> build_table() {
     const std::string base = std::string("/channels/") + kChannelNames[c];
     const bool r = c == 0;
     const std::string what = r ? "base shape (R)" : std::string("detail channel ") + char(toupper(kChannelNames[c][0]));
+    in(r ? ParamGroup::Shape : ParamGroup::Detail);
     add(base + "/enabled", "bool", r ? "true" : "false", 0, 0, "Generate the " + what + ".",
         [c](Preset& p, const json& j, const Index&) { p.channels[c].enabled = j.get<bool>(); });
     add(base + "/kind", "string", r ? "\"perlin-worley\"" : "\"worley\"", 0, 0, "Noise of the " + what + ".",
@@ -164,12 +178,14 @@ std::vector<Spec> build_table() {
         [c](Preset& p, const json& j, const Index&) { p.channels[c].octaves = j.get<int>(); });
     add(base + "/gain", "number", "0.5", 1e-6, 1, "Amplitude ratio between octaves.",
         [c](Preset& p, const json& j, const Index&) { p.channels[c].gain = j.get<double>(); });
+    in(r ? ParamGroup::Shape : ParamGroup::Detail, true);
     add(base + "/lacunarity", "integer", "2", 2, noise3d::kMaxLacunarity,
         "Frequency ratio between octaves (an integer, so every octave still tiles).",
         [c](Preset& p, const json& j, const Index&) { p.channels[c].lacunarity = j.get<int>(); });
     add(base + "/worley_octaves", "integer", "0", 0, noise3d::kMaxOctaves,
         "Perlin-Worley: octaves of the Worley part (0 = same as octaves).",
         [c](Preset& p, const json& j, const Index&) { p.channels[c].worley_octaves = j.get<int>(); });
+    in(r ? ParamGroup::Shape : ParamGroup::Detail);
     add(base + "/blend", "number", "1.0", 0, 1,
         "Perlin-Worley: how much Worley dilates the Perlin fBm (1 = full Perlin-Worley, 0 = Perlin alone).",
         [c](Preset& p, const json& j, const Index&) { p.channels[c].blend = j.get<double>(); });
@@ -179,11 +195,13 @@ std::vector<Spec> build_table() {
         [c](Preset& p, const json& j, const Index&) { p.channels[c].remap = {j[0].get<double>(), j[1].get<double>()}; });
     add(base + "/invert", "bool", "false", 0, 0, "Store 1 - noise.",
         [c](Preset& p, const json& j, const Index&) { p.channels[c].invert = j.get<bool>(); });
+    in(r ? ParamGroup::Shape : ParamGroup::Detail, true);
     add(base + "/seed_offset", "integer", std::to_string(c), 0, double(kMaxSeed),
         "Added to the master seed for this channel.",
         [c](Preset& p, const json& j, const Index&) { p.channels[c].seed_offset = j.get<uint64_t>(); });
   }
 
+  in(ParamGroup::Shape);
   add("/height/profile", "string", "\"exponential\"", 0, 0,
       "Vertical profile: the thesis's HD(h) = (1 - exp(-a h)) exp(-b h), or a cloud-type gradient.",
       [](Preset& p, const json& j, const Index&) {
@@ -242,17 +260,20 @@ std::vector<Spec> build_table() {
 
   add_shape_keys(add, big);
 
+  in(ParamGroup::Shape);
   add("/threshold", "number", "0.3", 0, 0.999, "Cut-off remap clamp((d - t) / (1 - t), 0, 1).",
       [](Preset& p, const json& j, const Index&) { p.threshold = j.get<double>(); });
   add("/density_scale", "number", "1.0", 0, 1000, "Multiplier after the threshold (result clamped to [0, 1]).",
       [](Preset& p, const json& j, const Index&) { p.density_scale = j.get<double>(); });
 
+  in(ParamGroup::Quality, true);
   add("/occupancy/cell", "integer", "4", 1, 256, "Coarse occupancy cell edge in voxels.",
       [](Preset& p, const json& j, const Index&) { p.occupancy_cell = j.get<uint32_t>(); });
   add("/occupancy/padding", "integer", "2", 0, 16,
       "Dilation in coarse cells (2 = the thesis's double padding, so a large step can't cut a corner).",
       [](Preset& p, const json& j, const Index&) { p.occupancy_padding = j.get<uint32_t>(); });
 
+  in(ParamGroup::Output);
   add("/export/vdb/half", "bool", "false", 0, 0, "Store VDB grids as half floats.",
       [](Preset& p, const json& j, const Index&) { p.export_options.vdb_half = j.get<bool>(); });
   add("/export/vdb/lod", "integer", "0", 0, kMaxLodLevels,
@@ -277,6 +298,7 @@ std::vector<Spec> build_table() {
       "grid holds extinction per metre (Principled Volume Density 1).",
       [](Preset& p, const json& j, const Index&) { p.export_options.vdb_physical = j.get<std::string>() == "physical"; },
       {"normalized", "physical"});
+  in(ParamGroup::Output, true);
   add("/export/vdb/bake_erosion", "bool", "true", 0, 0,
       "Apply the viewer's erosion (view.render.erosion, 0.35 by default) to density in the VDB and write no "
       "detail grids: a file about the size of its density grid that renders eroded in tools that read density "
@@ -299,6 +321,7 @@ std::vector<Spec> build_table() {
       "(normalised, or extinction per metre with export.vdb.units = physical); a leaf that 16 bits cannot keep "
       "within it gets 16 bits. Other precisions ignore it.",
       [](Preset& p, const json& j, const Index&) { p.export_options.nvdb_tolerance = j.get<double>(); });
+  in(ParamGroup::Output);
   add("/export/raw/format", "string", "\"rgba8\"", 0, 0, "Texel format of raw/KTX2 textures.",
       [](Preset& p, const json& j, const Index&) { p.export_options.texel = parse_texel(j.get<std::string>()); },
       names_of(kTexels, texel_name));
@@ -308,6 +331,7 @@ std::vector<Spec> build_table() {
     if (j.is_null()) dst.reset();
     else dst = v3(j);
   };
+  in(ParamGroup::Camera);
   add("/view/eye", "vec3", "null", -big, big, "Camera position, world metres (unset: the viewer's default framing).",
       [=](Preset& p, const json& j, const Index&) { opt_vec3(p.view.eye, j); });
   add("/view/target", "vec3", "null", -big, big, "Point the camera looks at, world metres (unset: the volume's centre).",
@@ -318,11 +342,13 @@ std::vector<Spec> build_table() {
   };
   add("/view/fov", "number", "null", 1, 170, "Vertical field of view, degrees (unset: 60).",
       [=](Preset& p, const json& j, const Index&) { opt_num(p.view.fov, j); });
+  in(ParamGroup::LightAndSky);
   add("/view/sun/azimuth", "number", "null", -360, 360,
       "Sun azimuth, degrees clockwise from -z toward +x (unset: behind the camera).",
       [=](Preset& p, const json& j, const Index&) { opt_num(p.view.sun_azimuth, j); });
   add("/view/sun/elevation", "number", "null", -90, 90, "Sun elevation, degrees (unset: 35).",
       [=](Preset& p, const json& j, const Index&) { opt_num(p.view.sun_elevation, j); });
+  in(ParamGroup::Output, true);
   add("/view/render", "object", "{}", 0, 0,
       "cloudviewer render settings for this preset, {\"KEY\": value} as in `cloudviewer --help-params` "
       "(e.g. {\"sigma_t\": 0.02, \"g\": 0.5}); the viewer checks keys and values, command-line flags override.",
@@ -331,6 +357,7 @@ std::vector<Spec> build_table() {
         for (auto& [k, val] : j.items()) p.view.render.push_back({k, val.is_string() ? val.get<std::string>() : val.dump()});
       });
   // The `motion` section, from motion.h's one table (the viewer's --set motion.KEY reads it too).
+  in(ParamGroup::Animation);
   const MotionParams motion_defaults;
   for (const MotionKey& k : motion_keys()) {
     double MotionParams::*member = k.member;
@@ -538,18 +565,34 @@ const std::vector<ParamInfo>& params() {
   return infos;
 }
 
+ParamPlace preset_param_place(const std::string& pointer) {
+  for (const Spec& s : table())
+    if (s.field.name == pointer) return s.place;
+  return {};
+}
+
 std::string params_markdown() {
+  // One table per group (param_group.h), in the panel's order; the engineering switches of a group
+  // in a table of their own under it.
   std::ostringstream o;
-  o << "| key | type | default | allowed | meaning |\n|---|---|---|---|---|\n";
-  for (const ParamInfo& i : params()) {
-    std::string key = i.pointer.substr(1);
-    std::replace(key.begin(), key.end(), '/', '.');
-    auto cell = [](std::string t) {  // a '|' inside a cell would end it
-      for (size_t k = 0; (k = t.find('|', k)) != std::string::npos; k += 2) t.replace(k, 1, "\\|");
-      return t;
-    };
-    o << "| `" << key << "` | " << i.type << " | `" << i.default_value << "` | " << cell(i.range) << " | " << cell(i.doc) << " |\n";
-  }
+  auto cell = [](std::string t) {  // a '|' inside a cell would end it
+    for (size_t k = 0; (k = t.find('|', k)) != std::string::npos; k += 2) t.replace(k, 1, "\\|");
+    return t;
+  };
+  for (ParamGroup g : kParamGroups)
+    for (bool advanced : {false, true}) {
+      std::ostringstream rows;
+      for (const Spec& s : table()) {
+        if (s.place.group != g || s.place.advanced != advanced) continue;
+        std::string key = s.field.name.substr(1);
+        std::replace(key.begin(), key.end(), '/', '.');
+        rows << "| `" << key << "` | " << s.field.type << " | `" << s.field.default_value << "` | "
+             << cell(s.field.range()) << " | " << cell(s.field.doc) << " |\n";
+      }
+      if (rows.str().empty()) continue;
+      o << (advanced ? "### " : "## ") << param_group_name(g) << (advanced ? ": advanced" : "") << "\n\n"
+        << "| key | type | default | allowed | meaning |\n|---|---|---|---|---|\n" << rows.str() << "\n";
+    }
   return o.str();
 }
 
@@ -582,6 +625,70 @@ Preset parse_preset(const std::string& text, const std::string& source, const st
     throw InputError(all);
   }
   return p;
+}
+
+std::string edited_preset_text(const std::string& path, const std::vector<std::string>& sets, const std::string& to) {
+  namespace fs = std::filesystem;
+  Reader r(path);
+  json doc = parse_json_checked(read_text_input(path, "the input preset " + printable(path), path), path);
+  if (!doc.is_object()) throw InputError(path + ": the preset must be a JSON object");
+  for (const std::string& ov : sets) apply_override(doc, ov, r);
+  if (!r.problems().empty()) {
+    std::string all;
+    for (const auto& m : r.problems()) all += (all.empty() ? "" : "\n") + m;
+    throw InputError(all);
+  }
+  // A file named relative to the preset's folder (from a set: to the current folder) is named
+  // relative to the new file's folder, so the saved preset finds it.
+  for (const char* ptr : {"/coverage/file", "/motion/flow_map"}) {
+    const json::json_pointer at(ptr);
+    if (!doc.contains(at) || !doc[at].is_string()) continue;
+    const std::string name = doc[at].get<std::string>();
+    if (name.empty() || name == "procedural" || fs::path(name).is_absolute()) continue;
+    std::string key = std::string(ptr).substr(1);
+    std::replace(key.begin(), key.end(), '/', '.');
+    const bool from_set = std::any_of(sets.begin(), sets.end(), [&](const std::string& s) { return s.rfind(key + "=", 0) == 0; });
+    const fs::path base = from_set ? fs::current_path() : fs::absolute(path).parent_path();
+    const fs::path file = (base / name).lexically_normal();
+    const fs::path rel = file.lexically_relative(fs::absolute(to).parent_path());
+    doc[at] = (rel.empty() ? file : rel).generic_string();
+  }
+  std::string text = doc.dump(2) + "\n";
+  parse_preset(text, to);  // what is saved reads back as a valid preset where it goes
+  return text;
+}
+
+const std::vector<PresetField>& preset_fields() {
+  static const std::vector<PresetField> fields = [] {
+    std::vector<PresetField> v;
+    for (const Spec& s : table()) {
+      PresetField f;
+      f.pointer = s.field.name;
+      f.key = f.pointer.substr(1);
+      std::replace(f.key.begin(), f.key.end(), '/', '.');
+      f.type = s.field.type;
+      f.default_value = s.field.default_value;
+      f.lo = s.field.lo, f.hi = s.field.hi;
+      f.choices = s.field.choices;
+      f.range = s.field.range();
+      f.doc = s.field.doc;
+      f.place = s.place;
+      v.push_back(std::move(f));
+    }
+    return v;
+  }();
+  return fields;
+}
+
+std::map<std::string, std::string> preset_values(const std::string& path, const std::vector<std::string>& sets) {
+  const json doc = json::parse(edited_preset_text(path, sets, path));
+  std::map<std::string, std::string> out;
+  for (const PresetField& f : preset_fields()) {
+    if (f.pointer.find('*') != std::string::npos) continue;
+    const json::json_pointer at(f.pointer);
+    out[f.key] = doc.contains(at) ? doc[at].dump() : f.default_value;
+  }
+  return out;
 }
 
 Preset load_preset(const std::string& path, const std::vector<std::string>& overrides) {

@@ -36,8 +36,23 @@ struct PanelWidget {
   bool logarithmic = false;           ///< ranges spanning more than three decades
   std::vector<std::string> choices;
   std::string default_value, tooltip;
+  cloudgen::ParamGroup group = cloudgen::ParamGroup::Unset;  ///< the table's group
+  bool advanced = false;                                      ///< under the group's Advanced fold
 };
 /// The widgets the panel builds, one per parameter, in table order.
 std::vector<PanelWidget> panel_widgets();
+
+/// One collapsible group of the panel (cloudgen/param_group.h), the layout panel.cpp draws: its
+/// render.* widgets and atmosphere.* keys, each split into the everyday ones and the engineering
+/// switches under an "Advanced" fold, in table order.
+struct PanelGroup {
+  cloudgen::ParamGroup group = cloudgen::ParamGroup::Unset;
+  std::string name;
+  std::vector<PanelWidget> render, render_advanced;
+  std::vector<std::string> atmosphere, atmosphere_advanced;  ///< keys without "atmosphere."
+};
+/// The panel's groups in kParamGroups order, the empty ones left out: every key of the render and
+/// atmosphere tables in exactly one.
+std::vector<PanelGroup> panel_groups();
 
 }  // namespace cloudviewer

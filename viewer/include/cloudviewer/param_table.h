@@ -3,8 +3,11 @@
 // the generated reference (docs/reference/viewer-params.md) and the window's panel.
 #pragma once
 #include <functional>
+#include <utility>
 #include <string>
 #include <vector>
+
+#include "cloudgen/param_group.h"
 
 namespace cloudviewer {
 
@@ -22,6 +25,14 @@ struct Param {
   ParamKind kind = ParamKind::Float;
   double lo = 0, hi = 0;             ///< Int, Float, FloatOrAuto: the allowed range
   std::vector<std::string> choices;  ///< Enum: the names, in code order
+  cloudgen::ParamGroup group = cloudgen::ParamGroup::Unset;  ///< the panel's and the docs' group
+  bool advanced = false;             ///< an engineering switch (under the group's Advanced fold)
+
+  /// Places the row in a group: `table.push_back(real(...).in(ParamGroup::Detail))`.
+  Param in(cloudgen::ParamGroup g, bool is_advanced = false) && {
+    group = g, advanced = is_advanced;
+    return std::move(*this);
+  }
 };
 
 }  // namespace cloudviewer

@@ -242,7 +242,8 @@ void add_options(CLI::App& app, Options& o, CliText& t) {
   app.add_option("--edit", o.edits, "headless, a preset INPUT: a preset KEY=VALUE (as --set) applied after the first "
                  "generation, the edits one after another, each regeneration timed; the noise is kept, so a threshold, "
                  "coverage, density, height or tower edit does not evaluate it again. The image is the last edit's "
-                 "(the same as --set of all of them)")->take_all();
+                 "(the same as --set of all of them). In a window with --out: applied through the panel's edit after the first "
+                 "frame, then the frame is written once the regeneration is shown")->take_all();
   app.add_option("--dump-lut", t.dump_lut, "write an atmosphere LUT read through the shaders' lookup to --out as CSV (no INPUT needed)")
       ->check(CLI::IsMember({"transmittance"}));
   app.add_flag("--stats", o.stats,
@@ -314,7 +315,9 @@ void sort_sets(Options& o) {
 // preset (the message names the edit, the key, the value and what is allowed).
 void check_edits(const Options& o) {
   if (o.edits.empty()) return;
-  if (!o.headless) throw InputError("--edit needs --headless (it times regenerations and writes the last image)");
+  if (!o.headless && o.out.empty())
+    throw InputError("--edit needs --headless (it times regenerations and writes the last image), or a window with "
+                     "--out (the edits go through the panel's edit after the first frame, then the frame is written)");
   if (!o.bench.empty()) throw InputError("--edit and --bench do not go together");
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
   std::string ext = std::filesystem::path(o.input).extension().string();
@@ -506,7 +509,7 @@ std::string milliseconds(double seconds) {
 // prepared and uploaded; one line each, with where the time went under --stats.
 void apply_edits(const Options& o, Session& session, std::ostream& out) {
   for (size_t i = 0; i < o.edits.size(); ++i) {
-    session.preset().sets.push_back(o.edits[i]);
+    session.edit_preset(o.edits[i]);  // the panel's edit too
     InputTiming t;
     double upload_s = 0;
     const auto t0 = std::chrono::steady_clock::now();

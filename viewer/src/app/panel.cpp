@@ -1,11 +1,12 @@
-// Dear ImGui panel: every entry of the render parameter table as a slider, checkbox or list with its
-// range and default, the table's doc line as the tooltip, and per-pass GPU times. The widgets come
-// from panel_widgets(), so a key added to the table (the sky's, the motion's) appears here with no
-// code of its own; the atmosphere.* table has a section of its own, with the last LUT recompute's
-// GPU time. Follows imgui's examples/example_glfw_opengl3/main.cpp.
+// Dear ImGui panel: every entry of the render and atmosphere parameter tables as a slider, checkbox
+// or list with its range and default, the table's doc line as the tooltip, and per-pass GPU times.
+// The layout comes from panel_groups(): one collapsible header per group of the tables (Shape,
+// Detail, Light and sky, ...), the engineering switches under an Advanced fold in each, so a key
+// added to a table appears here, in its group, with no code of its own. Follows imgui's examples/example_glfw_opengl3/main.cpp.
 #include "app/panel.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -14,8 +15,13 @@
 #include <backends/imgui_impl_glfw.h>
 #include <backends/imgui_impl_opengl3.h>
 
+#include <nlohmann/json.hpp>
+
 #include "cloudviewer/controls.h"
 #include "cloudviewer/errors.h"
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+#include "cloudgen/preset_fields.h"
+#endif
 
 namespace cloudviewer {
 
@@ -61,106 +67,284 @@ std::string text(double v) {
   return buf;
 }
 
+// One render.* control: slider, checkbox, list or auto + slider, with its tooltip.
+void render_widget(RenderSettings& s, const PanelWidget& w) {
+  const ParamDef& p = render_param(w.key);
+  const std::string value = p.get(s);
+  const char* label = w.key.c_str();
+  const ImGuiSliderFlags flags = w.logarithmic ? ImGuiSliderFlags_Logarithmic : 0;
+  switch (w.kind) {
+    case PanelWidget::Kind::Checkbox: {
+      bool b = value == "true";
+      if (ImGui::Checkbox(label, &b)) set(s, w.key, b ? "true" : "false");
+      break;
+    }
+    case PanelWidget::Kind::SliderInt: {
+      int v = std::stoi(value);
+      if (ImGui::SliderInt(label, &v, int(w.lo), int(w.hi), "%d", flags)) set(s, w.key, std::to_string(v));
+      break;
+    }
+    case PanelWidget::Kind::SliderFloat: {
+      float v = std::stof(value);
+      if (ImGui::SliderFloat(label, &v, float(w.lo), float(w.hi), "%.4g", flags)) set(s, w.key, text(v));
+      break;
+    }
+    case PanelWidget::Kind::Combo: {
+      int index = 0;
+      for (size_t i = 0; i < w.choices.size(); ++i)
+        if (w.choices[i] == value) index = int(i);
+      std::vector<const char*> items;
+      for (const std::string& c : w.choices) items.push_back(c.c_str());
+      if (ImGui::Combo(label, &index, items.data(), int(items.size()))) set(s, w.key, w.choices[size_t(index)]);
+      break;
+    }
+    case PanelWidget::Kind::SliderFloatOrAuto: {
+      bool automatic = value == "auto";
+      std::string auto_label = "auto##" + w.key;
+      if (ImGui::Checkbox(auto_label.c_str(), &automatic)) set(s, w.key, automatic ? "auto" : "0");
+      tooltip(w);
+      ImGui::SameLine();
+      float v = automatic ? 0.f : std::stof(value);
+      ImGui::BeginDisabled(automatic);
+      if (ImGui::SliderFloat(label, &v, float(w.lo), float(w.hi), "%.4g", flags)) set(s, w.key, text(v));
+      ImGui::EndDisabled();
+      break;
+    }
+  }
+  tooltip(w);
+}
+
+// One atmosphere.* control: a change re-runs the LUT passes on the next frame.
+void atmosphere_widget(RenderSettings& s, const std::string& key) {
+  const AtmosphereParamDef* found = nullptr;
+  for (const AtmosphereParamDef& p : atmosphere_params())
+    if (p.key == key) found = &p;
+  if (!found) return;
+  const AtmosphereParamDef& p = *found;
+  AtmosphereSettings defaults;
+  const std::string value = p.get(s.atmosphere), label = "atmosphere." + p.key;
+  const std::string tip = p.doc + " (" + p.type + ", " + p.range + ", default " + p.get(defaults) + ")";
+  AtmosphereSettings next = s.atmosphere;
+  bool changed = false;
+  try {
+    if (p.type == "bool") {
+      bool b = value == "true";
+      if (ImGui::Checkbox(label.c_str(), &b)) p.set(next, b ? "true" : "false"), changed = true;
+    } else if (p.type == "int") {
+      int v = std::stoi(value);
+      if (ImGui::SliderInt(label.c_str(), &v, int(p.lo), int(p.hi))) p.set(next, std::to_string(v)), changed = true;
+    } else {
+      float v = std::stof(value);
+      const bool log_scale = p.lo >= 0 && p.hi / std::max(p.lo, 1e-12) > 1e3;
+      // Per-metre coefficients are ~1e-6: the slider shows them in those units' own exponent.
+      if (ImGui::SliderFloat(label.c_str(), &v, float(p.lo), float(p.hi), "%.4g",
+                             log_scale ? ImGuiSliderFlags_Logarithmic : 0))
+        p.set(next, text(v)), changed = true;
+    }
+    if (changed) {
+      validate_atmosphere(next);  // e.g. top above bottom; an invalid combination is not applied
+      s.atmosphere = next;
+    }
+  } catch (const InputError&) {
+  }
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", tip.c_str());
+}
+
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+// One preset key (cloudgen's preset table): a slider, drag, checkbox or list by its type, within
+// its range; a change asks for the edit KEY=VALUE. Lists, objects, free text and unset values are
+// shown, not edited.
+void preset_widget(const cloudgen::PresetField& f, PanelFile& pf) {
+  const auto it = pf.values.find(f.key);
+  if (it == pf.values.end()) return;
+  const nlohmann::json v = nlohmann::json::parse(it->second, nullptr, false);
+  const std::string tip = f.doc + " (" + f.type + ", " + f.range + ", default " + f.default_value + ")";
+  const char* label = f.key.c_str();
+  auto edit = [&](const std::string& value) { pf.edits.push_back(f.key + "=" + value); };
+  const double span = f.hi - f.lo;
+  if (f.type == "bool" && v.is_boolean()) {
+    bool b = v.get<bool>();
+    if (ImGui::Checkbox(label, &b)) edit(b ? "true" : "false");
+  } else if ((f.type == "integer" || (f.type == "period" && v.is_number())) && v.is_number()) {
+    if (span <= 4096) {
+      int x = v.get<int>();
+      if (ImGui::SliderInt(label, &x, int(f.lo), int(f.hi))) edit(std::to_string(x));
+    } else {
+      long long x = v.get<long long>();
+      if (ImGui::InputScalar(label, ImGuiDataType_S64, &x, nullptr, nullptr, "%lld", ImGuiInputTextFlags_EnterReturnsTrue))
+        edit(std::to_string(std::clamp<long long>(x, (long long)f.lo, (long long)f.hi)));
+    }
+  } else if (f.type == "number" && v.is_number()) {
+    float x = v.get<float>();
+    const bool log_scale = f.lo > 0 && f.hi / f.lo > 1e3;
+    if (span <= 1000 && !log_scale) {
+      if (ImGui::SliderFloat(label, &x, float(f.lo), float(f.hi), "%.4g")) edit(text(x));
+    } else {
+      const float speed = std::max(std::abs(x) * 0.005f, 1e-3f);
+      if (ImGui::DragFloat(label, &x, speed, float(f.lo), float(f.hi), "%.4g", ImGuiSliderFlags_AlwaysClamp)) edit(text(x));
+    }
+  } else if (f.type == "string" && !f.choices.empty() && v.is_string()) {
+    int index = -1;
+    for (size_t i = 0; i < f.choices.size(); ++i)
+      if (f.choices[i] == v.get<std::string>()) index = int(i);
+    std::vector<const char*> items;
+    for (const std::string& c : f.choices) items.push_back(c.c_str());
+    if (ImGui::Combo(label, &index, items.data(), int(items.size())) && index >= 0) edit(f.choices[size_t(index)]);
+  } else if ((f.type == "vec2" || f.type == "vec3" || f.type == "ivec3" || f.type == "period") && v.is_array() &&
+             (v.size() == 2 || v.size() == 3)) {
+    const int n = int(v.size());
+    const bool ints = f.type == "ivec3" || f.type == "period";
+    float x[3] = {0, 0, 0};
+    int xi[3] = {0, 0, 0};
+    float largest = 0;
+    for (int a = 0; a < n; ++a) {
+      x[a] = v[size_t(a)].get<float>(), xi[a] = int(x[a]);
+      largest = std::max(largest, std::abs(x[a]));
+    }
+    bool changed = false;
+    if (ints) changed = ImGui::DragScalarN(label, ImGuiDataType_S32, xi, n, 0.2f, nullptr, nullptr, "%d");
+    else
+      changed = ImGui::DragScalarN(label, ImGuiDataType_Float, x, n, std::max(largest * 0.005f, 1e-3f), nullptr, nullptr,
+                                   "%.4g");
+    if (changed) {
+      std::string value = "[";
+      for (int a = 0; a < n; ++a) {
+        const double c = std::clamp(ints ? double(xi[a]) : double(x[a]), f.lo, f.hi);
+        value += (a ? "," : "") + (ints ? std::to_string((long long)c) : text(c));
+      }
+      edit(value + "]");
+    }
+  } else {
+    std::string shown = it->second.size() > 40 ? it->second.substr(0, 37) + "..." : it->second;
+    ImGui::TextDisabled("%s = %s", label, shown.c_str());
+  }
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", tip.c_str());
+}
+
+// The preset's keys of group `g` (advanced or not); true when there is any.
+bool preset_widgets(cloudgen::ParamGroup g, bool advanced, PanelFile* pf) {
+  if (!pf || !pf->preset) return false;
+  bool any = false;
+  for (const cloudgen::PresetField& f : cloudgen::preset_fields()) {
+    if (f.place.group != g || f.place.advanced != advanced || !pf->values.count(f.key)) continue;
+    if (!any) ImGui::TextDisabled(advanced ? "preset (advanced)" : "preset");
+    any = true;
+    preset_widget(f, *pf);
+  }
+  return any;
+}
+bool has_preset_widgets(cloudgen::ParamGroup g, bool advanced, const PanelFile* pf) {
+  if (!pf || !pf->preset) return false;
+  for (const cloudgen::PresetField& f : cloudgen::preset_fields())
+    if (f.place.group == g && f.place.advanced == advanced && pf->values.count(f.key)) return true;
+  return false;
+}
+#else
+bool preset_widgets(cloudgen::ParamGroup, bool, PanelFile*) { return false; }
+bool has_preset_widgets(cloudgen::ParamGroup, bool, const PanelFile*) { return false; }
+#endif
+
+// The key list's Markdown table rows as plain lines ("F1  the panel on / off"), headers dropped.
+std::string plain_key_list(const std::string& md) {
+  std::string out, row;
+  for (size_t i = 0; i <= md.size(); ++i) {
+    if (i < md.size() && md[i] != '\n') {
+      row += md[i];
+      continue;
+    }
+    if (!row.empty() && row.rfind("|---", 0) != 0 && row.rfind("| key", 0) != 0) {
+      std::string plain;
+      for (size_t k = 0; k < row.size(); ++k) {
+        if (row[k] == '`') continue;
+        if (row[k] == '\\' && k + 1 < row.size() && row[k + 1] == '|') plain += row[++k];  // an escaped |
+        else if (row[k] == '|') plain += plain.empty() ? "" : "  ";
+        else plain += row[k];
+      }
+      out += plain + "\n";
+    }
+    row.clear();
+  }
+  return out;
+}
+
+// A path field over a std::string.
+void path_field(const char* label, std::string& path) {
+  char buf[1024];
+  std::snprintf(buf, sizeof buf, "%s", path.c_str());
+  if (ImGui::InputText(label, buf, sizeof buf)) path = buf;
+}
+
+// Save preset as, Export and Open in Blender, with their paths, progress and outcome.
+void file_actions(PanelFile& f) {
+  if (!ImGui::CollapsingHeader("Preset file", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  ImGui::PushItemWidth(200);
+  path_field("##save", f.save_path);
+  ImGui::SameLine();
+  if (ImGui::Button("Save preset as")) f.save = true;
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Ctrl+S: the preset with the panel's edits, as JSON (atomic; never into presets/)");
+  path_field("##export", f.export_path);
+  ImGui::SameLine();
+  ImGui::BeginDisabled(f.busy);
+  if (ImGui::Button("Export")) f.export_vdb = true;
+  if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled)) ImGui::SetTooltip("Ctrl+E: generate and write the VDB as `cloudgen generate` does");
+  if (ImGui::Button("Open in Blender")) f.blender = true;
+  if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled)) ImGui::SetTooltip("Ctrl+B: `cloudgen blender` of the exported VDB");
+  ImGui::EndDisabled();
+  ImGui::PopItemWidth();
+  if (f.busy && f.progress >= 0) ImGui::ProgressBar(f.progress, ImVec2(-1, 0));
+  if (!f.status.empty()) ImGui::TextWrapped("%s", f.status.c_str());
+}
+
 }  // namespace
 
-void Panel::draw(RenderSettings& s, const GpuTimings& t, const std::string& hint) {
+void Panel::draw(RenderSettings& s, const GpuTimings& t, const std::string& hint, PanelFile* file) {
   if (!visible) return;
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
   ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
-  ImGui::SetNextWindowSize(ImVec2(340, 0), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(360, 0), ImGuiCond_FirstUseEver);
   ImGui::Begin("cloudviewer");
   ImGui::TextUnformatted(hint.c_str());
-  if (ImGui::CollapsingHeader("GPU time per pass", ImGuiTreeNodeFlags_DefaultOpen)) {
+  if (ImGui::CollapsingHeader("GPU time per pass")) {
     for (const auto& p : t.passes) ImGui::Text("%-14s %8.2f ms", p.first.c_str(), p.second);
     ImGui::Text("%-14s %8.2f ms", "total", t.total_ms);
   }
-  if (ImGui::CollapsingHeader("render.*", ImGuiTreeNodeFlags_DefaultOpen)) {
-    ImGui::PushItemWidth(150);
-    for (const PanelWidget& w : panel_widgets()) {
-      const ParamDef& p = render_param(w.key);
-      const std::string value = p.get(s);
-      const char* label = w.key.c_str();
-      const ImGuiSliderFlags flags = w.logarithmic ? ImGuiSliderFlags_Logarithmic : 0;
-      switch (w.kind) {
-        case PanelWidget::Kind::Checkbox: {
-          bool b = value == "true";
-          if (ImGui::Checkbox(label, &b)) set(s, w.key, b ? "true" : "false");
-          break;
-        }
-        case PanelWidget::Kind::SliderInt: {
-          int v = std::stoi(value);
-          if (ImGui::SliderInt(label, &v, int(w.lo), int(w.hi), "%d", flags)) set(s, w.key, std::to_string(v));
-          break;
-        }
-        case PanelWidget::Kind::SliderFloat: {
-          float v = std::stof(value);
-          if (ImGui::SliderFloat(label, &v, float(w.lo), float(w.hi), "%.4g", flags)) set(s, w.key, text(v));
-          break;
-        }
-        case PanelWidget::Kind::Combo: {
-          int index = 0;
-          for (size_t i = 0; i < w.choices.size(); ++i)
-            if (w.choices[i] == value) index = int(i);
-          std::vector<const char*> items;
-          for (const std::string& c : w.choices) items.push_back(c.c_str());
-          if (ImGui::Combo(label, &index, items.data(), int(items.size()))) set(s, w.key, w.choices[size_t(index)]);
-          break;
-        }
-        case PanelWidget::Kind::SliderFloatOrAuto: {
-          bool automatic = value == "auto";
-          std::string auto_label = "auto##" + w.key;
-          if (ImGui::Checkbox(auto_label.c_str(), &automatic)) set(s, w.key, automatic ? "auto" : "0");
-          tooltip(w);
-          ImGui::SameLine();
-          float v = automatic ? 0.f : std::stof(value);
-          ImGui::BeginDisabled(automatic);
-          if (ImGui::SliderFloat(label, &v, float(w.lo), float(w.hi), "%.4g", flags)) set(s, w.key, text(v));
-          ImGui::EndDisabled();
-          break;
-        }
-      }
-      tooltip(w);
-    }
-    ImGui::PopItemWidth();
-  }
-  // The atmosphere model: a change re-runs the LUT passes on the next frame (timed below).
+  if (!help.empty() && ImGui::CollapsingHeader("Keys")) ImGui::TextUnformatted(plain_key_list(help).c_str());
+  if (file && file->preset) file_actions(*file);
   if (t.atmosphere_ms > 0.01) last_lut_ms_ = t.atmosphere_ms;
-  if (ImGui::CollapsingHeader("atmosphere.*")) {
-    ImGui::Text("LUT precompute (last run) %8.2f ms", last_lut_ms_);
-    ImGui::PushItemWidth(150);
-    AtmosphereSettings defaults;
-    for (const AtmosphereParamDef& p : atmosphere_params()) {
-      const std::string value = p.get(s.atmosphere), label = "atmosphere." + p.key;
-      const std::string tip = p.doc + " (" + p.type + ", " + p.range + ", default " + p.get(defaults) + ")";
-      AtmosphereSettings next = s.atmosphere;
-      bool changed = false;
-      try {
-        if (p.type == "bool") {
-          bool b = value == "true";
-          if (ImGui::Checkbox(label.c_str(), &b)) p.set(next, b ? "true" : "false"), changed = true;
-        } else if (p.type == "int") {
-          int v = std::stoi(value);
-          if (ImGui::SliderInt(label.c_str(), &v, int(p.lo), int(p.hi))) p.set(next, std::to_string(v)), changed = true;
-        } else {
-          float v = std::stof(value);
-          const bool log_scale = p.lo >= 0 && p.hi / std::max(p.lo, 1e-12) > 1e3;
-          // Per-metre coefficients are ~1e-6: the slider shows them in those units' own exponent.
-          if (ImGui::SliderFloat(label.c_str(), &v, float(p.lo), float(p.hi), "%.4g",
-                                 log_scale ? ImGuiSliderFlags_Logarithmic : 0))
-            p.set(next, text(v)), changed = true;
-        }
-        if (changed) {
-          validate_atmosphere(next);  // e.g. top above bottom; an invalid combination is not applied
-          s.atmosphere = next;
-        }
-      } catch (const InputError&) {
-      }
-      if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", tip.c_str());
+  // The groups of the parameter tables (panel_groups), in their order; the engineering switches of
+  // each under its own Advanced fold.
+  static const std::vector<PanelGroup> groups = panel_groups();
+  if (file && file->preset && !file->edit_status.empty()) ImGui::TextWrapped("%s", file->edit_status.c_str());
+  ImGui::PushItemWidth(150);
+  for (cloudgen::ParamGroup group : cloudgen::kParamGroups) {
+    static const PanelGroup none;
+    const PanelGroup* found = &none;
+    for (const PanelGroup& g : groups)
+      if (g.group == group) found = &g;
+    const PanelGroup& g = *found;
+    const bool preset_basic = has_preset_widgets(group, false, file), preset_advanced = has_preset_widgets(group, true, file);
+    const bool advanced = !g.render_advanced.empty() || !g.atmosphere_advanced.empty() || preset_advanced;
+    if (g.render.empty() && g.atmosphere.empty() && !preset_basic && !advanced) continue;
+    const bool open_at_start = group == cloudgen::ParamGroup::Shape;  // the others folded: every header in view
+    const char* name = cloudgen::param_group_name(group);
+    if (!ImGui::CollapsingHeader(name, open_at_start ? ImGuiTreeNodeFlags_DefaultOpen : 0)) continue;
+    ImGui::PushID(name);
+    if (preset_widgets(group, false, file) && !g.render.empty()) ImGui::TextDisabled("render");
+    for (const PanelWidget& w : g.render) render_widget(s, w);
+    if (!g.atmosphere.empty() || !g.atmosphere_advanced.empty())
+      ImGui::Text("atmosphere LUTs (last run) %8.2f ms", last_lut_ms_);
+    for (const std::string& k : g.atmosphere) atmosphere_widget(s, k);
+    if (advanced && ImGui::TreeNode("Advanced")) {
+      if (preset_widgets(group, true, file) && !g.render_advanced.empty()) ImGui::TextDisabled("render");
+      for (const PanelWidget& w : g.render_advanced) render_widget(s, w);
+      for (const std::string& k : g.atmosphere_advanced) atmosphere_widget(s, k);
+      ImGui::TreePop();
     }
-    ImGui::PopItemWidth();
+    ImGui::PopID();
   }
+  ImGui::PopItemWidth();
   ImGui::End();
   ImGui::Render();
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());

@@ -1,7 +1,10 @@
 // The window's on-screen panel (Dear ImGui): one control per render.* key, built from the
 // parameter table by panel_widgets() (settings.h), plus the GPU time of every pass. Internal.
 #pragma once
+#include <map>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "cloudviewer/controls.h"
 #include "cloudviewer/renderer.h"
@@ -10,6 +13,22 @@
 struct GLFWwindow;
 
 namespace cloudviewer {
+
+/// The panel's file actions on a preset INPUT (Save preset as, Export, Open in Blender): the
+/// panel edits the paths and sets a request; window.cpp does the work (authoring.h, Session) and
+/// reports back in `status` and `progress`.
+struct PanelFile {
+  bool preset = false;  ///< the INPUT is a preset .json: the actions are offered
+  std::string save_path, export_path, blend_path;
+  bool save = false, export_vdb = false, blender = false;  ///< asked for this frame (buttons, Ctrl+S/E/B)
+  bool busy = false;       ///< an export or a Blender scene is being made
+  float progress = -1;     ///< the export's generation, [0, 1], while busy
+  std::string status;      ///< the last action's outcome (the .blend's path, an error)
+  /// The preset's fields (cloudgen::preset_values: KEY -> JSON text), drawn in their groups.
+  std::map<std::string, std::string> values;
+  std::vector<std::string> edits;  ///< KEY=VALUE the user asked for this frame (Session::edit_preset)
+  std::string edit_status;         ///< the last refused edit's reason
+};
 
 class Panel {
  public:
@@ -20,11 +39,14 @@ class Panel {
   Panel& operator=(const Panel&) = delete;
   /// Builds and draws the panel into the current framebuffer (after the frame's present()).
   /// Changes `s` where the user moved a control; `hint` is a line shown under the title.
-  void draw(RenderSettings& s, const GpuTimings& t, const std::string& hint);
+  /// `file`: the file actions of a preset INPUT (null: none).
+  void draw(RenderSettings& s, const GpuTimings& t, const std::string& hint, PanelFile* file = nullptr);
   /// True while ImGui uses the keyboard or mouse (the window's own bindings then stay quiet).
   static bool wants_keyboard();
   static bool wants_mouse();
   bool visible = true;
+  /// The window's key list (Markdown table rows, as H prints it), shown under "Keys".
+  std::string help;
 
  private:
   double last_lut_ms_ = 0;  ///< GPU time of the last atmosphere LUT recompute

@@ -4,12 +4,18 @@
 #include <utility>
 
 #include "cloudviewer/distance_field.h"
+#include "cloudviewer/errors.h"
 #include "cloudviewer/input.h"
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+#include "cloudgen/errors.h"
+#include "cloudgen/preset.h"
+#include "cloudgen/preset_save.h"
+#endif
 
 namespace cloudviewer {
 
 Session::Session(const std::string& input, const RenderSettings& s, uint32_t lod_level, PresetSource preset)
-    : vol_(open_input(input, s, lod_level, preset)), lod_level_(lod_level), preset_(std::move(preset)) {
+    : input_(input), vol_(open_input(input, s, lod_level, preset)), lod_level_(lod_level), preset_(std::move(preset)) {
   if (preset_.noise_cache) preset_.spare_rgba = &spare_rgba_;  // an edited preset reuses the memory
 }
 
@@ -32,6 +38,34 @@ void Session::stop_renderer() {
   renderer_.reset();
   context_.reset();
   uploaded_ = nullptr;
+}
+
+void Session::edit_preset(const std::string& assignment) {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+  // A later value of the same key replaces the earlier one (a dragged slider makes many).
+  const std::string key = assignment.substr(0, assignment.find('=') + 1);
+  std::vector<std::string> sets;
+  for (const std::string& s : preset_.sets)
+    if (key.size() < 2 || s.rfind(key, 0) != 0) sets.push_back(s);
+  sets.push_back(assignment);
+  try {
+    cloudgen::load_preset(input_, sets);  // the same check as loading: key, value, range, cross-checks
+  } catch (const cloudgen::InputError& e) {
+    throw InputError("edit " + assignment + ": " + e.what());
+  }
+  preset_.sets = std::move(sets);
+#else
+  throw InputError("edit " + assignment + ": this cloudviewer was built without the cloudgen library");
+#endif
+}
+
+std::string Session::save_preset_as(const std::string& target, bool replace_input) const {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+  return cloudgen::save_preset_as(input_, preset_.sets, target, replace_input);
+#else
+  (void)target, (void)replace_input;
+  throw InputError("save preset as: this cloudviewer was built without the cloudgen library");
+#endif
 }
 
 void Session::reopen(const std::string& input, const RenderSettings& s, InputTiming* timing, double* upload_s) {

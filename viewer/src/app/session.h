@@ -43,6 +43,16 @@ class Session {
   PresetSource& preset() { return preset_; }
   const PresetSource& preset() const { return preset_; }
   uint32_t lod_level() const { return lod_level_; }
+  /// The INPUT as given.
+  const std::string& input() const { return input_; }
+  /// A preset INPUT: checks KEY=VALUE (a preset key, as `cloudgen generate --set` spells it) against
+  /// the preset with the edits so far and adds it to them (in place of an earlier value of the same
+  /// key); the caller regenerates (reopen, or the
+  /// window's worker). What the panel and `--edit` call. InputError, nothing changed, on a bad edit.
+  void edit_preset(const std::string& assignment);
+  /// A preset INPUT: writes it with the edits so far to `target` (cloudgen::save_preset_as: atomic,
+  /// never into the shipped presets, not over the input unless `replace_input`). Returns the text.
+  std::string save_preset_as(const std::string& target, bool replace_input = false) const;
   /// Uploads `v` (the volume, or a copy of it at other occupancy and field settings) unless it is
   /// the one the renderer holds.
   void show(const PreparedVolume& v);
@@ -56,6 +66,7 @@ class Session {
                            int height, std::string& refused) const;
 
  private:
+  std::string input_;
   PreparedVolume vol_;
   uint32_t lod_level_ = 0;  // the .vdb level of detail drawn (reopen keeps it)
   PresetSource preset_;

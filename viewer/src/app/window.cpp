@@ -3,8 +3,11 @@
 // and the table's key bindings, GPU frame time in the title bar, F12 saves PNG + EXR, the input
 // preset regenerates when its file changes, shaders hot-reload from --shader-dir.
 #include <algorithm>
+#include <atomic>
+#include <cctype>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <future>
 #include <map>
@@ -19,8 +22,10 @@
 #include "cloudviewer/errors.h"
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
 #include "cloudgen/noise_cache.h"
+#include "cloudgen/preset_fields.h"
 #endif
 #include "internal.h"
+#include "app/authoring.h"
 #include "app/panel.h"
 #include "app/session.h"
 
@@ -63,6 +68,7 @@ struct ViewState {
   Sun* sun = nullptr;
   std::ostream* out = nullptr;
   Panel* panel = nullptr;
+  PanelFile* file = nullptr;  // a preset INPUT's file actions
 };
 
 glm::dvec3 forward_of(double yaw_deg, double pitch_deg) {
@@ -98,6 +104,9 @@ const char* kWindowKeys =
     "| `Backspace` | motion time back to `--time` |\n"
     "| `R` | reload shaders (from `--shader-dir`) and the input |\n"
     "| `F12` | save `cloudviewer_N.png` (tone-mapped) and `cloudviewer_N.exr` (linear HDR) |\n"
+    "| `Ctrl+S` | a preset INPUT: save it with the panel's edits as the panel's file (atomic; never into presets/) |\n"
+    "| `Ctrl+E` | a preset INPUT: export its VDB with the edits (as `cloudgen generate`) |\n"
+    "| `Ctrl+B` | a preset INPUT: open the exported VDB in Blender (`cloudgen blender`; the .blend's path shown) |\n"
     "| `H`, `Esc` | this list, quit |\n";
 
 std::string format_scale(double v) {
@@ -110,6 +119,12 @@ void on_key(GLFWwindow* w, int key, int, int action, int mods) {
   if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
   auto* v = static_cast<ViewState*>(glfwGetWindowUserPointer(w));
   if (v->panel && v->panel->visible && Panel::wants_keyboard()) return;  // typing into the panel
+  if ((mods & GLFW_MOD_CONTROL) && v->file && v->file->preset) {  // the preset's file actions
+    if (key == GLFW_KEY_S) v->file->save = true;
+    if (key == GLFW_KEY_E) v->file->export_vdb = true;
+    if (key == GLFW_KEY_B) v->file->blender = true;
+    return;
+  }
   RenderSettings& s = *v->settings;
   Sun& sun = *v->sun;
   if (key == GLFW_KEY_KP_ADD) key = GLFW_KEY_EQUAL;
@@ -138,7 +153,6 @@ void on_key(GLFWwindow* w, int key, int, int action, int mods) {
     case GLFW_KEY_H: *v->out << kWindowKeys << key_help_markdown(); break;
     default: break;
   }
-  (void)mods;
 }
 
 void on_button(GLFWwindow* w, int button, int action, int) {
@@ -257,6 +271,15 @@ class Watcher {
     if (pending_ && !job_.valid()) start(session, settings);
   }
 
+  /// An edit of the preset (the panel): regenerate now, or as soon as the reload in flight ends.
+  void request(const Session& session, const RenderSettings& settings) {
+    pending_ = true;
+    if (!job_.valid()) start(session, settings);
+  }
+
+  /// No reload in flight or waiting.
+  bool idle() const { return !pending_ && !job_.valid(); }
+
   /// Every frame: a finished reload replaces the volume (the upload happens here, on the GL thread).
   void collect(Session& session, std::ostream& out, std::ostream& err) {
     if (!job_.valid() || job_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
@@ -288,6 +311,102 @@ class Watcher {
   std::chrono::steady_clock::time_point started_;
   std::future<PreparedVolume> job_;  // (its destructor waits for a reload in flight)
 };
+
+// The panel's file actions on a preset INPUT: Save preset as at once (a small JSON file), Export
+// and Open in Blender on a worker thread, one at a time, while the window keeps drawing.
+class FileActions {
+ public:
+  FileActions(const Options& o, PanelFile& f) : f_(f) {
+    std::string ext = fs::path(o.input).extension().string();
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+    f.preset = ext == ".json";
+#endif
+    f.save_path = edited_name(o.input, ".json");
+    f.export_path = edited_name(o.input, ".vdb");
+  }
+  /// Every frame, on the GL thread: the panel's preset edits, checked and added to the session's;
+  /// true when one changes the volume (the caller regenerates it on the watcher's worker).
+  bool edit(Session& session) {
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+    if (f_.preset && f_.values.empty()) f_.values = cloudgen::preset_values(session.input(), session.preset().sets);
+#endif
+    if (f_.edits.empty()) return false;
+    bool applied = false, regenerate = false;
+    for (const std::string& e : f_.edits) {
+      try {
+        session.edit_preset(e);
+        applied = true;
+        // The view, the export options and the names go with Save as and Export; the volume stays.
+        bool volume = true;
+        for (const char* kept : {"view.", "export.", "name=", "description="}) volume = volume && e.rfind(kept, 0) != 0;
+        regenerate = regenerate || volume;
+        f_.edit_status = volume ? "" : "kept for Save preset as and Export: " + e;
+      } catch (const Error& x) {
+        f_.edit_status = x.what();
+      }
+    }
+    f_.edits.clear();
+#ifdef CLOUDVIEWER_HAS_CLOUDGEN
+    if (applied) f_.values = cloudgen::preset_values(session.input(), session.preset().sets);
+#endif
+    return regenerate;
+  }
+
+  /// Every frame, on the GL thread: starts what the panel or the keys asked for, collects a finished job.
+  void run(const Session& session, std::ostream& out) {
+    if (f_.save) {
+      f_.save = false;
+      try {
+        session.save_preset_as(f_.save_path);
+        f_.status = "saved " + cloudgen::printable(f_.save_path) + " (" + std::to_string(session.preset().sets.size()) +
+                    " edits)";
+      } catch (const std::exception& e) {
+        f_.status = std::string("not saved: ") + e.what();
+      }
+      out << f_.status << "\n";
+    }
+    if ((f_.export_vdb || f_.blender) && !job_.valid()) {
+      const bool blender = f_.blender;
+      f_.export_vdb = f_.blender = false;
+      f_.busy = true;
+      f_.progress = blender ? -1.f : 0.f;
+      progress_ = 0;
+      f_.status = blender ? "making the Blender scene..." : "exporting " + cloudgen::printable(f_.export_path) + "...";
+      const std::string vdb = f_.export_path, blend = fs::path(vdb).replace_extension(".blend").string();
+      job_ = std::async(std::launch::async, [this, blender, vdb, blend, input = session.input(), sets = session.preset().sets] {
+        if (blender) {
+          std::error_code ec;
+          if (!fs::is_regular_file(vdb, ec)) throw InputError("no " + vdb + " yet: Export first (Ctrl+E)");
+          return "Blender scene " + open_in_blender(vdb, blend);
+        }
+        export_preset_files(input, sets, {vdb}, [this](double x) { progress_ = float(x); });
+        return "exported " + vdb;
+      });
+    }
+    f_.export_vdb = f_.blender = false;  // asked while busy: ignored
+    if (job_.valid()) {
+      f_.progress = f_.progress < 0 ? -1.f : progress_.load();
+      if (job_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+        try {
+          f_.status = job_.get();
+        } catch (const std::exception& e) {
+          f_.status = std::string("failed: ") + e.what();
+        }
+        f_.busy = false;
+        out << f_.status << "\n";
+      }
+    }
+  }
+
+ private:
+  PanelFile& f_;
+  std::atomic<float> progress_{0};
+  std::future<std::string> job_;  // (its destructor waits for a job in flight)
+};
+
+// A file action asked for or in flight.
+bool automating_action(const PanelFile& f) { return f.busy || f.save || f.export_vdb || f.blender; }
 
 std::string panel_hint(const ViewState& view, const RenderSettings& settings, const Sun& sun) {
   std::ostringstream hint;
@@ -366,7 +485,11 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
   GlRenderer& renderer = session.start_renderer(o.shader_dir);
   // After our callbacks: ImGui chains to them.
   Panel panel(window);
+  panel.help = std::string(kWindowKeys) + key_help_markdown();
   view.panel = &panel;
+  PanelFile file;
+  FileActions actions(o, file);
+  view.file = &file;
   out << "window: " << renderer.renderer_string() << " (press H for keys, F1 for the panel)\n";
 
   Watcher watcher(o);
@@ -374,7 +497,20 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
   auto last_frame = last_poll;
   int frame = 0, saved = 0;
   double gpu_ms_avg = 0, cloud_ms_avg = 0;
-  const int auto_frames = o.out.empty() ? 0 : 3;  // with --out: render a few frames, save, exit
+  // With --out: render a few frames, save, exit. --edit (a preset) goes through the panel's own
+  // edit path after the first frame; the frames count from 0 again once its regeneration is shown,
+  // so the saved frame is the one a fresh --set of the same keys saves.
+  const int auto_frames = o.out.empty() ? 0 : 3;
+  bool edits_sent = false, edits_waiting = false;
+  // CLOUDVIEWER_WINDOW_ACTIONS="save export blender" (with --out; tests/window_edit.sh): the panel's
+  // file actions, one after another once the edits are shown, as the buttons ask for them.
+  std::vector<std::string> todo;
+  if (const char* a = std::getenv("CLOUDVIEWER_WINDOW_ACTIONS"); a && auto_frames > 0) {
+    std::istringstream words(a);
+    for (std::string w; words >> w;) todo.push_back(w);
+  }
+  auto automating = [&] { return edits_waiting || !todo.empty() || automating_action(file); };
+  bool was_automating = false;
   while (!glfwWindowShouldClose(window)) {
     glfwPollEvents();
     auto now = std::chrono::steady_clock::now();
@@ -389,7 +525,19 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
       watcher.poll(session, settings, view.reload_requested, out, err);
       view.reload_requested = false;
     }
+    if (auto_frames > 0 && frame == 1 && !o.edits.empty() && !edits_sent) {
+      file.edits = o.edits;
+      edits_sent = edits_waiting = true;
+    }
+    if (actions.edit(session)) watcher.request(session, settings);
     watcher.collect(session, out, err);
+    if (edits_waiting && watcher.idle()) edits_waiting = false;
+    if (!edits_waiting && frame >= 1 && !todo.empty() && !automating_action(file)) {
+      (todo.front() == "save" ? file.save : todo.front() == "export" ? file.export_vdb : file.blender) = true;
+      todo.erase(todo.begin());
+    }
+    if (was_automating && !automating()) frame = 0;  // the saved frame is then a fresh run's frame
+    was_automating = automating();
     int fw = 0, fh = 0;
     glfwGetFramebufferSize(window, &fw, &fh);
     if (fw < 1 || fh < 1) continue;
@@ -405,8 +553,9 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
     GpuTimings t;
     renderer.render(fs, &t);
     renderer.present(fw, fh);
-    panel.draw(settings, t, panel_hint(view, settings, sun));
-    if (auto_frames > 0 && frame + 1 == auto_frames) {  // what the window shows, read from its back buffer before the swap
+    panel.draw(settings, t, panel_hint(view, settings, sun), &file);
+    actions.run(session, out);
+    if (auto_frames > 0 && !was_automating && !automating() && frame + 1 == auto_frames) {  // what the window shows, read from its back buffer before the swap
       std::string shot = fs::path(o.out).replace_extension("").string() + ".window.png";
       write_png(shot, renderer.read_window(fw, fh));
       out << "wrote " << cloudgen::printable(shot) << " (window back buffer " << fw << "x" << fh << ")\n";
@@ -416,7 +565,7 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
     cloud_ms_avg = frame == 0 ? t.cloud_ms : cloud_ms_avg * 0.9 + t.cloud_ms * 0.1;
     ++frame;
     if (frame % 4 == 1) glfwSetWindowTitle(window, window_title(view, settings, sun, gpu_ms_avg, cloud_ms_avg).c_str());
-    const bool auto_save = auto_frames > 0 && frame == auto_frames;
+    const bool auto_save = auto_frames > 0 && !was_automating && !automating() && frame == auto_frames;
     if (view.save_requested || auto_save) {
       view.save_requested = false;
       save_frame(o, window, renderer, auto_save, frame, saved, t, out);

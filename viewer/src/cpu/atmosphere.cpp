@@ -44,34 +44,34 @@ AtmosphereParamDef integer(const std::string& key, At at, int lo, int hi, const 
 
 std::vector<AtmosphereParamDef> build() {
   std::vector<AtmosphereParamDef> t;
-  t.push_back(real("bottom_radius", CV_AT(bottom_radius), 1e3, 1e9, "planet radius (the ground), m"));
-  t.push_back(real("top_radius", CV_AT(top_radius), 1e3, 1e9, "radius of the top of the atmosphere, m (> bottom_radius)"));
-  t.push_back(boolean("rayleigh", CV_AT(rayleigh), "Rayleigh scattering (air molecules) on"));
-  t.push_back(real("rayleigh_r", CV_AT(rayleigh_scattering.x), 0, 1e-3, "Rayleigh scattering at sea level, 680 nm, 1/m"));
-  t.push_back(real("rayleigh_g", CV_AT(rayleigh_scattering.y), 0, 1e-3, "Rayleigh scattering at sea level, 550 nm, 1/m"));
-  t.push_back(real("rayleigh_b", CV_AT(rayleigh_scattering.z), 0, 1e-3, "Rayleigh scattering at sea level, 440 nm, 1/m"));
-  t.push_back(real("rayleigh_height", CV_AT(rayleigh_height), 1, 1e6, "Rayleigh density scale height (density exp(-h/H)), m"));
-  t.push_back(boolean("mie", CV_AT(mie), "Mie scattering and absorption (aerosols) on"));
-  t.push_back(real("mie_extinction", CV_AT(mie_extinction), 0, 1e-2, "Mie extinction at sea level (all wavelengths), 1/m"));
-  t.push_back(real("mie_scattering", CV_AT(mie_scattering), 0, 1e-2, "Mie scattering at sea level (<= extinction), 1/m"));
-  t.push_back(real("mie_height", CV_AT(mie_height), 1, 1e6, "Mie density scale height, m"));
-  t.push_back(real("mie_g", CV_AT(mie_g), -0.999, 0.999, "Mie phase asymmetry (Cornette-Shanks)"));
-  t.push_back(boolean("ozone", CV_AT(ozone), "ozone absorption on"));
-  t.push_back(real("ozone_r", CV_AT(ozone_absorption.x), 0, 1e-3, "ozone absorption at the peak, 680 nm, 1/m"));
-  t.push_back(real("ozone_g", CV_AT(ozone_absorption.y), 0, 1e-3, "ozone absorption at the peak, 550 nm, 1/m"));
-  t.push_back(real("ozone_b", CV_AT(ozone_absorption.z), 0, 1e-3, "ozone absorption at the peak, 440 nm, 1/m"));
-  t.push_back(real("ozone_bottom", CV_AT(ozone_bottom), 0, 1e6, "ozone tent profile: zero below this altitude, m"));
-  t.push_back(real("ozone_peak", CV_AT(ozone_peak), 0, 1e6, "ozone tent profile: density 1 at this altitude, m"));
-  t.push_back(real("ozone_top", CV_AT(ozone_top), 0, 1e6, "ozone tent profile: zero above this altitude, m"));
-  t.push_back(real("ground_albedo", CV_AT(ground_albedo), 0, 1, "ground albedo of the planet beyond the ground mesh (seen through the air)"));
-  t.push_back(real("sun_angular_radius", CV_AT(sun_angular_radius_deg), 0.01, 10, "sun angular radius, degrees (the disc, and the smooth set of the sunlight below the horizon)"));
+  t.push_back(real("bottom_radius", CV_AT(bottom_radius), 1e3, 1e9, "planet radius (the ground), m").in(cloudgen::ParamGroup::LightAndSky, true));
+  t.push_back(real("top_radius", CV_AT(top_radius), 1e3, 1e9, "radius of the top of the atmosphere, m (> bottom_radius)").in(cloudgen::ParamGroup::LightAndSky, true));
+  t.push_back(boolean("rayleigh", CV_AT(rayleigh), "Rayleigh scattering (air molecules) on").in(cloudgen::ParamGroup::LightAndSky));
+  t.push_back(real("rayleigh_r", CV_AT(rayleigh_scattering.x), 0, 1e-3, "Rayleigh scattering at sea level, 680 nm, 1/m").in(cloudgen::ParamGroup::LightAndSky, true));
+  t.push_back(real("rayleigh_g", CV_AT(rayleigh_scattering.y), 0, 1e-3, "Rayleigh scattering at sea level, 550 nm, 1/m").in(cloudgen::ParamGroup::LightAndSky, true));
+  t.push_back(real("rayleigh_b", CV_AT(rayleigh_scattering.z), 0, 1e-3, "Rayleigh scattering at sea level, 440 nm, 1/m").in(cloudgen::ParamGroup::LightAndSky, true));
+  t.push_back(real("rayleigh_height", CV_AT(rayleigh_height), 1, 1e6, "Rayleigh density scale height (density exp(-h/H)), m").in(cloudgen::ParamGroup::LightAndSky, true));
+  t.push_back(boolean("mie", CV_AT(mie), "Mie scattering and absorption (aerosols) on").in(cloudgen::ParamGroup::LightAndSky));
+  t.push_back(real("mie_extinction", CV_AT(mie_extinction), 0, 1e-2, "Mie extinction at sea level (all wavelengths), 1/m").in(cloudgen::ParamGroup::LightAndSky, true));
+  t.push_back(real("mie_scattering", CV_AT(mie_scattering), 0, 1e-2, "Mie scattering at sea level (<= extinction), 1/m").in(cloudgen::ParamGroup::LightAndSky, true));
+  t.push_back(real("mie_height", CV_AT(mie_height), 1, 1e6, "Mie density scale height, m").in(cloudgen::ParamGroup::LightAndSky, true));
+  t.push_back(real("mie_g", CV_AT(mie_g), -0.999, 0.999, "Mie phase asymmetry (Cornette-Shanks)").in(cloudgen::ParamGroup::LightAndSky));
+  t.push_back(boolean("ozone", CV_AT(ozone), "ozone absorption on").in(cloudgen::ParamGroup::LightAndSky));
+  t.push_back(real("ozone_r", CV_AT(ozone_absorption.x), 0, 1e-3, "ozone absorption at the peak, 680 nm, 1/m").in(cloudgen::ParamGroup::LightAndSky, true));
+  t.push_back(real("ozone_g", CV_AT(ozone_absorption.y), 0, 1e-3, "ozone absorption at the peak, 550 nm, 1/m").in(cloudgen::ParamGroup::LightAndSky, true));
+  t.push_back(real("ozone_b", CV_AT(ozone_absorption.z), 0, 1e-3, "ozone absorption at the peak, 440 nm, 1/m").in(cloudgen::ParamGroup::LightAndSky, true));
+  t.push_back(real("ozone_bottom", CV_AT(ozone_bottom), 0, 1e6, "ozone tent profile: zero below this altitude, m").in(cloudgen::ParamGroup::LightAndSky, true));
+  t.push_back(real("ozone_peak", CV_AT(ozone_peak), 0, 1e6, "ozone tent profile: density 1 at this altitude, m").in(cloudgen::ParamGroup::LightAndSky, true));
+  t.push_back(real("ozone_top", CV_AT(ozone_top), 0, 1e6, "ozone tent profile: zero above this altitude, m").in(cloudgen::ParamGroup::LightAndSky, true));
+  t.push_back(real("ground_albedo", CV_AT(ground_albedo), 0, 1, "ground albedo of the planet beyond the ground mesh (seen through the air)").in(cloudgen::ParamGroup::LightAndSky));
+  t.push_back(real("sun_angular_radius", CV_AT(sun_angular_radius_deg), 0.01, 10, "sun angular radius, degrees (the disc, and the smooth set of the sunlight below the horizon)").in(cloudgen::ParamGroup::LightAndSky));
   t.push_back(integer("scattering_orders", CV_AT(scattering_orders), 1, 64,
                       "scattering orders of the sky: 1 = single scattering; N adds orders 2..N from the "
-                      "multiple-scattering LUT (Hillaire 2020; large N tends to its infinite series L2 / (1 - f))"));
+                      "multiple-scattering LUT (Hillaire 2020; large N tends to its infinite series L2 / (1 - f))").in(cloudgen::ParamGroup::LightAndSky, true));
   t.push_back(boolean("density_orders", CV_AT(density_orders),
                       "with render.sky_lut=true: the orders 2..N by Bruneton's scattering-density passes (each order's "
                       "light from the last one's, with the true phase functions, in an 8x32x32x16 table; seconds of "
-                      "precompute) instead of the Psi_ms series; the per-pixel march always uses Psi_ms"));
+                      "precompute) instead of the Psi_ms series; the per-pixel march always uses Psi_ms").in(cloudgen::ParamGroup::LightAndSky, true));
   return t;
 }
 
@@ -120,16 +120,7 @@ void validate_atmosphere(const AtmosphereSettings& s) {
                      fmt(s.mie_extinction) + " (scattering is part of extinction)");
 }
 
-std::string atmosphere_params_markdown() {
-  std::string md = "| key | type | range | default | meaning |\n|---|---|---|---|---|\n";
-  AtmosphereSettings d;
-  for (const AtmosphereParamDef& p : atmosphere_params()) {
-    std::string range = p.range;
-    for (size_t i = 0; (i = range.find('|', i)) != std::string::npos; i += 2) range.replace(i, 1, "\\|");
-    md += "| atmosphere." + p.key + " | " + p.type + " | " + range + " | " + p.get(d) + " | " + p.doc + " |\n";
-  }
-  return md;
-}
+std::string atmosphere_params_markdown() { return param::grouped_markdown(atmosphere_params(), "atmosphere.", "###"); }
 
 std::string atmosphere_params_help() {
   std::string s = "atmosphere parameters (--set atmosphere.KEY=VALUE):\n";

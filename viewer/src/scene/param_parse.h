@@ -5,6 +5,7 @@
 #include <cmath>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "cloudviewer/errors.h"
 #include "cloudviewer/param_table.h"
@@ -74,6 +75,29 @@ Param<S> integer(const char* prefix, const std::string& key, At at, int lo, int 
             at(s) = int(d);
           },
           [=](const S& s) { return std::to_string(at(s)); }, ParamKind::Int, double(lo), double(hi), {}};
+}
+
+/// The Markdown reference of a table (docs/reference/viewer-params.md): one table per group in
+/// the panel's order (cloudgen/param_group.h), a group's engineering switches in a table of their
+/// own under it; `prefix` ("atmosphere.") goes before each key, headings are `level` deep ("###").
+template <class S>
+std::string grouped_markdown(const std::vector<Param<S>>& table, const std::string& prefix, const std::string& level) {
+  std::string md;
+  const S d{};
+  for (cloudgen::ParamGroup g : cloudgen::kParamGroups)
+    for (bool advanced : {false, true}) {
+      std::string rows;
+      for (const Param<S>& p : table) {
+        if (p.group != g || p.advanced != advanced) continue;
+        std::string range = p.range;
+        for (size_t i = 0; (i = range.find('|', i)) != std::string::npos; i += 2) range.replace(i, 1, "\\|");
+        rows += "| " + prefix + p.key + " | " + p.type + " | " + range + " | " + p.get(d) + " | " + p.doc + " |\n";
+      }
+      if (rows.empty()) continue;
+      md += level + (advanced ? "# " : " ") + cloudgen::param_group_name(g) + (advanced ? ": advanced" : "") + "\n\n" +
+            "| key | type | range | default | meaning |\n|---|---|---|---|---|\n" + rows + "\n";
+    }
+  return md;
 }
 
 }  // namespace cloudviewer::param

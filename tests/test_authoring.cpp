@@ -1,0 +1,147 @@
+// The window's authoring actions on a preset (issue 45 item 3), driven headless through the very
+// functions the panel calls: Session::edit_preset, Session::save_preset_as, export_preset_files.
+// A saved preset validates and regenerates the edited session's volume byte for byte; a failed or
+// refused save leaves every file as it was; the shipped presets are never written; Export writes
+// the bytes `cloudgen generate --set` writes.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "../viewer/src/app/authoring.h"
+#include "../viewer/src/app/session.h"
+#include "cloudgen/errors.h"
+#include "cloudgen/preset_fields.h"
+#include "cloudgen/preset_save.h"
+#include "cloudviewer/errors.h"
+#include "cloudviewer/input.h"
+#include "test_util_viewer.h"
+
+using namespace cloudviewer;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kTiny = testutil::kPresets + "tiny.json";
+
+// tiny.json copied into `dir` (an input the test may own).
+std::string own_copy(const testutil::TempDir& dir) {
+  const std::string path = dir / "tiny.json";
+  fs::copy_file(kTiny, path);
+  return path;
+}
+
+}  // namespace
+
+TEST(ViewerAuthoring, SavedPresetValidatesAndRegeneratesTheEditedVolume) {
+  testutil::TempDir dir;
+  const std::string input = own_copy(dir);
+  RenderSettings s;
+  Session session(input, s);
+  const std::vector<float> before = session.volume().rgba;
+  session.edit_preset("threshold=0.5");
+  session.edit_preset("towers.list.0.amplitude=0.9");
+  session.edit_preset("threshold=0.45");  // a dragged slider: the last value replaces the earlier
+  EXPECT_THROW(session.edit_preset("threshold=5"), cloudgen::InputError);  // refused, and not kept
+  ASSERT_EQ(session.preset().sets, (std::vector<std::string>{"towers.list.0.amplitude=0.9", "threshold=0.45"}));
+  session.reopen(input, s);
+  ASSERT_NE(session.volume().rgba, before) << "the edits changed nothing";
+
+  const std::string saved = dir / "sub/edited.json";
+  fs::create_directories(dir / "sub");
+  session.save_preset_as(saved);
+  std::string out;
+  EXPECT_EQ(testutil::run_cli("validate " + saved, &out), 0) << out;
+  EXPECT_EQ(open_input(saved, s).rgba, session.volume().rgba) << "the saved preset makes another volume";
+  EXPECT_EQ(testutil::read_text(input), testutil::read_text(kTiny)) << "the input changed";
+}
+
+TEST(ViewerAuthoring, FailedOrRefusedSavesLeaveEveryFileAsItWas) {
+  testutil::TempDir dir;
+  const std::string input = own_copy(dir);
+  const std::string old_file = dir / "old.json", old_text = "{\"name\": \"keep me\"}\n";
+  testutil::write_text(old_file, old_text);
+  // An edit the preset refuses: nothing replaces the old file.
+  EXPECT_THROW(cloudgen::save_preset_as(input, {"threshold=5"}, old_file), cloudgen::InputError);
+  EXPECT_EQ(testutil::read_text(old_file), old_text);
+  // A folder, a path under a file, the input itself: refused or failed, nothing written.
+  EXPECT_THROW(cloudgen::save_preset_as(input, {"threshold=0.4"}, dir.path.string()), cloudgen::InputError);
+  EXPECT_THROW(cloudgen::save_preset_as(input, {"threshold=0.4"}, old_file + "/x.json"), cloudgen::Error);
+  EXPECT_EQ(testutil::read_text(old_file), old_text);
+  EXPECT_THROW(cloudgen::save_preset_as(input, {"threshold=0.4"}, input), cloudgen::InputError);
+  EXPECT_EQ(testutil::read_text(input), testutil::read_text(kTiny));
+  // Asked for, the input is replaced, and reads back with the edit.
+  cloudgen::save_preset_as(input, {"threshold=0.4"}, input, true);
+  EXPECT_NE(testutil::read_text(input).find("\"threshold\": 0.4"), std::string::npos) << testutil::read_text(input);
+  // The shipped presets: never written, neither a new file nor an existing one (asked or not).
+  const std::string shipped = cloudgen::shipped_preset_dir();
+  const std::string tiny_text = testutil::read_text(kTiny);
+  EXPECT_THROW(cloudgen::save_preset_as(input, {}, shipped + "/zz_test_new.json"), cloudgen::InputError);
+  EXPECT_FALSE(fs::exists(shipped + "/zz_test_new.json"));
+  EXPECT_THROW(cloudgen::save_preset_as(kTiny, {"threshold=0.4"}, kTiny, true), cloudgen::InputError);
+  try {
+    cloudgen::save_preset_as(input, {}, shipped + "/tiny.json");
+  } catch (const cloudgen::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("shipped presets"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(testutil::read_text(kTiny), tiny_text);
+}
+
+TEST(ViewerAuthoring, ExportWritesWhatCloudgenGenerateWrites) {
+  testutil::TempDir dir;
+  const std::string input = own_copy(dir);
+  RenderSettings s;
+  Session session(input, s);
+  session.edit_preset("threshold=0.45");
+  double last = -1;
+  const std::vector<std::string> written =
+      export_preset_files(session.input(), session.preset().sets, {dir / "panel.vdb"}, [&](double f) { last = f; });
+  ASSERT_EQ(written, std::vector<std::string>{dir / "panel.vdb"});
+  EXPECT_EQ(last, 1.0) << "the progress never reached the end";
+  std::string out;
+  ASSERT_EQ(testutil::run_cli("generate " + input + " --set threshold=0.45 -q -o " + (dir / "cli.vdb"), &out), 0) << out;
+  const std::string a = testutil::read_text(dir / "panel.vdb");
+  ASSERT_FALSE(a.empty());
+  EXPECT_EQ(a, testutil::read_text(dir / "cli.vdb")) << "Export and cloudgen generate wrote different bytes";
+  // An export over its own input is refused before any work.
+  EXPECT_THROW(export_preset_files(input, {}, {input}), cloudgen::InputError);
+}
+
+// Open in Blender: `cloudgen blender` of the exported VDB makes the .blend whose path it returns; a
+// missing VDB fails with cloudgen's message. (Debian's blender: about 4 s; skipped without it.)
+TEST(ViewerAuthoring, OpenInBlenderMakesTheSceneOfTheExportedVolume) {
+  testutil::TempDir dir;
+  const std::string input = own_copy(dir);
+  try {
+    open_in_blender(dir / "missing.vdb", dir / "missing.blend");
+    ADD_FAILURE() << "a missing VDB was accepted";
+  } catch (const cloudgen::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("missing.vdb"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir / "missing.blend"));
+  if (testutil::run_shell("command -v blender >/dev/null") != 0) GTEST_SKIP() << "no blender on the PATH";
+  export_preset_files(input, {"threshold=0.45"}, {dir / "cloud.vdb"});
+  EXPECT_EQ(open_in_blender(dir / "cloud.vdb", dir / "cloud.blend"), dir / "cloud.blend");
+  EXPECT_GT(fs::file_size(dir / "cloud.blend"), 1000u);
+}
+
+// The panel's preset fields: every key of the preset table without a list index has a value (the
+// file's, an edit's, else the table's default) and a group; an edit shows in them.
+TEST(ViewerAuthoring, PanelShowsEveryPresetFieldWithItsValue) {
+  const std::map<std::string, std::string> v = cloudgen::preset_values(kTiny, {"threshold=0.45", "coverage.low=0.2"});
+  size_t plain = 0;
+  for (const cloudgen::PresetField& f : cloudgen::preset_fields()) {
+    EXPECT_NE(f.place.group, cloudgen::ParamGroup::Unset) << f.key;
+    if (f.key.find('*') != std::string::npos) continue;
+    ++plain;
+    ASSERT_EQ(v.count(f.key), 1u) << f.key;
+  }
+  EXPECT_EQ(v.size(), plain);
+  EXPECT_EQ(v.at("threshold"), "0.45");
+  EXPECT_EQ(v.at("coverage.low"), "0.2");
+  EXPECT_EQ(v.at("seed"), "3");                                      // the file's
+  EXPECT_EQ(v.at("density_scale"), "1.0");                            // the table's default
+  EXPECT_EQ(v.at("name"), "\"tiny\"");
+}
