@@ -275,6 +275,9 @@ ct.links.new(join.outputs[0], comp.inputs["Image"])
 # Saved beside the final .blend (a temporary name in the same folder), so the relative path holds.
 vol.filepath = S["vdb_relative"]
 scene.render.use_file_extension = False  # the PNG goes to a temporary name first
+# No "NAME.blend1" backup: cloudgen hands Blender an empty staged temporary to save over, and
+# Blender's save versions would keep it beside the output as an empty "...1" file.
+bpy.context.preferences.filepaths.save_version = 0
 bpy.ops.wm.save_as_mainfile(filepath=S["blend"], relative_remap=False)
 print(f"cloudgen blender: wrote {S['blend']}")
 if S.get("render_png"):

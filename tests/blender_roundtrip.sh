@@ -67,6 +67,9 @@ echo "openvdb: z-up world bbox $bounds, voxel $voxel"
 #    the cloud's alpha mask at the same size.
 "$bin/cloudgen" blender "$tmp/tiny.vdb" -q -o "$tmp/scene.blend" --render "$tmp/cycles.png" --size 128x72 --samples 8
 test -s "$tmp/scene.blend" && test -s "$tmp/cycles.png"
+# Nothing else is left beside them: no staged temporary, no Blender "NAME.blend1" backup of one.
+left="$(find "$tmp" -maxdepth 1 -name '.*tmp*' -o -maxdepth 1 -name '*.blend1')"
+if [ -n "$left" ]; then echo "left beside the outputs: $left"; exit 1; fi
 blender_py check "$tmp/scene.blend" "$tmp/cycles_mask.png" "$voxel" ${bounds//,/ } "$tmp/full.vdb" 800
 
 # 4. The viewer's default view of the same file (transmittance, no tone curve) against Cycles' mask;
