@@ -16,6 +16,7 @@
 #include "cloudgen/io.h"
 #include "cloudgen/motion.h"
 #include "cloudgen/preset.h"
+#include "cloudgen/printable.h"
 #include "cloudgen/texture_pack.h"
 #include "cloudgen/view.h"
 #include "cloudgen/weather_map.h"
@@ -24,13 +25,6 @@
 namespace cloudgen::cli {
 namespace {
 
-std::string human(uint64_t b) {
-  std::ostringstream o;
-  o.precision(3);
-  if (b >= (1ull << 30)) o << b / double(1ull << 30) << " GiB";
-  else o << b / double(1ull << 20) << " MiB";
-  return o.str();
-}
 
 void run_generate(const GenerateArgs& a) {
   std::vector<std::string> sets = a.sets;
@@ -133,7 +127,7 @@ void run_generate(const GenerateArgs& a) {
                  "generate %.3f s, write %.3f s, peak memory %s\n",
                  printable(p.name).c_str(), x.dims[0], x.dims[1], x.dims[2], st.active_voxels,
                  100.0 * st.active_voxels / double(std::max<uint64_t>(1, voxels)), st.bricks, st.bricks_skipped,
-                 st.detail_bricks, st.seconds, write_s, human(uint64_t(ru.ru_maxrss) * 1024).c_str());
+                 st.detail_bricks, st.seconds, write_s, human_bytes(uint64_t(ru.ru_maxrss) * 1024).c_str());
   }
   if (g_cancel) {
     std::fprintf(stderr, "interrupted after every output was complete and in place\n");

@@ -33,12 +33,6 @@ using json = nlohmann::json;
 namespace cloudgen::cli {
 namespace {
 
-std::string human_bytes(uint64_t b) {
-  char s[32];
-  if (b >= (1ull << 30)) std::snprintf(s, sizeof s, "%.3g GiB", b / double(1ull << 30));
-  else std::snprintf(s, sizeof s, "%.3g MiB", b / double(1ull << 20));
-  return s;
-}
 
 ExportOptions export_options(const Preset& p) { return p.export_options; }
 

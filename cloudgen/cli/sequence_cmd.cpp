@@ -9,17 +9,12 @@
 #include "cloudgen/cli_parse.h"
 #include "cloudgen/sequence.h"
 #include "cloudgen/weather_map.h"
+#include "cloudgen/printable.h"
 #include "commands.h"
 
 namespace cloudgen::cli {
 
 namespace {
-std::string human_bytes(uint64_t b) {
-  char buf[32];
-  if (b >= (1ull << 30)) std::snprintf(buf, sizeof buf, "%.3g GiB", b / double(1ull << 30));
-  else std::snprintf(buf, sizeof buf, "%.3g MiB", b / double(1ull << 20));
-  return buf;
-}
 
 /// Every staged frame holds one open file until the batch commits (the all-or-nothing rule), so a
 /// long sequence needs as many descriptors: raise the soft limit to the hard one, and refuse up

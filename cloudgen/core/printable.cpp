@@ -1,6 +1,8 @@
 // Text made safe to print (printable.h).
 #include "cloudgen/printable.h"
 
+#include <sstream>
+
 #include <cstdio>
 
 namespace cloudgen {
@@ -18,6 +20,14 @@ std::string printable(const std::string& s, bool keep_newlines) {
     }
   }
   return out;
+}
+
+std::string human_bytes(unsigned long long b) {
+  std::ostringstream o;
+  o.precision(3);
+  if (b >= (1ull << 30)) o << b / double(1ull << 30) << " GiB";
+  else o << b / double(1ull << 20) << " MiB";
+  return o.str();
 }
 
 }  // namespace cloudgen

@@ -1,6 +1,8 @@
 // Game-engine texture pack (texture_pack.h, docs/textures.md "Texture pack").
 #include "cloudgen/texture_pack.h"
 
+#include "cloudgen/detail_noise.h"
+
 #include <sys/stat.h>
 
 #include <algorithm>
@@ -26,12 +28,9 @@ constexpr uint32_t kPackVersion = 1;
 constexpr uint32_t kBaseEdge = 128;   // the base texture's longest axis (Nubis: 128^3)
 constexpr uint32_t kDetailEdge = 32;  // Nubis: 32^3
 constexpr uint32_t kCurlEdge = 128;   // Nubis: 128^2
-// The detail texture's R channel is the viewer's render.detail texture (viewer/include/cloudviewer/
-// detail_texture.h: kDetailBaseCells, kDetailOctaves, kDetailSeed; test_texture_pack checks the
-// bytes agree), laid at the viewer's default render.detail_period.
-constexpr uint32_t kDetailBaseCells = 4;
-constexpr uint32_t kDetailOctaves = 3;
-constexpr uint64_t kDetailSeed = 0xde7a11c10d5ull;
+// The detail texture's R channel is the viewer's render.detail texture (cloudgen/detail_noise.h, one
+// definition for both; test_texture_pack checks the bytes agree), laid at the viewer's default
+// render.detail_period.
 constexpr double kDetailPeriodM = 200;
 constexpr uint32_t kCurlCells = 4;  // Perlin cells of the curl potential per tile
 constexpr uint64_t kCurlSeed = 0xc011c011ull;
@@ -43,21 +42,6 @@ std::string join(const std::string& dir, const std::string& name) {
   return dir.empty() || dir.back() == '/' ? dir + name : dir + "/" + name;
 }
 
-// One channel of a tileable fBm over a whole edge^3 grid, stretched to [0, 1] by its own range.
-std::vector<float> stretched_fbm(uint32_t edge, uint32_t cells, uint32_t octaves, uint64_t seed) {
-  noise3d::FractalParams fp;
-  fp.kind = noise3d::Kind::Worley;
-  fp.period = noise3d::Period::cube(cells);
-  fp.seed = seed;
-  fp.octaves = octaves;
-  fp.gain = 0.5;
-  fp.lacunarity = 2.0;
-  std::vector<float> v(size_t(edge) * edge * edge);
-  const noise3d::MinMax mm = noise3d::evaluate_grid(fp, noise3d::GridRegion::whole(edge), v.data());
-  const double range = mm.max > mm.min ? mm.max - mm.min : 1.0;
-  for (float& x : v) x = float((double(x) - mm.min) / range);
-  return v;
-}
 
 json texture_json(const MipTexture& t, const std::string& role, const std::array<double, 3>& period,
                   const json& channels) {
@@ -173,9 +157,9 @@ TexturePack make_texture_pack(const Preset& p, int threads) {
   d.dims = {kDetailEdge, kDetailEdge, kDetailEdge};
   d.channels = 3;
   d.wrap = {true, true, true};
-  const std::vector<float> oct[3] = {stretched_fbm(kDetailEdge, kDetailBaseCells, kDetailOctaves, kDetailSeed),
-                                     stretched_fbm(kDetailEdge, 2 * kDetailBaseCells, 1, kDetailSeed + 1),
-                                     stretched_fbm(kDetailEdge, 4 * kDetailBaseCells, 1, kDetailSeed + 2)};
+  const std::vector<float> oct[3] = {stretched_worley_fbm(kDetailEdge, kDetailBaseCells, kDetailOctaves, kDetailSeed),
+                                     stretched_worley_fbm(kDetailEdge, 2 * kDetailBaseCells, 1, kDetailSeed + 1),
+                                     stretched_worley_fbm(kDetailEdge, 4 * kDetailBaseCells, 1, kDetailSeed + 2)};
   d.levels = {std::vector<uint8_t>(oct[0].size() * 3)};
   for (size_t i = 0; i < oct[0].size(); ++i)
     for (int c = 0; c < 3; ++c) d.levels[0][i * 3 + size_t(c)] = unorm8(oct[c][i]);

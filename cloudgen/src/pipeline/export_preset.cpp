@@ -1,5 +1,6 @@
 // A preset's volume to its output files (export_preset.h).
 #include "cloudgen/export_preset.h"
+#include "cloudgen/printable.h"
 
 #include <chrono>
 #include <sstream>
@@ -12,13 +13,6 @@
 namespace cloudgen {
 namespace {
 
-std::string human(uint64_t b) {
-  std::ostringstream o;
-  o.precision(3);
-  if (b >= (1ull << 30)) o << b / double(1ull << 30) << " GiB";
-  else o << b / double(1ull << 20) << " MiB";
-  return o.str();
-}
 
 }  // namespace
 
@@ -59,7 +53,7 @@ ExportedPreset export_preset(const Preset& p, const std::string& path, const Pre
   const uint64_t need = memory_estimate(p, detail);
   if (need > e.max_memory)
     throw InputError(path + ": resolution " + std::to_string(p.resolution[0]) + "x" + std::to_string(p.resolution[1]) + "x" +
-                     std::to_string(p.resolution[2]) + " needs about " + human(need) + ", more than " + e.max_memory_text +
+                     std::to_string(p.resolution[2]) + " needs about " + human_bytes(need) + ", more than " + e.max_memory_text +
                      " (lower /resolution, use --resolution N or --voxel-budget N, or add --mpi: the sparse path "
                      "holds only the bricks with cloud, in one process too)");
   set_export_detail(p, path, r.formats, go);

@@ -5,12 +5,15 @@
 #include <memory>
 #include <vector>
 
+#include "cloudgen/detail_noise.h"
+
 namespace cloudviewer {
 
-/// Lattice of the detail's base Worley octave per tile: 3 octaves at 4, 8 and 16 cells per tile.
-inline constexpr int kDetailBaseCells = 4;
-inline constexpr int kDetailOctaves = 3;
-inline constexpr unsigned long long kDetailSeed = 0xde7a11c10d5ull;
+// Its noise (lattice, octaves, seed) is cloudgen's (cloudgen/detail_noise.h), which the texture
+// pack ships too.
+using cloudgen::kDetailBaseCells;
+using cloudgen::kDetailOctaves;
+using cloudgen::kDetailSeed;
 
 /// The detail texture of edge `size` (render.detail_size, 32..128): size^3 values, x fastest, of
 /// libnoise3d's inverted Worley fBm (kDetailOctaves octaves, gain 0.5, lacunarity 2, base period

@@ -6,8 +6,6 @@
 #include <stdexcept>
 #include <string>
 
-#include <noise3d/noise3d.h>
-
 namespace cloudviewer {
 
 std::shared_ptr<const std::vector<float>> detail_texture(int size) {
@@ -17,17 +15,7 @@ std::shared_ptr<const std::vector<float>> detail_texture(int size) {
   std::lock_guard<std::mutex> lock(mutex);
   auto it = cached.find(size);
   if (it != cached.end()) return it->second;
-  noise3d::FractalParams fp;
-  fp.kind = noise3d::Kind::Worley;
-  fp.period = noise3d::Period::cube(kDetailBaseCells);
-  fp.seed = kDetailSeed;
-  fp.octaves = kDetailOctaves;
-  fp.gain = 0.5;
-  fp.lacunarity = 2.0;
-  std::vector<float> v(size_t(size) * size * size);
-  const noise3d::MinMax mm = noise3d::evaluate_grid(fp, noise3d::GridRegion::whole(uint32_t(size)), v.data());
-  const double range = mm.max > mm.min ? mm.max - mm.min : 1.0;
-  for (float& x : v) x = float((double(x) - mm.min) / range);
+  std::vector<float> v = cloudgen::stretched_worley_fbm(uint32_t(size), kDetailBaseCells, kDetailOctaves, kDetailSeed);
   auto out = std::make_shared<const std::vector<float>>(std::move(v));
   cached.emplace(size, out);
   return out;
