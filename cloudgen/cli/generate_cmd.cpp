@@ -7,7 +7,6 @@
 #include <chrono>
 #include <cstdio>
 #include <memory>
-#include <sstream>
 
 #include "cloudgen/budget.h"
 #include "cloudgen/cli_parse.h"
@@ -78,14 +77,8 @@ void run_generate(const GenerateArgs& a) {
     go.region_extent = r.extent;
   }
   if (mpi) {
-    std::vector<Format> formats;
     OutputBatch batch;  // claimed up front, as export_preset does
-    batch.protect(path, "the input preset " + path);
-    if (p.weather_map) batch.protect(p.weather_map->path, "the preset's weather map " + p.weather_map->path);
-    for (const auto& o : a.outputs) {
-      formats.push_back(a.format.empty() ? format_from_path(o) : parse_format(a.format));
-      for (const OutputFile& of : output_files(o, formats.back(), true)) batch.claim(of.path, of.role);
-    }
+    const std::vector<Format> formats = claim_outputs(p, path, a.outputs, a.format, batch);
     set_export_detail(p, path, formats, go);
     return run_generate_mpi(p, go, a.outputs, formats, a.quiet, a.stats);
   }

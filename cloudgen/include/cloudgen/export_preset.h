@@ -37,6 +37,12 @@ struct ExportedPreset {
   double write_seconds = 0;
 };
 
+/// Claims in `batch` every file of `outputs` (each one's format from `format`, or from its
+/// extension when empty) and protects the preset `path` and its weather map; returns the formats.
+/// Throws InputError for an output that would replace an input or another output.
+std::vector<Format> claim_outputs(const Preset& p, const std::string& path, const std::vector<std::string>& outputs,
+                                  const std::string& format, OutputBatch& batch);
+
 /// The detail flags of `go` for these outputs of `p` (read from `path`): detail channels only where
 /// a format stores them, and only in cloud where a VDB / NanoVDB bakes the erosion.
 void set_export_detail(const Preset& p, const std::string& path, const std::vector<Format>& formats, GenerateOptions& go);

@@ -3,7 +3,6 @@
 #include "cloudgen/printable.h"
 
 #include <chrono>
-#include <sstream>
 
 #include "cloudgen/errors.h"
 #include "cloudgen/output.h"
@@ -11,10 +10,6 @@
 #include "cloudgen/weather_map.h"
 
 namespace cloudgen {
-namespace {
-
-
-}  // namespace
 
 void set_export_detail(const Preset& p, const std::string& path, const std::vector<Format>& formats, GenerateOptions& go) {
   const ExportOptions& eo = p.export_options;
@@ -33,22 +28,28 @@ void set_export_detail(const Preset& p, const std::string& path, const std::vect
   }
 }
 
+std::vector<Format> claim_outputs(const Preset& p, const std::string& path, const std::vector<std::string>& outputs,
+                                  const std::string& format, OutputBatch& batch) {
+  // Every file of every output is claimed before any work: an output that would replace the
+  // preset, or a sidecar that would collide with another output, is refused up front.
+  batch.protect(path, "the input preset " + path);
+  if (p.weather_map) batch.protect(p.weather_map->path, "the preset's weather map " + p.weather_map->path);
+  std::vector<Format> formats;
+  for (const auto& o : outputs) {
+    formats.push_back(format.empty() ? format_from_path(o) : parse_format(format));
+    for (const OutputFile& of : output_files(o, formats.back(), true)) batch.claim(of.path, of.role);
+  }
+  return formats;
+}
+
 ExportedPreset export_preset(const Preset& p, const std::string& path, const PresetExport& e, GenerateOptions go) {
   if (e.outputs.empty() && !e.stage) throw InputError("export " + path + ": no output file given");
   const ExportOptions& eo = p.export_options;
   ExportedPreset r;
-  bool detail = false;
-  // Every file of every output is claimed before any work: an output that would replace the
-  // preset, or a sidecar that would collide with another output, is refused up front.
   OutputBatch batch;
-  batch.protect(path, "the input preset " + path);
-  if (p.weather_map) batch.protect(p.weather_map->path, "the preset's weather map " + p.weather_map->path);
-  for (const auto& o : e.outputs) {
-    Format f = e.format.empty() ? format_from_path(o) : parse_format(e.format);
-    r.formats.push_back(f);
-    detail |= needs_detail(f, eo);
-    for (const OutputFile& of : output_files(o, f, true)) batch.claim(of.path, of.role);
-  }
+  r.formats = claim_outputs(p, path, e.outputs, e.format, batch);
+  bool detail = false;
+  for (Format f : r.formats) detail |= needs_detail(f, eo);
   if (e.claim) e.claim(batch);
   const uint64_t need = memory_estimate(p, detail);
   if (need > e.max_memory)
