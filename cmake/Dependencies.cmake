@@ -30,6 +30,9 @@ if(CLOUD_BUILD_CLOUDGEN)
   cloud_require(OpenVDB_FOUND "OpenVDB" "libopenvdb-dev libboost-dev libboost-iostreams-dev libblosc-dev")
   find_package(OpenEXR CONFIG QUIET)
   cloud_require(OpenEXR_FOUND "OpenEXR" "libopenexr-dev")
+  # Mesh shape sources (OBJ, PLY, STL, glTF): cloudgen/src/pipeline/mesh_source.cpp only.
+  find_package(assimp CONFIG QUIET)
+  cloud_require(assimp_FOUND "Assimp" "libassimp-dev")
 endif()
 
 # GLM: cloudgen compiles the motion formulas (cloudgen/motion.glsl) with its GLSL-named types.

@@ -21,7 +21,7 @@ cmake --build build-asan -j "$jobs" --target cloud_tests cloudgen
 
 log "building the libFuzzer targets (clang, ASan+UBSan) into build-fuzz/"
 clang_build build-fuzz -DCLOUD_FUZZ=ON -DCLOUD_BUILD_TESTS=OFF
-cmake --build build-fuzz -j "$jobs" --target fuzz_preset fuzz_cli fuzz_raw fuzz_ktx2 fuzz_vdb fuzz_nvdb fuzz_weather fuzz_plan fuzz_pack \
+cmake --build build-fuzz -j "$jobs" --target fuzz_preset fuzz_cli fuzz_raw fuzz_ktx2 fuzz_vdb fuzz_nvdb fuzz_weather fuzz_plan fuzz_pack fuzz_mesh \
   fuzz_track fuzz_viewer_input
 
 configure_and_build -DCLOUD_BUILD_TESTS=ON -DCLOUD_BUILD_BENCH=ON \

@@ -30,6 +30,7 @@ void add_phase_command(CLI::App& app, std::function<void()>& run);
 void add_flowmap_command(CLI::App& app, std::function<void()>& run);
 void add_weather_map_command(CLI::App& app, std::function<void()>& run);
 void add_blender_command(CLI::App& app, std::function<void()>& run);
+void add_shape_command(CLI::App& app, std::function<void()>& run);
 
 /// The shipped presets' folder: $CLOUDGEN_PRESET_DIR, else the source tree's presets/.
 std::string preset_dir();

@@ -39,6 +39,7 @@ int main(int argc, char** argv) {
   add_phase_command(app, run);
   add_flowmap_command(app, run);
   add_weather_map_command(app, run);
+  add_shape_command(app, run);
   add_blender_command(app, run);
   add_scale_commands(app, run);
 

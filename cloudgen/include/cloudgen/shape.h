@@ -14,6 +14,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -21,19 +22,28 @@
 
 namespace cloudgen {
 
+struct TriangleMesh;
+class MeshDistance;
+
 using ShapeVec = std::array<double, 3>;
 
-enum class ShapeKind { Ellipsoid, Sphere, Capsule };
+enum class ShapeKind { Ellipsoid, Sphere, Capsule, Mesh };
 const char* shape_kind_name(ShapeKind k);
 
 /// One source as the preset writes it. Placement: scale (in the source's own axes) and rotate
 /// (degrees about x, then y, then z) about the source's centre (a capsule's: the middle of a-b),
-/// then translate.
+/// then translate. A mesh's centre is the middle of its bounding box, and `fit` first scales it
+/// evenly and moves it so it fills the volume (fit_sources).
 struct ShapeSource {
   std::optional<ShapeKind> kind;
   std::optional<ShapeVec> center, radii, a, b;  ///< ellipsoid: center, radii; sphere: center; capsule: a, b
   std::optional<double> radius;                  ///< sphere, capsule
+  std::optional<std::string> file;               ///< mesh: the file as written in the preset
+  bool fit = false;                              ///< mesh: fit into the volume (fit_sources)
   ShapeVec translate{{0, 0, 0}}, rotate{{0, 0, 0}}, scale{{1, 1, 1}};
+  std::shared_ptr<const TriangleMesh> mesh;  ///< mesh: read by the preset's reader (mesh_source.h)
+  double fit_scale = 1;                      ///< set by fit_sources: an even scale before `scale`
+  ShapeVec fit_offset{{0, 0, 0}};            ///< set by fit_sources: a move before `translate`
 };
 
 /// The preset's `shape` section. No sources: the height profile, towers and coverage place the
@@ -46,16 +56,25 @@ struct ShapeParams {
 
 /// At most this many sources (each costs every voxel near the shape an evaluation).
 inline constexpr size_t kMaxShapeSources = 64;
+/// At most this many of them meshes (each holds a distance lattice, mesh_source.h).
+inline constexpr size_t kMaxMeshSources = 8;
 
 /// The problems of a shape section ("<pointer>", "<what>"), empty when it can be placed: at most
 /// kMaxShapeSources sources, each with its kind's keys and no other kind's; a capsule's scale is
 /// uniform.
 std::vector<std::pair<std::string, std::string>> shape_problems(const ShapeParams& s);
 
+/// Sets fit_scale and fit_offset of every source with `fit`: the placed mesh's box (after scale and
+/// rotate) scaled evenly and centred so it fills the volume less falloff / 2 + one voxel on each
+/// side; `translate` then moves it from there.
+void fit_sources(ShapeParams& s, const ShapeVec& origin, const std::array<uint32_t, 3>& n, double voxel_size);
+
 /// The sources placed in the world, ready to evaluate. Thread-safe to read.
 class ShapeField {
  public:
-  explicit ShapeField(const ShapeParams& s);  ///< s must have no shape_problems
+  /// s must have no shape_problems and its meshes read; a mesh's distance is sampled every
+  /// `voxel_size` metres (coarser when the mesh's box would need more than kMaxMeshSamples).
+  explicit ShapeField(const ShapeParams& s, double voxel_size = 0);
   bool empty() const { return prims_.empty(); }
 
   /// The signed distance d at p: the smooth union of the sources in their order.
@@ -74,6 +93,7 @@ class ShapeField {
   std::array<ShapeVec, 2> support_box() const;
 
   struct Prim {
+    std::shared_ptr<const MeshDistance> mesh;  ///< a mesh (then nothing below is used)
     bool capsule;        ///< else an ellipsoid
     ShapeVec c, radii;   ///< ellipsoid: centre and radii along its own axes
     double rot[3][3];    ///< ellipsoid: columns are its axes in the world

@@ -5,6 +5,7 @@
 #include <chrono>
 
 #include "cloudgen/errors.h"
+#include "cloudgen/mesh_source.h"
 #include "cloudgen/output.h"
 #include "cloudgen/view.h"
 #include "cloudgen/weather_map.h"
@@ -32,8 +33,10 @@ std::vector<Format> claim_outputs(const Preset& p, const std::string& path, cons
                                   const std::string& format, OutputBatch& batch) {
   // Every file of every output is claimed before any work: an output that would replace the
   // preset, or a sidecar that would collide with another output, is refused up front.
-  batch.protect(path, "the input preset " + path);
+  batch.protect(path, "the input preset " + path);  // for `cloudgen shape`: the mesh, named so below
   if (p.weather_map) batch.protect(p.weather_map->path, "the preset's weather map " + p.weather_map->path);
+  for (const ShapeSource& s : p.shape.sources)
+    if (s.mesh) batch.protect(s.mesh->file, "the preset's mesh " + s.mesh->file);
   std::vector<Format> formats;
   for (const auto& o : outputs) {
     formats.push_back(format.empty() ? format_from_path(o) : parse_format(format));

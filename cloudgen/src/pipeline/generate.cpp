@@ -14,6 +14,7 @@
 #include "cloudgen/channel.h"
 #include "cloudgen/cloud_type.h"
 #include "cloudgen/shape.h"
+#include "cloudgen/mesh_source.h"
 #include "cloudgen/view.h"
 #include "cloudgen/weather_map.h"
 
@@ -115,7 +116,7 @@ struct Shape {
   const ShapeField field;                 // empty: no shape sources
   std::array<std::vector<double>, 3> pos;  // shape sources: world metres of the voxel centres per axis
 
-  Shape(const Preset& pr, int threads) : p(pr), N(pr.resolution), field(pr.shape) {
+  Shape(const Preset& pr, int threads) : p(pr), N(pr.resolution), field(pr.shape, pr.voxel_size) {
     profile.resize(N[1]);
     for (uint32_t y = 0; y < N[1]; ++y) profile[y] = float(height_profile(p, (y + 0.5) / N[1]));
     t = float(p.threshold), inv = float(1.0 / (1.0 - p.threshold)), scale = float(p.density_scale);
@@ -825,6 +826,8 @@ void hash_shape(std::ostream& o, const ShapeParams& s) {
     if (src.radius) o << *src.radius << ',';
     else o << "-,";
     vec(src.translate), vec(src.rotate), vec(src.scale);
+    if (src.mesh)  // the mesh's content, not its name; a fitted one's placement follows from the volume
+      o << "mesh:" << src.mesh->fnv1a << ',' << src.mesh->triangles.size() << ',' << src.fit << ',';
     o << ';';
   }
 }

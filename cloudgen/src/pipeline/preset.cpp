@@ -18,6 +18,7 @@
 #include "cloudgen/channel.h"
 #include "cloudgen/io.h"
 #include "cloudgen/json_checked.h"
+#include "cloudgen/mesh_source.h"
 #include "cloudgen/param_group.h"
 #include "cloudgen/preset_fields.h"
 #include "cloudgen/preset_save.h"
@@ -80,13 +81,25 @@ void add_shape_keys(Add& add, double big) {
       "density = clamp(density_scale * (R * s - t) / (1 - t), 0, 1).",
       [](Preset& p, const json& j, const Index&) { p.shape.sources.resize(j.size()); });
   add("/shape/sources/*/kind", "string", "null", 0, 0,
-      "Required. ellipsoid (center, radii), sphere (center, radius) or capsule (a, b, radius).",
+      "Required. ellipsoid (center, radii), sphere (center, radius), capsule (a, b, radius) or mesh (file).",
       [=](Preset& p, const json& j, const Index& i) {
         src(p, i).kind.reset();
-        for (ShapeKind k : {ShapeKind::Ellipsoid, ShapeKind::Sphere, ShapeKind::Capsule})
+        for (ShapeKind k : {ShapeKind::Ellipsoid, ShapeKind::Sphere, ShapeKind::Capsule, ShapeKind::Mesh})
           if (j.is_string() && j.get<std::string>() == shape_kind_name(k)) src(p, i).kind = k;
       },
-      {"ellipsoid", "sphere", "capsule"});
+      {"ellipsoid", "sphere", "capsule", "mesh"});
+  add("/shape/sources/*/file", "string", "null", 0, 0,
+      "Mesh: an OBJ, PLY, STL, glTF/GLB (or another format Assimp reads) file, relative to the preset's folder "
+      "(to the current folder with --set); closed meshes give a solid, open ones a sheet (with a warning); at most " +
+          std::to_string(kMaxMeshTriangles) + " triangles and " + std::to_string(kMeshFileCap >> 20) + " MiB.",
+      [=](Preset& p, const json& j, const Index& i) {
+        if (j.is_null()) src(p, i).file.reset();
+        else src(p, i).file = j.get<std::string>();
+      });
+  add("/shape/sources/*/fit", "bool", "false", 0, 0,
+      "Mesh: scale it evenly and centre it so it fills the volume (less falloff / 2 + one voxel a side), after "
+      "scale and rotate; translate then moves it from there.",
+      [=](Preset& p, const json& j, const Index& i) { src(p, i).fit = j.get<bool>(); });
   add("/shape/sources/*/center", "vec3", "null", -big, big, "(metres) Ellipsoid or sphere centre." + where,
       [=](Preset& p, const json& j, const Index& i) { opt3(src(p, i).center, j); });
   add("/shape/sources/*/radii", "vec3", "null", 1e-3, big, "(metres) Ellipsoid semi-axes along x, y, z (before rotate).",
@@ -475,7 +488,7 @@ void shape_checks(const Preset& p, Reader& r) {
   const auto problems = shape_problems(p.shape);
   for (const auto& [ptr, what] : problems) r.problem(ptr, what);
   if (!problems.empty() || p.shape.sources.empty() || !p.tiling) return;
-  if (const auto q = ShapeField(p.shape).nonzero_at_side_faces(p.origin, p.resolution, p.voxel_size))
+  if (const auto q = ShapeField(p.shape, p.voxel_size).nonzero_at_side_faces(p.origin, p.resolution, p.voxel_size))
     r.problem("/shape/sources", "with /tiling true the shape must be 0 on the voxels of the x and z faces (the volume wraps "
                                 "there, shapes do not), but the voxel at (" + fmt((*q)[0]) + ", " + fmt((*q)[1]) + ", " +
                                     fmt((*q)[2]) + ") m has s > 0: move the sources inward or set \"tiling\": false");
@@ -512,6 +525,39 @@ void cross_checks(const Preset& p, Reader& r) {
     for (int a : {0, 2})
       if (6 * p.tower_sigma[a] >= 1)
         r.problem("/towers/sigma", "6 * sigma must be below 1 on x and z so random towers fit inside the tile");
+}
+
+/// The meshes of mesh sources, read (a file named in the preset is found next to it; one given with
+/// --set, from the current folder), then the fitted ones placed (shape.h fit_sources). A source
+/// without its keys is left to shape_checks.
+void load_meshes(Preset& p, const std::string& source, const std::vector<std::string>& overrides, Reader& r) {
+  for (size_t i = 0; i < p.shape.sources.size(); ++i) {
+    ShapeSource& s = p.shape.sources[i];
+    if (s.kind != ShapeKind::Mesh || !s.file) continue;
+    const std::string ptr = "/shape/sources/" + std::to_string(i) + "/file";
+    const std::string key = "shape.sources." + std::to_string(i);
+    const bool from_set = std::any_of(overrides.begin(), overrides.end(), [&](const std::string& ov) {
+      for (const std::string& k : {key + ".file=", key + "=", std::string("shape.sources="), std::string("shape=")})
+        if (ov.rfind(k, 0) == 0) return true;
+      return false;
+    });
+    std::filesystem::path file = *s.file;
+    if (file.empty()) {
+      r.problem(ptr, "empty; give a mesh file (OBJ, PLY, STL, glTF/GLB)");
+      continue;
+    }
+    if (!from_set && file.is_relative()) file = (std::filesystem::path(source).parent_path() / file).lexically_normal();
+    try {
+      s.mesh = std::make_shared<const TriangleMesh>(read_mesh(file.string(), printable(file.string())));
+      if (s.mesh->open_edges > 0)
+        std::fprintf(stderr, "warning: %s: %s is not closed (%zu edges with one triangle): it has no inside, so it "
+                             "becomes a sheet of cloud along its surface (unsigned distance)\n",
+                     ptr.c_str(), printable(file.string()).c_str(), s.mesh->open_edges);
+    } catch (const InputError& e) {
+      r.problem(ptr, e.what());
+    }
+  }
+  if (r.problems().empty()) fit_sources(p.shape, p.origin, p.resolution, p.voxel_size);
 }
 
 /// coverage.kind "image": needs coverage.enabled and coverage.file, read like motion.flow_map (a
@@ -618,6 +664,7 @@ Preset parse_preset(const std::string& text, const std::string& source, const st
     }
   }
   if (r.problems().empty()) load_weather_image(p, source, overrides, r);
+  if (r.problems().empty()) load_meshes(p, source, overrides, r);
   if (r.problems().empty()) cross_checks(p, r);
   if (!r.problems().empty()) {
     std::string all;
@@ -640,14 +687,26 @@ std::string edited_preset_text(const std::string& path, const std::vector<std::s
   }
   // A file named relative to the preset's folder (from a set: to the current folder) is named
   // relative to the new file's folder, so the saved preset finds it.
-  for (const char* ptr : {"/coverage/file", "/motion/flow_map"}) {
+  std::vector<std::string> file_keys = {"/coverage/file", "/motion/flow_map"};
+  const json::json_pointer sources_at("/shape/sources");
+  if (doc.contains(sources_at) && doc[sources_at].is_array())
+    for (size_t i = 0; i < doc[sources_at].size(); ++i) file_keys.push_back("/shape/sources/" + std::to_string(i) + "/file");
+  for (const std::string& ptr : file_keys) {
     const json::json_pointer at(ptr);
     if (!doc.contains(at) || !doc[at].is_string()) continue;
     const std::string name = doc[at].get<std::string>();
     if (name.empty() || name == "procedural" || fs::path(name).is_absolute()) continue;
-    std::string key = std::string(ptr).substr(1);
+    std::string key = ptr.substr(1);
     std::replace(key.begin(), key.end(), '/', '.');
-    const bool from_set = std::any_of(sets.begin(), sets.end(), [&](const std::string& s) { return s.rfind(key + "=", 0) == 0; });
+    // A mesh's file came from --set also when its source or the list was set whole.
+    const std::string source_key = key.substr(0, key.rfind('.'));
+    const bool from_set = std::any_of(sets.begin(), sets.end(), [&](const std::string& s) {
+      if (s.rfind(key + "=", 0) == 0) return true;
+      if (ptr.rfind("/shape/sources/", 0) != 0) return false;
+      for (const std::string& k : {source_key + "=", std::string("shape.sources="), std::string("shape=")})
+        if (s.rfind(k, 0) == 0) return true;
+      return false;
+    });
     const fs::path base = from_set ? fs::current_path() : fs::absolute(path).parent_path();
     const fs::path file = (base / name).lexically_normal();
     const fs::path rel = file.lexically_relative(fs::absolute(to).parent_path());

@@ -7,10 +7,15 @@
 // where L > 0, d = L * (k0 / k1) / rmin >= L because k0 / k1 >= rmin. So over a ball of radius h
 // around c every source's d is at least L(c) - h (capsules: d(c) - h), and because the smooth
 // minimum is non-decreasing in both arguments the same fold over those bounds bounds the union.
+// A mesh's distance is sampled on a lattice (mesh_source.h) and its bound over a ball is the least
+// sample the ball's box interpolates from.
 #include "cloudgen/shape.h"
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+
+#include "cloudgen/mesh_source.h"
 
 namespace cloudgen {
 namespace {
@@ -59,9 +64,57 @@ ShapeField::Prim ellipsoid(const V& c, const V& radii, const double R[3][3]) {
   return p;
 }
 
-ShapeField::Prim resolve(const ShapeSource& s) {
+/// A mesh's own centre: the middle of its box.
+V mesh_centre(const TriangleMesh& m) { return {(m.lo[0] + m.hi[0]) / 2, (m.lo[1] + m.hi[1]) / 2, (m.lo[2] + m.hi[2]) / 2}; }
+
+/// The box of R (k * (corner - m)) over the mesh box's corners, k = scale * fit_scale per axis.
+std::array<V, 2> turned_box(const TriangleMesh& m, const ShapeSource& s, const double R[3][3], double fit_scale) {
+  const V c = mesh_centre(m);
+  std::array<V, 2> b{{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}}};
+  for (int corner = 0; corner < 8; ++corner) {
+    V l;
+    for (int i = 0; i < 3; ++i) l[i] = s.scale[i] * fit_scale * (((corner >> i) & 1 ? m.hi[i] : m.lo[i]) - c[i]);
+    for (int i = 0; i < 3; ++i) {
+      const double w = R[i][0] * l[0] + R[i][1] * l[1] + R[i][2] * l[2];
+      b[0][i] = std::min(b[0][i], w), b[1][i] = std::max(b[1][i], w);
+    }
+  }
+  return b;
+}
+
+ShapeField::Prim resolve(const ShapeSource& s, double voxel_size, double band) {
   double R[3][3];
   rotation(s.rotate, R);
+  if (*s.kind == ShapeKind::Mesh) {
+    if (!s.mesh) throw std::logic_error("ShapeField: a mesh source whose file was not read");
+    if (!(voxel_size > 0)) throw std::logic_error("ShapeField: a mesh source needs the voxel size");
+    const TriangleMesh& m = *s.mesh;
+    const V c = mesh_centre(m);
+    // world = c + fit_offset + translate + R (k (q - c)): T = [R k | t] as 3 rows of 4.
+    std::array<double, 12> T{};
+    for (int i = 0; i < 3; ++i) {
+      double t = c[i] + s.fit_offset[i] + s.translate[i];
+      for (int j = 0; j < 3; ++j) {
+        const double a = R[i][j] * s.scale[j] * s.fit_scale;
+        T[4 * i + j] = a;
+        t -= a * c[j];
+      }
+      T[4 * i + 3] = t;
+    }
+    // The lattice's spacing: the voxel size, or coarser so the mesh's box (grown by the band) keeps
+    // within kMaxMeshSamples.
+    const std::array<V, 2> b = turned_box(m, s, R, s.fit_scale);
+    double h = voxel_size;
+    for (int it = 0; it < 64; ++it) {
+      double count = 1;
+      for (int i = 0; i < 3; ++i) count *= std::ceil((b[1][i] - b[0][i] + 2 * (std::ceil(band / h) + 3) * h) / h) + 1;
+      if (count <= 0.9 * double(kMaxMeshSamples)) break;
+      h *= 1.1;
+    }
+    ShapeField::Prim p{};
+    p.mesh = std::make_shared<const MeshDistance>(m, T, h, band);
+    return p;
+  }
   if (*s.kind == ShapeKind::Capsule) {
     const V m{(s.a->at(0) + s.b->at(0)) / 2, (s.a->at(1) + s.b->at(1)) / 2, (s.a->at(2) + s.b->at(2)) / 2};
     return capsule(place(*s.a, m, s, R), place(*s.b, m, s, R), *s.radius * s.scale[0]);
@@ -81,6 +134,7 @@ V ellipsoid_u(const ShapeField::Prim& e, const V& p) {
 }
 
 double prim_distance(const ShapeField::Prim& e, const V& p) {
+  if (e.mesh) return e.mesh->distance(p);
   if (e.capsule) {
     const V pa = sub(p, e.a), ba = sub(e.b, e.a);
     const double bb = dot(ba, ba);
@@ -92,10 +146,12 @@ double prim_distance(const ShapeField::Prim& e, const V& p) {
   return k1 > 0 ? k0 * (k0 - 1) / k1 : -e.r;
 }
 
-/// A lower bound of prim_distance wherever it is positive, 1-Lipschitz (see the top of the file).
-double prim_lower_bound(const ShapeField::Prim& e, const V& p) {
-  if (e.capsule) return prim_distance(e, p);
-  return e.r * (len(ellipsoid_u(e, p)) - 1);
+/// A lower bound of prim_distance over the ball of `radius` around c, where it is positive (see the
+/// top of the file).
+double prim_ball_bound(const ShapeField::Prim& e, const V& c, double radius) {
+  if (e.mesh) return e.mesh->lower_bound({c[0] - radius, c[1] - radius, c[2] - radius}, {c[0] + radius, c[1] + radius, c[2] + radius});
+  if (e.capsule) return prim_distance(e, c) - radius;
+  return e.r * (len(ellipsoid_u(e, c)) - 1) - radius;
 }
 
 }  // namespace
@@ -105,6 +161,7 @@ const char* shape_kind_name(ShapeKind k) {
     case ShapeKind::Ellipsoid: return "ellipsoid";
     case ShapeKind::Sphere: return "sphere";
     case ShapeKind::Capsule: return "capsule";
+    case ShapeKind::Mesh: return "mesh";
   }
   return "?";
 }
@@ -124,11 +181,16 @@ std::vector<std::pair<std::string, std::string>> shape_problems(const ShapeParam
   std::vector<std::pair<std::string, std::string>> out;
   if (sp.sources.size() > kMaxShapeSources)
     return {{"/shape/sources", std::to_string(sp.sources.size()) + " sources; at most " + std::to_string(kMaxShapeSources)}};
+  const size_t meshes = size_t(std::count_if(sp.sources.begin(), sp.sources.end(),
+                                              [](const ShapeSource& s) { return s.kind == ShapeKind::Mesh; }));
+  if (meshes > kMaxMeshSources)
+    out.push_back({"/shape/sources", std::to_string(meshes) + " mesh sources; at most " + std::to_string(kMaxMeshSources) +
+                                         " (each holds a distance lattice of up to 128 MiB)"});
   for (size_t i = 0; i < sp.sources.size(); ++i) {
     const ShapeSource& s = sp.sources[i];
     const std::string ptr = "/shape/sources/" + std::to_string(i);
     if (!s.kind) {
-      out.push_back({ptr + "/kind", "missing; expected one of: ellipsoid | sphere | capsule"});
+      out.push_back({ptr + "/kind", "missing; expected one of: ellipsoid | sphere | capsule | mesh"});
       continue;
     }
     const ShapeKind k = *s.kind;
@@ -137,9 +199,12 @@ std::vector<std::pair<std::string, std::string>> shape_problems(const ShapeParam
       if (has && !wanted) out.push_back({ptr + "/" + key, "is not a key of a " + kn});
       if (!has && wanted) out.push_back({ptr, "a " + kn + " needs \"" + key + "\""});
     };
-    need(bool(s.center), k != ShapeKind::Capsule, "center");
+    const bool mesh = k == ShapeKind::Mesh;
+    need(bool(s.center), k != ShapeKind::Capsule && !mesh, "center");
     need(bool(s.radii), k == ShapeKind::Ellipsoid, "radii");
-    need(bool(s.radius), k != ShapeKind::Ellipsoid, "radius");
+    need(bool(s.radius), k == ShapeKind::Sphere || k == ShapeKind::Capsule, "radius");
+    need(bool(s.file), mesh, "file");
+    if (s.fit && !mesh) out.push_back({ptr + "/fit", "is not a key of a " + kn + " (only a mesh is fitted)"});
     need(bool(s.a), k == ShapeKind::Capsule, "a");
     need(bool(s.b), k == ShapeKind::Capsule, "b");
     if (k == ShapeKind::Capsule && !uniform(s.scale))
@@ -148,8 +213,31 @@ std::vector<std::pair<std::string, std::string>> shape_problems(const ShapeParam
   return out;
 }
 
-ShapeField::ShapeField(const ShapeParams& s) : blend_(s.blend), falloff_(s.falloff) {
-  for (const ShapeSource& src : s.sources) prims_.push_back(resolve(src));
+ShapeField::ShapeField(const ShapeParams& s, double voxel_size) : blend_(s.blend), falloff_(s.falloff) {
+  // A mesh's lattice holds the true distance out to the band; beyond it the field is +-band. Where
+  // the smooth union could still reach below falloff / 2 from there it must be exact: the fold
+  // lowers a distance by at most blend / 4 per source, and only within blend of another.
+  const double band = falloff_ / 2 + blend_ * (1 + double(s.sources.size()) / 4);
+  for (const ShapeSource& src : s.sources) prims_.push_back(resolve(src, voxel_size, band));
+}
+
+void fit_sources(ShapeParams& sp, const ShapeVec& origin, const std::array<uint32_t, 3>& n, double vs) {
+  for (ShapeSource& s : sp.sources) {
+    if (!s.fit || !s.mesh) continue;
+    double R[3][3];
+    rotation(s.rotate, R);
+    const std::array<V, 2> b = turned_box(*s.mesh, s, R, 1.0);
+    const double margin = sp.falloff / 2 + vs;
+    double f = 1e300;
+    for (int i = 0; i < 3; ++i) {
+      const double room = std::max(n[i] * vs - 2 * margin, 0.5 * n[i] * vs);
+      if (b[1][i] - b[0][i] > 0) f = std::min(f, room / (b[1][i] - b[0][i]));
+    }
+    if (!(f < 1e300)) f = 1;
+    const V c = mesh_centre(*s.mesh);
+    s.fit_scale = f;
+    for (int i = 0; i < 3; ++i) s.fit_offset[i] = origin[i] + n[i] * vs / 2 - c[i] - f * (b[0][i] + b[1][i]) / 2;
+  }
 }
 
 double ShapeField::distance(const ShapeVec& p) const {
@@ -161,8 +249,8 @@ double ShapeField::distance(const ShapeVec& p) const {
 double ShapeField::density(const ShapeVec& p) const { return shape_falloff(distance(p), falloff_); }
 
 bool ShapeField::zero_in_ball(const ShapeVec& c, double radius) const {
-  double lb = prim_lower_bound(prims_[0], c) - radius;
-  for (size_t i = 1; i < prims_.size(); ++i) lb = smooth_min(lb, prim_lower_bound(prims_[i], c) - radius, blend_);
+  double lb = prim_ball_bound(prims_[0], c, radius);
+  for (size_t i = 1; i < prims_.size(); ++i) lb = smooth_min(lb, prim_ball_bound(prims_[i], c, radius), blend_);
   // Rounding of d and of the bound is far below a millionth of the scales involved.
   const double scale = 1 + falloff_ + radius + std::max({std::abs(c[0]), std::abs(c[1]), std::abs(c[2])});
   return lb >= falloff_ / 2 + 1e-6 * scale;
@@ -177,7 +265,9 @@ std::array<ShapeVec, 2> ShapeField::support_box() const {
   for (const Prim& e : prims_) {
     for (int a = 0; a < 3; ++a) {
       double lo, hi;
-      if (e.capsule) {
+      if (e.mesh) {  // inside the mesh or near it; the lattice's interpolation adds up to a sample
+        lo = e.mesh->mesh_lo()[a] - g - 2 * e.mesh->spacing(), hi = e.mesh->mesh_hi()[a] + g + 2 * e.mesh->spacing();
+      } else if (e.capsule) {
         lo = std::min(e.a[a], e.b[a]) - e.r - g, hi = std::max(e.a[a], e.b[a]) + e.r + g;
       } else {
         const double f = 1 + g / e.r;  // half extent of the grown ellipsoid along world axis a
