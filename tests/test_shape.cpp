@@ -455,3 +455,31 @@ TEST(Shape, RotationsFollowTheStatedConvention) {
       }
   }
 }
+
+// shape.floor and shape.ceiling cut the union flat (a cumulus's base, an anvil's top): with the
+// noise neutralised the cloud is the sphere's interior between the two heights, skipping stays
+// exact, and a ceiling below the floor is refused.
+TEST(Shape, FloorAndCeilingCutFlat) {
+  const std::string shape = R"({"falloff": 100, "floor": 250, "ceiling": 420,
+      "sources": [{"kind": "sphere", "center": [320, 320, 320], "radius": 200}]})";
+  const Volume v = generate(shaped(shape, true));
+  const double i = iou(v, [](double x, double y, double z) { return std::hypot(x - 320, y - 320, z - 320) < 200 && y > 250 && y < 420; });
+  std::printf("  cut sphere: IoU %.4f\n", i);
+  EXPECT_GE(i, 0.99);
+  const Preset eroded = shaped(shape, false);
+  GenerateOptions on, off;
+  off.skip_empty = false;
+  GenerateStats st;
+  const Volume a = generate(eroded, on, &st), b = generate(eroded, off);
+  EXPECT_TRUE(same_bytes(a.density, b.density));
+  EXPECT_GT(st.bricks_skipped, 0u);
+  for (int z = 0; z < kN; ++z)
+    for (int y = 0; y < kN; ++y)
+      for (int x = 0; x < kN; ++x)
+        if (a.density[a.index(x, y, z)] > 0) {
+          ASSERT_TRUE(centre(y) > 200 && centre(y) < 470) << y;
+        }
+  EXPECT_NE(error_of(R"({"tiling": false, "shape": {"floor": 500, "ceiling": 400, "sources": [{"kind": "sphere", "center": [0, 0, 0], "radius": 3}]}})")
+                .find("/shape/ceiling: 400 must be above /shape/floor (500)"),
+            std::string::npos);
+}

@@ -51,6 +51,9 @@ struct ShapeSource {
 struct ShapeParams {
   double blend = 0;      ///< metres of the smooth union (polynomial smooth-min); 0 = hard union
   double falloff = 100;  ///< metres from s = 1 to s = 0 across the surface
+  /// World heights (metres, y) that cut the union flat: d = max(d, floor - y, y - ceiling). A
+  /// cumulus base at the condensation level, an anvil under the tropopause.
+  std::optional<double> floor, ceiling;
   std::vector<ShapeSource> sources;
 };
 
@@ -77,7 +80,8 @@ class ShapeField {
   explicit ShapeField(const ShapeParams& s, double voxel_size = 0);
   bool empty() const { return prims_.empty(); }
 
-  /// The signed distance d at p: the smooth union of the sources in their order.
+  /// The signed distance d at p: the smooth union of the sources in their order, cut by the
+  /// floor and the ceiling.
   double distance(const ShapeVec& p) const;
   /// The base density s(d) at p, in [0, 1].
   double density(const ShapeVec& p) const;
@@ -103,6 +107,7 @@ class ShapeField {
 
  private:
   double blend_, falloff_;
+  std::optional<double> floor_, ceiling_;
   std::vector<Prim> prims_;
 };
 

@@ -820,6 +820,8 @@ void hash_shape(std::ostream& o, const ShapeParams& s) {
     else o << "-,";
   };
   o << "shape:" << s.blend << ',' << s.falloff << ';';
+  if (s.floor || s.ceiling)  // presets without cuts keep their hash
+    o << "cut:" << (s.floor ? *s.floor : -1e300) << ',' << (s.ceiling ? *s.ceiling : 1e300) << ';';
   for (const ShapeSource& src : s.sources) {
     o << (src.kind ? shape_kind_name(*src.kind) : "-") << ',';
     vec(src.center), vec(src.radii), vec(src.a), vec(src.b);

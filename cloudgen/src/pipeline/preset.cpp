@@ -76,6 +76,20 @@ void add_shape_keys(Add& add, double big) {
       "(metres) Width of the edge: base density s = S(clamp(0.5 - d / falloff, 0, 1)), S(u) = u^2 (3 - 2u), "
       "d the signed distance to the sources (negative inside); s = 0.5 on the surface, 0 from falloff / 2 outside.",
       [](Preset& p, const json& j, const Index&) { p.shape.falloff = j.get<double>(); });
+  add("/shape/floor", "number", "null", -big, big,
+      "(metres, world y) Cuts the shape flat below this height: d = max(d, floor - y). A cumulus's flat base at "
+      "the condensation level. Unset: no cut.",
+      [](Preset& p, const json& j, const Index&) {
+        if (j.is_null()) p.shape.floor.reset();
+        else p.shape.floor = j.get<double>();
+      });
+  add("/shape/ceiling", "number", "null", -big, big,
+      "(metres, world y) Cuts the shape flat above this height: d = max(d, y - ceiling). An anvil spreading "
+      "under the tropopause. Unset: no cut.",
+      [](Preset& p, const json& j, const Index&) {
+        if (j.is_null()) p.shape.ceiling.reset();
+        else p.shape.ceiling = j.get<double>();
+      });
   add("/shape/sources", "array", "[]", 0, 0,
       "Shape sources (docs/shaping.md), at most " + std::to_string(kMaxShapeSources) + ". Non-empty: s replaces the height profile, towers and coverage, and "
       "density = clamp(density_scale * (R * s - t) / (1 - t), 0, 1).",

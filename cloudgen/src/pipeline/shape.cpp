@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include "cloudgen/mesh_source.h"
@@ -48,6 +49,12 @@ V place(const V& q, const V& m, const ShapeSource& s, const double R[3][3]) {
 }
 
 bool uniform(const V& s) { return s[0] == s[1] && s[1] == s[2]; }
+
+std::string shortest(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
 
 ShapeField::Prim capsule(const V& a, const V& b, double r) {
   ShapeField::Prim p{};
@@ -186,6 +193,8 @@ std::vector<std::pair<std::string, std::string>> shape_problems(const ShapeParam
   if (meshes > kMaxMeshSources)
     out.push_back({"/shape/sources", std::to_string(meshes) + " mesh sources; at most " + std::to_string(kMaxMeshSources) +
                                          " (each holds a distance lattice of up to 128 MiB)"});
+  if (sp.floor && sp.ceiling && !(*sp.ceiling > *sp.floor))
+    out.push_back({"/shape/ceiling", shortest(*sp.ceiling) + " must be above /shape/floor (" + shortest(*sp.floor) + ")"});
   for (size_t i = 0; i < sp.sources.size(); ++i) {
     const ShapeSource& s = sp.sources[i];
     const std::string ptr = "/shape/sources/" + std::to_string(i);
@@ -213,7 +222,8 @@ std::vector<std::pair<std::string, std::string>> shape_problems(const ShapeParam
   return out;
 }
 
-ShapeField::ShapeField(const ShapeParams& s, double voxel_size) : blend_(s.blend), falloff_(s.falloff) {
+ShapeField::ShapeField(const ShapeParams& s, double voxel_size)
+    : blend_(s.blend), falloff_(s.falloff), floor_(s.floor), ceiling_(s.ceiling) {
   // A mesh's lattice holds the true distance out to the band; beyond it the field is +-band. Where
   // the smooth union could still reach below falloff / 2 from there it must be exact: the fold
   // lowers a distance by at most blend / 4 per source, and only within blend of another.
@@ -243,6 +253,9 @@ void fit_sources(ShapeParams& sp, const ShapeVec& origin, const std::array<uint3
 double ShapeField::distance(const ShapeVec& p) const {
   double d = prim_distance(prims_[0], p);
   for (size_t i = 1; i < prims_.size(); ++i) d = smooth_min(d, prim_distance(prims_[i], p), blend_);
+  // The cuts: intersections with the half-spaces above the floor and below the ceiling.
+  if (floor_) d = std::max(d, *floor_ - p[1]);
+  if (ceiling_) d = std::max(d, p[1] - *ceiling_);
   return d;
 }
 
@@ -251,6 +264,9 @@ double ShapeField::density(const ShapeVec& p) const { return shape_falloff(dista
 bool ShapeField::zero_in_ball(const ShapeVec& c, double radius) const {
   double lb = prim_ball_bound(prims_[0], c, radius);
   for (size_t i = 1; i < prims_.size(); ++i) lb = smooth_min(lb, prim_ball_bound(prims_[i], c, radius), blend_);
+  // max(a, b) is bounded below by max of the bounds; the half-spaces' distances are exact.
+  if (floor_) lb = std::max(lb, *floor_ - (c[1] + radius));
+  if (ceiling_) lb = std::max(lb, (c[1] - radius) - *ceiling_);
   // Rounding of d and of the bound is far below a millionth of the scales involved.
   const double scale = 1 + falloff_ + radius + std::max({std::abs(c[0]), std::abs(c[1]), std::abs(c[2])});
   return lb >= falloff_ / 2 + 1e-6 * scale;
@@ -277,6 +293,9 @@ std::array<ShapeVec, 2> ShapeField::support_box() const {
       box[0][a] = std::min(box[0][a], lo), box[1][a] = std::max(box[1][a], hi);
     }
   }
+  // s > 0 needs floor - y < falloff / 2 and y - ceiling < falloff / 2.
+  if (floor_) box[0][1] = std::max(box[0][1], *floor_ - falloff_ / 2);
+  if (ceiling_) box[1][1] = std::min(box[1][1], *ceiling_ + falloff_ / 2);
   return box;
 }
 
