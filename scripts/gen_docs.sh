@@ -43,7 +43,6 @@ replace_block "$params" render-keys "$tmp"
 # anything. `--no-pictures` skips them (they take a minute on the CPU).
 if [ "${1:-}" != "--no-pictures" ]; then
   mkdir -p docs/images
-  gallery=""
   for p in presets/*.json; do
     name="$(basename "$p" .json)"
     input="$p"
@@ -55,10 +54,19 @@ if [ "${1:-}" != "--no-pictures" ]; then
     fi
     build/bin/cloudviewer "$input" --headless --size 240x135 --out "docs/images/preset_$name.png" >/dev/null
     if [ "$input" != "$p" ]; then rm -r "$(dirname "$input")"; fi
-    gallery+="| ![$name](docs/images/preset_$name.png) "
   done
-  names="$(for p in presets/*.json; do printf '| `%s` ' "$(basename "$p" .json)"; done)"
-  seps="$(for p in presets/*.json; do printf '|---'; done)"
-  printf '%s|\n%s|\n%s|\n' "$names" "$seps" "$gallery" > "$tmp"
+  # Rows of five: a name row over a picture row (a markdown table needs one header row; the
+  # first names are it, the later name rows are plain rows).
+  : > "$tmp"
+  presets=(presets/*.json)
+  for ((i = 0; i < ${#presets[@]}; i += 5)); do
+    names="" pics="" seps=""
+    for p in "${presets[@]:i:5}"; do
+      name="$(basename "$p" .json)"
+      names+="| \`$name\` " pics+="| ![$name](docs/images/preset_$name.png) " seps+="|---"
+    done
+    if [ "$i" -eq 0 ]; then printf '%s|\n%s|\n' "$names" "$seps" >> "$tmp"; else printf '%s|\n' "$names" >> "$tmp"; fi
+    printf '%s|\n' "$pics" >> "$tmp"
+  done
   replace_block README.md preset-gallery "$tmp"
 fi
