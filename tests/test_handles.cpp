@@ -98,6 +98,32 @@ TEST(SolarPosition, MorningEastAfternoonWestSymmetricAboutNoon) {
   }
 }
 
+// render.time_of_day drives the sun of every frame that resolves one (headless, window start,
+// --lighting-json): over the view's sun, under --sun; auto leaves the view's.
+TEST(SolarPosition, TimeOfDayReplacesTheViewsSunButNotTheFlag) {
+  Options o;
+  o.view.sun_azimuth = 50;
+  o.view.sun_elevation = 30;
+  const Camera cam;
+  EXPECT_EQ(default_view_sun(o, cam).azimuth_deg, 50);
+  apply_setting(o.settings, "render.time_of_day=18.5");
+  apply_setting(o.settings, "render.latitude=47");
+  apply_setting(o.settings, "render.day_of_year=200");
+  const Sun tod = default_view_sun(o, cam), want = solar_sun(47, 200, 18.5);
+  EXPECT_EQ(tod.azimuth_deg, want.azimuth_deg);
+  EXPECT_EQ(tod.elevation_deg, want.elevation_deg);
+  EXPECT_GT(tod.azimuth_deg, 270);  // a summer evening: north of west
+  o.sun = Sun{10, 20};
+  EXPECT_EQ(default_view_sun(o, cam).azimuth_deg, 10);
+  o.sun.reset();
+  apply_setting(o.settings, "render.time_of_day=auto");
+  EXPECT_EQ(default_view_sun(o, cam).elevation_deg, 30);
+  EXPECT_EQ(render_param("time_of_day").get(o.settings), "auto");
+  EXPECT_THROW(apply_setting(o.settings, "render.time_of_day=25"), InputError);
+  EXPECT_THROW(apply_setting(o.settings, "render.latitude=91"), InputError);
+  EXPECT_THROW(apply_setting(o.settings, "render.day_of_year=0"), InputError);
+}
+
 // sun_toward is Sun::direction's inverse, on the whole sphere of directions.
 TEST(SunHandle, SunTowardInvertsTheSunDirection) {
   for (double az = -175; az <= 180; az += 25)

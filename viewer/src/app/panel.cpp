@@ -101,7 +101,8 @@ void render_widget(RenderSettings& s, const PanelWidget& w) {
     case PanelWidget::Kind::SliderFloatOrAuto: {
       bool automatic = value == "auto";
       std::string auto_label = "auto##" + w.key;
-      if (ImGui::Checkbox(auto_label.c_str(), &automatic)) set(s, w.key, automatic ? "auto" : "0");
+      // Off auto: the middle of the range (ground_height 0, time_of_day noon).
+      if (ImGui::Checkbox(auto_label.c_str(), &automatic)) set(s, w.key, automatic ? "auto" : text(0.5 * (w.lo + w.hi)));
       tooltip(w);
       ImGui::SameLine();
       float v = automatic ? 0.f : std::stof(value);
