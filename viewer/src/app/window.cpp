@@ -482,7 +482,7 @@ std::string panel_hint(const ViewState& view, const RenderSettings& settings, co
   hint.precision(3);
   hint << "sun " << sun.azimuth_deg << ", " << sun.elevation_deg << (view.fly ? " | fly" : " | orbit") << " | t "
        << settings.time << " s" << (view.playing ? " x" + format_scale(view.time_scale) : " paused")
-       << " | Shift+drag sun, Home reset view | H keys, F1 hide";
+       << " | H keys, F1 hide\nShift+drag: sun | Home: reset view";
   return hint.str();
 }
 
