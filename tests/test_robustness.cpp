@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <thread>
@@ -13,6 +14,7 @@
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
 #include "cloudgen/json_checked.h"
+#include "cloudgen/nvdb.h"
 #include "cloudgen/preset.h"
 #include "test_util.h"
 
@@ -524,6 +526,44 @@ TEST(HostileInputs, LevelSetsNonFiniteValuesAndEmptyGridsAreNamed) {
   r = cli({"info", dir / "none.vdb"}).run();
   EXPECT_EQ(r.code, 1) << r.out;
   EXPECT_NE(r.out.find("no grids"), std::string::npos) << r.out;
+}
+
+// A 70 KB VDB whose density is one active 65536^3 region (4096 root tiles, no leaves) kept the CPU
+// viewer busy for over a minute: the memory and work estimates counted the tiles as a few voxels
+// (NanoVDB's own count takes a 4096^3 root tile for 32^3 voxels). Active voxels now count each
+// tile as the voxels it covers, and the viewer refuses such a file at once, exit 1, naming it.
+TEST(HostileInputs, AnActiveTileCountsAsTheVoxelsItCovers) {
+  TempDir dir;
+  const std::string py =
+      "import pyopenvdb as vdb, sys\n"
+      "d = sys.argv[1]\n"
+      "g = vdb.FloatGrid(); g.name = 'density'\n"
+      "g.fill((0, 0, 0), (65535, 65535, 65535), 0.5, True); vdb.write(d + '/region.vdb', grids=[g])\n"
+      "g = vdb.FloatGrid(); g.name = 'density'\n"
+      "g.fill((0, 0, 0), (4095, 4095, 4095), 0.5, True); g.getAccessor().setValueOn((5000, 0, 0), 0.25)\n"
+      "vdb.write(d + '/tile.vdb', grids=[g])\n";
+  write_text(dir / "make.py", py);
+  std::string out;
+  if (run_shell("/usr/bin/python3 " + (dir / "make.py") + " " + dir.path.string(), &out) != 0)
+    GTEST_SKIP() << "python3-openvdb unavailable: " << out;
+  EXPECT_LT(fs::file_size(dir / "region.vdb"), 100000u);
+  EXPECT_EQ(nano_from_vdb(dir / "region.vdb").grids[0].active_voxels, uint64_t(1) << 48);
+  // One root tile and one leaf voxel: 4096^3 + 1.
+  EXPECT_EQ(nano_from_vdb(dir / "tile.vdb").grids[0].active_voxels, (uint64_t(1) << 36) + 1);
+  // cloudgen's dense reader counts the box: refused by the read budget, not allocated.
+  EXPECT_NE(error_of([&] { read_volume(dir / "region.vdb"); }).find("to load densely"), std::string::npos);
+  Process v = cli({dir / "region.vdb", "--headless", "--backend", "cpu", "--size", "16x9", "--out", dir / "r.png"});
+  v.program = std::string(CLOUD_BINARY_DIR) + "/bin/cloudviewer";
+  if (!fs::exists(v.program)) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto r = v.run();
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("input '" + (dir / "region.vdb") + "': volume (NanoVDB grids): its active tiles cover 281474976710656 voxels"),
+            std::string::npos)
+      << r.out;
+  EXPECT_LT(seconds, 30.0) << "refused from the estimate, before any work on the region";
+  EXPECT_FALSE(fs::exists(dir / "r.png"));
 }
 
 TEST(HostileInputs, DeepAndDuplicateJsonIsRefusedWithThePointer) {
