@@ -1,4 +1,5 @@
 #include "cloudviewer/controls.h"
+#include "cloudviewer/render_check.h"
 #include "cloudviewer/settings.h"
 
 #include <algorithm>
@@ -175,6 +176,23 @@ void apply_setting(RenderSettings& s, const std::string& assignment) {
     known += (known.empty() ? "" : ", ") + p.key;
   }
   throw InputError("--set " + assignment + ": unknown key render." + key + " (known: " + known + ")");
+}
+
+std::string view_render_problem(const std::string& key, const std::string& value) {
+  RenderSettings s;
+  const std::string assignment = key + "=" + value;
+  try {
+    apply_setting(s, assignment);
+    return "";
+  } catch (const InputError& e) {
+    // The table's words are a --set's ("--set render.KEY=VALUE: invalid value, allowed: ..."):
+    // what follows the echoed assignment is the reason, which the caller puts after its own name
+    // of the field.
+    std::string m = e.what();
+    const std::string echoed = "=" + value + ": ";
+    const size_t at = m.rfind("--set ", 0) == 0 ? m.find(echoed) : std::string::npos;
+    return at == std::string::npos ? m : m.substr(at + echoed.size());
+  }
 }
 
 const ParamDef& render_param(const std::string& key) {
