@@ -12,10 +12,12 @@
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
 #include "cloudgen/preset.h"
+#include "cloudgen/schema.h"
 #include "cloudgen/view.h"
 #include "cloudviewer/errors.h"
 #include "cloudviewer/renderer.h"
 #include "cloudviewer/scene.h"
+#include "cloudviewer/settings.h"
 #include "test_util.h"
 
 using namespace cloudviewer;
@@ -25,6 +27,53 @@ namespace {
 using testutil::kPresets;
 using testutil::TempDir;
 }  // namespace
+
+// Issue 47, D20: `generate tiny --set 'view.render={"steps":1e9}' -o vr.vdb` wrote a file that
+// cloudviewer then refused. The preset reader checks view.render with the viewer's own table
+// (cloudviewer_params): every render.* key just beyond its range is refused, naming the preset,
+// the field, the value and the range, and at the end of its range accepted; `generate` writes
+// nothing and `validate` says the same; a file generated with an accepted view opens in the viewer.
+TEST(DefaultView, GenerateAndValidateRefuseAViewTheViewerWouldRefuse) {
+  int refused = 0;
+  for (const ParamDef& d : render_params()) {
+    SCOPED_TRACE(d.key);
+    std::string beyond, at_end;
+    switch (d.kind) {
+      case ParamKind::Bool: beyond = "\"maybe\"", at_end = "true"; break;
+      case ParamKind::Enum: beyond = "\"nonsense\"", at_end = "\"" + d.choices.back() + "\""; break;
+      default: beyond = cloudgen::shortest_text(d.hi + std::max(1.0, std::abs(d.hi))), at_end = cloudgen::shortest_text(d.hi);
+    }
+    const std::string doc = R"({"resolution": [8, 8, 8], "view": {"render": {")" + d.key + "\": ";
+    try {
+      cloudgen::parse_preset(doc + beyond + "}}}", "p.json");
+      ADD_FAILURE() << d.key << "=" << beyond << " accepted";
+    } catch (const cloudgen::InputError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("p.json: /view/render/" + d.key + ": "), std::string::npos) << m;
+      EXPECT_NE(m.find("is refused by cloudviewer's table"), std::string::npos) << m;
+      ++refused;
+    }
+    EXPECT_NO_THROW(cloudgen::parse_preset(doc + at_end + "}}}", "p.json")) << d.key << "=" << at_end;
+  }
+  EXPECT_EQ(refused, int(render_params().size()));
+
+  TempDir dir;
+  std::string out;
+  const std::string set = " --set 'view.render={\"steps\":1e9}'";
+  EXPECT_EQ(testutil::run_cli("generate tiny -q" + set + " -o " + dir / "vr.vdb", &out), 1) << out;
+  for (const char* part : {"tiny.json: /view/render/steps: 1000000000.0 is refused by cloudviewer's table",
+                           "allowed: a number in [1, 8192]"})
+    EXPECT_NE(out.find(part), std::string::npos) << out;
+  EXPECT_TRUE(testutil::list_dir(dir.path).empty()) << "nothing written";
+  EXPECT_EQ(testutil::run_cli("validate tiny" + set, &out), 1) << out;
+  EXPECT_NE(out.find("/view/render/steps: 1000000000.0"), std::string::npos) << out;
+  // Accepted by generate: opened by the viewer, with the view's value.
+  ASSERT_EQ(testutil::run_cli("generate tiny -q --set 'view.render={\"steps\":8192}' -o " + dir / "ok.vdb", &out), 0) << out;
+  Options o;
+  o.input = dir / "ok.vdb";
+  apply_input_view(o, false);
+  EXPECT_EQ(o.settings.steps, 8192);
+}
 
 TEST(DefaultView, LookDefaultsAndConstantsAreTheViewers) {
   const RenderSettings s;
@@ -142,15 +191,27 @@ TEST(DefaultView, TheFilesViewWinsOverDefaultsAndLosesToFlags) {
   EXPECT_EQ(q.fov, 60.0) << "--fov given";
   EXPECT_EQ(q.settings.g, 0.7);
   EXPECT_FALSE(q.camera);
-  // A bad render key names the input.
+  // A bad render key names the input: in a preset, the preset reader refuses it (the viewer's
+  // table, GenerateAndValidateRefuseAViewTheViewerWouldRefuse); in a file's metadata (another
+  // writer's), the viewer does.
+  try {
+    cloudgen::parse_preset(R"({"resolution": [8, 8, 8], "view": {"render": {"gg": 1}}})", "b.json");
+    FAIL() << "no error";
+  } catch (const cloudgen::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("b.json: /view/render/gg: 1 is refused by cloudviewer's table: unknown key render.gg"),
+              std::string::npos) << e.what();
+  }
+  cloudgen::View bad;
+  bad.render = {{"gg", "1"}};
+  cloudgen::add_view_metadata(v.metadata, bad);
+  cloudgen::write_vdb(v, dir / "b.vdb", {});
   Options b;
-  b.input = dir / "b.json";
-  { std::ofstream(b.input) << R"({"resolution": [8, 8, 8], "view": {"render": {"gg": 1}}})"; }
+  b.input = dir / "b.vdb";
   try {
     apply_input_view(b, false);
     FAIL() << "no error";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("b.json: view.render.gg"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("b.vdb: view.render.gg"), std::string::npos) << e.what();
   }
 }
 

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <thread>
@@ -13,6 +14,7 @@
 #include "cloudgen/generate.h"
 #include "cloudgen/io.h"
 #include "cloudgen/json_checked.h"
+#include "cloudgen/nvdb.h"
 #include "cloudgen/preset.h"
 #include "test_util.h"
 
@@ -99,23 +101,36 @@ TEST(Interrupts, PipeInputsAreRefusedByEveryReader) {
   TempDir dir;
   ASSERT_EQ(::mkfifo((dir / "p.json").c_str(), 0600), 0);
   ASSERT_EQ(::mkfifo((dir / "p.vdb").c_str(), 0600), 0);
-  const std::string json = dir / "p.json", vdb = dir / "p.vdb";
+  ASSERT_EQ(::mkfifo((dir / "p.png").c_str(), 0600), 0);
+  const std::string json = dir / "p.json", vdb = dir / "p.vdb", png = dir / "p.png";
+  // The same words for every input, the flow map and the painted weather map included (they once
+  // had checks of their own beside the input layer).
+  const std::string fifo = ": is a pipe (FIFO), not a regular file; every input must be a regular file";
   const std::vector<std::vector<std::string>> runs = {
       {"validate", json}, {"generate", json, "-q", "-o", dir / "o.vdb"}, {"info", json}, {"info", vdb},
-      {"plan", json, "--tiles", "2,1,1", "-o", dir / "plan.json"}, {"merge", json, "-o", dir / "m.vdb"}};
+      {"plan", json, "--tiles", "2,1,1", "-o", dir / "plan.json"}, {"merge", json, "-o", dir / "m.vdb"},
+      {"generate", "tiny", "-q", "--set", "motion.flow_map=" + png, "-o", dir / "o.vdb"},
+      {"generate", "tiny", "-q", "--set", "coverage.enabled=true", "--set", "coverage.kind=image", "--set",
+       "coverage.file=" + png, "-o", dir / "o.vdb"}};
   for (const auto& args : runs) {
     const auto r = cli(args).run();
     EXPECT_EQ(r.code, 1) << args[0] << ": " << r.out;
-    EXPECT_NE(r.out.find("is a pipe (FIFO), not a regular file"), std::string::npos) << args[0] << ": " << r.out;
+    const std::string& input = args[1] == "tiny" ? png : args[1];
+    EXPECT_NE(r.out.find(input + fifo), std::string::npos) << args[0] << ": " << r.out;
   }
   Process v = cli({json, "--headless", "--size", "16x9", "--out", dir / "a.png"});
   v.program = std::string(CLOUD_BINARY_DIR) + "/bin/cloudviewer";
   if (fs::exists(v.program)) {
-    const auto r = v.run();
+    auto r = v.run();
     EXPECT_EQ(r.code, 1) << r.out;
-    EXPECT_NE(r.out.find("is a pipe (FIFO), not a regular file"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(json + fifo), std::string::npos) << r.out;
+    v.args = {"synthetic:sphere", "--mie-table", png, "--set", "render.phase=mie", "--headless", "--size", "16x9",
+              "--out", dir / "a.png"};
+    r = v.run();
+    EXPECT_EQ(r.code, 1) << r.out;
+    EXPECT_NE(r.out.find(png + fifo), std::string::npos) << r.out;
   }
-  EXPECT_EQ(list_dir(dir.path), (std::vector<std::string>{"p.json", "p.vdb"}));
+  EXPECT_EQ(list_dir(dir.path), (std::vector<std::string>{"p.json", "p.png", "p.vdb"}));
 }
 
 // Work that cannot poll the cancel flag (the test hold "generate:stuck" stands for a call blocked
@@ -511,6 +526,44 @@ TEST(HostileInputs, LevelSetsNonFiniteValuesAndEmptyGridsAreNamed) {
   r = cli({"info", dir / "none.vdb"}).run();
   EXPECT_EQ(r.code, 1) << r.out;
   EXPECT_NE(r.out.find("no grids"), std::string::npos) << r.out;
+}
+
+// A 70 KB VDB whose density is one active 65536^3 region (4096 root tiles, no leaves) kept the CPU
+// viewer busy for over a minute: the memory and work estimates counted the tiles as a few voxels
+// (NanoVDB's own count takes a 4096^3 root tile for 32^3 voxels). Active voxels now count each
+// tile as the voxels it covers, and the viewer refuses such a file at once, exit 1, naming it.
+TEST(HostileInputs, AnActiveTileCountsAsTheVoxelsItCovers) {
+  TempDir dir;
+  const std::string py =
+      "import pyopenvdb as vdb, sys\n"
+      "d = sys.argv[1]\n"
+      "g = vdb.FloatGrid(); g.name = 'density'\n"
+      "g.fill((0, 0, 0), (65535, 65535, 65535), 0.5, True); vdb.write(d + '/region.vdb', grids=[g])\n"
+      "g = vdb.FloatGrid(); g.name = 'density'\n"
+      "g.fill((0, 0, 0), (4095, 4095, 4095), 0.5, True); g.getAccessor().setValueOn((5000, 0, 0), 0.25)\n"
+      "vdb.write(d + '/tile.vdb', grids=[g])\n";
+  write_text(dir / "make.py", py);
+  std::string out;
+  if (run_shell("/usr/bin/python3 " + (dir / "make.py") + " " + dir.path.string(), &out) != 0)
+    GTEST_SKIP() << "python3-openvdb unavailable: " << out;
+  EXPECT_LT(fs::file_size(dir / "region.vdb"), 100000u);
+  EXPECT_EQ(nano_from_vdb(dir / "region.vdb").grids[0].active_voxels, uint64_t(1) << 48);
+  // One root tile and one leaf voxel: 4096^3 + 1.
+  EXPECT_EQ(nano_from_vdb(dir / "tile.vdb").grids[0].active_voxels, (uint64_t(1) << 36) + 1);
+  // cloudgen's dense reader counts the box: refused by the read budget, not allocated.
+  EXPECT_NE(error_of([&] { read_volume(dir / "region.vdb"); }).find("to load densely"), std::string::npos);
+  Process v = cli({dir / "region.vdb", "--headless", "--backend", "cpu", "--size", "16x9", "--out", dir / "r.png"});
+  v.program = std::string(CLOUD_BINARY_DIR) + "/bin/cloudviewer";
+  if (!fs::exists(v.program)) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto r = v.run();
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("input '" + (dir / "region.vdb") + "': volume (NanoVDB grids): its active tiles cover 281474976710656 voxels"),
+            std::string::npos)
+      << r.out;
+  EXPECT_LT(seconds, 30.0) << "refused from the estimate, before any work on the region";
+  EXPECT_FALSE(fs::exists(dir / "r.png"));
 }
 
 TEST(HostileInputs, DeepAndDuplicateJsonIsRefusedWithThePointer) {

@@ -514,7 +514,9 @@ TEST(FlowMap, BadFilesAreRefusedWithTheReason) {
   EXPECT_NE(error(dir / "missing.png").find("--set motion.flow_map " + (dir / "missing.png") + ": no such file"), std::string::npos);
   EXPECT_NE(error(dir / "text.png").find("not a PNG file"), std::string::npos);
   EXPECT_NE(error(dir / "grey.png").find("a grey image"), std::string::npos);
-  EXPECT_NE(error(dir / "folder.png").find("not a regular file"), std::string::npos);
+  EXPECT_NE(error(dir / "folder.png").find("--set motion.flow_map " + (dir / "folder.png") + ": is a folder, not a file"),
+            std::string::npos)
+      << error(dir / "folder.png");
   EXPECT_NE(error("").find("give a PNG file or \"procedural\""), std::string::npos);
   // Wider than the limit: refused from the header, before any texel is stored.
   write_png8(dir / "wide.png", kFlowMapMaxSide + 1, 1, 3, [](int, int, int) { return 128; });

@@ -3,7 +3,10 @@
 // box filter of the one above, tileable textures wrapping, the KTX2 reader refusing damaged level
 // indexes, pack.json errors naming the field, and the pack written all or nothing.
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <csignal>
 #include <cstring>
 #include <filesystem>
 
@@ -256,7 +259,7 @@ TEST(TexturePack, AllOrNothing) {
   EXPECT_EQ(run_cli("generate " + kPresets + "tiny.json -q -o " + t / "a.vdb" + " --texture-pack " + t / "taken", &out), 1) << out;
   EXPECT_NE(out.find("exists and is not a folder"), std::string::npos) << out;
   EXPECT_EQ(list_dir(t.path), (std::vector<std::string>{"taken"}));
-  // An -o output that is one of the pack's files: refused up front, the new folder removed again.
+  // An -o output that is one of the pack's files: refused up front, no folder made.
   EXPECT_EQ(run_cli("generate " + kPresets + "tiny.json -q -o " + t / "p/base.raw" + " --texture-pack " + t / "p", &out), 1) << out;
   EXPECT_EQ(list_dir(t.path), (std::vector<std::string>{"taken"})) << out;
   // An unwritable folder: exit 2 (I/O), the other output not written either, no debris.
@@ -274,6 +277,44 @@ TEST(TexturePack, AllOrNothing) {
   const Process::Result r = p.run();
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_EQ(list_dir(t.path), (std::vector<std::string>{"taken"})) << r.out;
+}
+
+// kill -9 used to leave an empty DIR behind (the folder was made when the batch claimed its
+// files). A new pack folder is staged beside DIR and appears whole at the commit, or not at all:
+// killed while generating or just before the commit, nothing is left; a temporary folder that a
+// run killed inside its commit left is removed by the next run, which writes the pack whole; an
+// existing folder keeps the current rule (its pack files replaced, the user's other files kept).
+TEST(TexturePack, AKilledRunLeavesNoFolderAndTheNextRunWritesItWhole) {
+  TempDir t;
+  for (const char* hold : {"generate", "commit"}) {
+    Process p;
+    p.args = {"generate", kPresets + "tiny.json", "-q", "-o", t / "a.vdb", "--texture-pack", t / "pack"};
+    p.env = {std::string("CLOUDGEN_TEST_HOLD=") + hold};
+    p.signal_on = std::string("test hold at ") + hold;
+    p.sig = SIGKILL;
+    const Process::Result r = p.run();
+    EXPECT_EQ(r.term_signal, SIGKILL) << hold << ": " << r.out;
+    EXPECT_TRUE(list_dir(t.path).empty()) << hold << ": nothing may survive kill -9: " << r.out;
+  }
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  ::waitpid(child, nullptr, 0);
+  const std::string stale = ".pack.tmp-" + std::to_string(child) + "-0";
+  std::filesystem::create_directory(t / stale);
+  write_text(t / stale + "/base.ktx2", "a half-published pack");
+  std::filesystem::create_directory(t / ".pack.tmp-notapid-0");  // not a temporary of ours: kept
+  std::string out;
+  ASSERT_EQ(run_cli("generate " + kPresets + "tiny.json -q --threads 2 --texture-pack " + t / "pack", &out), 0) << out;
+  EXPECT_EQ(list_dir(t.path), (std::vector<std::string>{".pack.tmp-notapid-0", "pack"}));
+  const std::vector<std::string> files = {"base.ktx2",   "base.raw",   "curl.ktx2",    "curl.raw",   "detail.ktx2",
+                                          "detail.raw",  "pack.json",  "weather.ktx2", "weather.raw"};
+  EXPECT_EQ(list_dir(t / "pack"), files);
+  for (const std::string& f : files) EXPECT_EQ(bytes_of(t / "pack/" + f), bytes_of(cli_pack() + "/" + f)) << f;
+  write_text(t / "pack/notes.txt", "mine");
+  write_text(t / "pack/base.raw", "old");
+  ASSERT_EQ(run_cli("generate " + kPresets + "tiny.json -q --threads 2 --texture-pack " + t / "pack", &out), 0) << out;
+  EXPECT_EQ(read_text(t / "pack/notes.txt"), "mine");
+  EXPECT_EQ(bytes_of(t / "pack/base.raw"), bytes_of(cli_pack() + "/base.raw"));
 }
 
 TEST(TexturePack, SameBytesForAnyThreadCount) {

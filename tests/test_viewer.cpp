@@ -1184,7 +1184,7 @@ TEST(ViewerPanel, OffersExactlyTheParameterTablesKeys) {
     PanelWidget::Kind expected = p.type == "bool" ? PanelWidget::Kind::Checkbox
                                  : p.type == "int" ? PanelWidget::Kind::SliderInt
                                  : p.type == "enum" ? PanelWidget::Kind::Combo
-                                 : p.key == "ground_height" ? PanelWidget::Kind::SliderFloatOrAuto
+                                 : p.kind == ParamKind::FloatOrAuto ? PanelWidget::Kind::SliderFloatOrAuto
                                                             : PanelWidget::Kind::SliderFloat;
     EXPECT_EQ(int(w.kind), int(expected)) << p.key;
     EXPECT_EQ(w.default_value, p.get(d)) << p.key;

@@ -51,14 +51,6 @@ void run_generate(const GenerateArgs& a) {
     throw InputError("--texture-pack works with a whole volume in one process: leave out --frames, --mpi and --region");
   if (sequence) return run_generate_sequence(p, path, a);
   if (a.outputs.empty() && !pack) throw InputError("-o/--output: give at least one output file (.vdb, .nvdb, .raw, .ktx2, .png, .exr)");
-  // The pack's folder is made when the batch claims its files, if absent (its files are staged
-  // inside it), and removed again, if still empty, when anything fails before the commit.
-  struct RemoveIfEmpty {
-    std::string dir;
-    ~RemoveIfEmpty() {
-      if (!dir.empty()) ::rmdir(dir.c_str());
-    }
-  } made_dir;
   const bool mpi = mpi_requested(a.mpi);  // ranks hold sparse bricks, not the dense volume
   const uint64_t max_memory = parse_bytes(a.max_memory, "--max-memory");
   GenerateOptions go;
@@ -93,7 +85,8 @@ void run_generate(const GenerateArgs& a) {
   e.before_commit = [] { test_hold("commit"); };
   if (pack) {
     e.claim = [&](OutputBatch& batch) {
-      if (prepare_texture_pack_dir(a.texture_pack)) made_dir.dir = a.texture_pack;
+      // An absent folder appears whole at the commit (staged beside it), or not at all.
+      prepare_texture_pack_dir(a.texture_pack, batch);
       for (const std::string& f : texture_pack_files(a.texture_pack)) batch.claim(f, "the texture pack's " + f);
     };
     e.stage = [&](OutputBatch& batch) {
@@ -102,7 +95,6 @@ void run_generate(const GenerateArgs& a) {
     };
   }
   const ExportedPreset x = export_preset(p, path, e, go);
-  made_dir.dir.clear();  // committed: the folder stays
   const std::vector<Format>& formats = x.formats;
   const GenerateStats& st = x.stats;
   const double write_s = x.write_seconds;

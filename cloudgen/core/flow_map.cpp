@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -42,9 +41,8 @@ glm::dvec2 FlowMap::sample(double u, double h) const {
 
 std::shared_ptr<const FlowMap> load_flow_map(const std::string& path) {
   const std::string what = "motion.flow_map " + path;
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw InputError(what + ": no such file");
-  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(what + ": not a regular file");
+  // What the file may be (a regular file: no pipe, device or folder) and how much of it is read:
+  // the one input layer's rule and words (cloudgen/input_scope.h), as for every other input.
   // 4096^2 RGBA at 16 bits, uncompressed, is 128 MiB; a PNG bigger than that is not a flow map.
   const std::vector<uint8_t> bytes = read_input_bytes(path, "the flow map " + path, what, size_t(1) << 28);
   if (!is_png(bytes.data(), bytes.size()))

@@ -23,7 +23,7 @@ struct NanoVolume {
     std::string name;
     uint64_t offset = 0;  ///< bytes from the start of the buffer
     uint64_t bytes = 0;
-    uint64_t active_voxels = 0;
+    uint64_t active_voxels = 0;  ///< every active tile counted as the voxels it covers (saturating)
     uint32_t leaves = 0, lower = 0, upper = 0;  ///< node counts
     /// How the file stored it (export.nvdb.precision's names): "float", or "fp16", "fp8", "fp4",
     /// "fpn" for NanoVDB's quantised leaves, decoded to float on reading.

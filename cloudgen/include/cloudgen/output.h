@@ -12,6 +12,11 @@
 //  - A symlink destination is followed: its target is replaced atomically in the target's folder
 //    and the link stays. A character device or FIFO (/dev/null, /dev/stdout, a pipe) is written
 //    through, never replaced. A folder, block device or socket is refused.
+//  - A folder the batch creates (new_folder: a texture pack's) is published whole: its files are
+//    staged beside it, moved at commit into a temporary sibling folder `.NAME.tmp-PID-N`, which is
+//    then renamed to NAME (never over anything that appeared meanwhile). Until then NAME does not
+//    exist; a run killed in the commit's last moments leaves the hidden sibling, which the next run
+//    that creates NAME removes.
 //  - An output that would replace one of the run's inputs (those given to protect(), and every
 //    input the readers recorded in the live InputScope, by device and inode), or another output
 //    of the same run (a sidecar included), is refused before anything is written.
@@ -47,6 +52,11 @@ class OutputBatch {
   /// or claimed, or is a folder/block device/socket; otherwise records the claim. Call this for
   /// every planned output before long work so collisions are reported up front.
   void claim(const std::string& path, const std::string& role);
+  /// `dir` (absent now) is created by this batch, whole, at commit: every file staged as
+  /// `dir/NAME` goes into it, and `dir` appears with all of them or not at all (see the file
+  /// comment). InputError if `dir` exists or its parent folder cannot take it (missing, not
+  /// writable), before any work.
+  void new_folder(const std::string& dir, const std::string& role);
   /// Writes the content of `path` now: `fill(tmp)` writes to `tmp`, a path it may open, write and
   /// close (any library that takes a file name works). Nothing is visible at `path` until commit().
   void stage(const std::string& path, const std::function<void(const std::string& tmp)>& fill);

@@ -65,9 +65,11 @@ TexturePack make_texture_pack(const Preset& p, int threads = 0);
 
 /// Every file a pack writes into `dir`, pack.json last.
 std::vector<std::string> texture_pack_files(const std::string& dir);
-/// Checks `dir` can hold a pack (absent, or a folder; not a file): InputError otherwise. Creates it
-/// when absent and returns true then (the caller removes it again if the batch fails).
-bool prepare_texture_pack_dir(const std::string& dir);
+/// Checks `dir` can hold a pack (absent, or a folder; not a file): InputError otherwise. An existing
+/// folder receives the pack's files (each replaced atomically, all or none, by the batch); an absent
+/// one is announced to `batch` (OutputBatch::new_folder), which creates it whole at its commit, so
+/// a failed or killed run leaves no folder. Returns whether the folder is new.
+bool prepare_texture_pack_dir(const std::string& dir, OutputBatch& batch);
 /// Stages every file of the pack (KTX2, raw, pack.json) in `batch`.
 void stage_texture_pack(const TexturePack& pack, const std::string& dir, const std::string& preset_path,
                         OutputBatch& batch);

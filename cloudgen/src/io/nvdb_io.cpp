@@ -353,6 +353,36 @@ bool same_layout(const NanoVolume& n, size_t a, size_t b) {
   return true;
 }
 
+/// Active voxels of a grid, each active tile counted as the voxels it covers: 4096^3 for a root
+/// tile, 128^3 and 8^3 for the internal nodes'. NanoVDB's own count (OpenToNanoVDB's mVoxelCount)
+/// takes a root tile for 32^3 voxels, and a file's is whatever the file says: a 17 KB file of one
+/// 65536^3 active region counted as a few thousand voxels, and the viewer set to work on it as on
+/// a small cloud (issue 47). Saturates instead of wrapping (a damaged file can claim anything).
+uint64_t active_voxels_with_tiles(const NanoGrid& grid) {
+  const NanoTree& tree = grid.tree();
+  uint64_t n = 0;
+  auto add = [&](uint64_t count, uint64_t each) {
+    const uint64_t k = count > UINT64_MAX / each ? UINT64_MAX : count * each;
+    n = n > UINT64_MAX - k ? UINT64_MAX : n + k;
+  };
+  const auto* root = tree.root().data();
+  uint64_t root_tiles = 0;
+  for (uint32_t i = 0; i < root->mTableSize; ++i) root_tiles += !root->tile(i)->isChild() && root->tile(i)->state;
+  add(root_tiles, uint64_t(NanoUpper::DIM) * NanoUpper::DIM * NanoUpper::DIM);
+  auto tiles = [](const auto& data) {  // value-mask bits that are not children: the active tiles
+    uint64_t t = 0;
+    for (auto it = data.mValueMask.beginOn(); it; ++it) t += !data.mChildMask.isOn(*it);
+    return t;
+  };
+  const NanoUpper* up = tree.nodeCount(2) ? tree.template getFirstNode<2>() : nullptr;
+  for (uint32_t c = 0; c < tree.nodeCount(2); ++c) add(tiles(*up[c].data()), uint64_t(NanoLower::DIM) * NanoLower::DIM * NanoLower::DIM);
+  const NanoLower* low = tree.nodeCount(1) ? tree.template getFirstNode<1>() : nullptr;
+  for (uint32_t c = 0; c < tree.nodeCount(1); ++c) add(tiles(*low[c].data()), uint64_t(NanoLeaf::DIM) * NanoLeaf::DIM * NanoLeaf::DIM);
+  const NanoLeaf* leaf = tree.nodeCount(0) ? tree.template getFirstNode<0>() : nullptr;
+  for (uint32_t c = 0; c < tree.nodeCount(0); ++c) add(leaf[c].valueMask().countOn(), 1);
+  return n;
+}
+
 NanoVolume assemble(std::vector<std::pair<std::string, std::vector<NanoVolume::Block>>> parts, const std::string& name) {
   NanoVolume n;
   uint64_t total = 0;
@@ -368,7 +398,7 @@ NanoVolume assemble(std::vector<std::pair<std::string, std::vector<NanoVolume::B
   }
   for (size_t i = 0; i < n.grids.size(); ++i) {
     const NanoGrid& g = *grid_at(n, i);
-    n.grids[i].active_voxels = g.activeVoxelCount();
+    n.grids[i].active_voxels = active_voxels_with_tiles(g);
     for (int l = 0; l < 3; ++l) (l == 0 ? n.grids[i].leaves : l == 1 ? n.grids[i].lower : n.grids[i].upper) = g.tree().nodeCount(l);
   }
   describe(n, name);

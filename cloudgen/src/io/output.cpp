@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cstdio>
@@ -109,7 +110,8 @@ bool pid_alive(long pid) { return pid > 0 && (::kill(pid_t(pid), 0) == 0 || errn
 /// with "File name too long").
 std::string temp_stem(const std::string& name) { return name.size() <= 200 ? name : name.substr(0, 200); }
 
-/// Removes `.NAME.tmp-PID-N` / `.NAME.bak-PID-N` files that a killed earlier run left in `dir`.
+/// Removes `.NAME.tmp-PID-N` / `.NAME.bak-PID-N` files (and the temporary folders of
+/// OutputBatch::new_folder, with what they hold) that a killed earlier run left in `dir`.
 void remove_stale_temporaries(const fs::path& dir, const std::string& name) {
   std::error_code ec;
   for (const char* tag : {".tmp-", ".bak-"}) {
@@ -125,7 +127,8 @@ void remove_stale_temporaries(const fs::path& dir, const std::string& name) {
       const long pid = std::strtol(pid_text.c_str(), &endp, 10);
       if (!endp || *endp != '\0' || pid == long(::getpid()) || pid_alive(pid)) continue;
       std::error_code rm;
-      fs::remove(it->path(), rm);
+      if (it->is_directory(rm) && !it->is_symlink(rm)) fs::remove_all(it->path(), rm);
+      else fs::remove(it->path(), rm);
     }
   }
 }
@@ -206,10 +209,19 @@ struct OutputBatch::Impl {
     int fd = -1;           ///< the temporary's descriptor
     bool anonymous = false;  ///< O_TMPFILE (no name until commit)
     std::string named_tmp;   ///< fallback temporary's path
+    int folder = -1;         ///< index in folders_ when the file goes into a folder the batch creates
+  };
+  /// A folder new_folder() announced: its files are gathered in `tmp` at commit, then `tmp` is
+  /// renamed to `path`.
+  struct Folder {
+    fs::path path;    ///< as the user named it, normalised, no trailing slash
+    std::string tmp;  ///< the temporary sibling, once the commit made it
+    bool published = false;
   };
   std::map<std::string, std::string> protected_;  ///< identity -> role
   std::map<std::string, std::string> claimed_;    ///< identity -> role
   std::vector<Staged> staged_;
+  std::vector<Folder> folders_;
 
   ~Impl() { discard(); }
   void discard() {
@@ -218,8 +230,22 @@ struct OutputBatch::Impl {
       if (!s.named_tmp.empty()) ::unlink(s.named_tmp.c_str());
     }
     staged_.clear();
+    for (Folder& f : folders_) {
+      std::error_code ec;
+      if (!f.tmp.empty() && !f.published) fs::remove_all(f.tmp, ec);
+    }
+    folders_.clear();
   }
 };
+
+namespace {
+fs::path normal_folder(const std::string& dir) {
+  fs::path p = fs::path(dir).lexically_normal();
+  if (p.has_parent_path() && p.filename().empty()) p = p.parent_path();  // "pack/" -> "pack"
+  return p;
+}
+fs::path parent_or_dot(const fs::path& p) { return p.parent_path().empty() ? fs::path(".") : p.parent_path(); }
+}  // namespace
 
 OutputBatch::OutputBatch() : impl_(std::make_unique<Impl>()) {}
 OutputBatch::~OutputBatch() = default;
@@ -245,6 +271,20 @@ void OutputBatch::claim(const std::string& path, const std::string& role) {
   impl_->claimed_[id] = role;
 }
 
+void OutputBatch::new_folder(const std::string& dir, const std::string& role) {
+  struct stat st;
+  if (::lstat(dir.c_str(), &st) == 0) throw InputError(dir + ": " + role + " would be created here, but it exists");
+  if (errno != ENOENT) throw_io(dir, "cannot inspect the output path", errno);
+  const fs::path path = normal_folder(dir), parent = parent_or_dot(path);
+  int err = 0;
+  if (::stat(parent.c_str(), &st) != 0) err = errno;
+  else if (!S_ISDIR(st.st_mode)) err = ENOTDIR;
+  else if (::access(parent.c_str(), W_OK | X_OK) != 0) err = errno;
+  if (err) throw InputError(dir + ": cannot create the folder: " + system_error_text(err));
+  remove_stale_temporaries(parent, path.filename().string());
+  impl_->folders_.push_back({path, "", false});
+}
+
 void OutputBatch::stage(const std::string& path, const std::function<void(const std::string&)>& fill) {
   stage_impl(path, fill, false);
 }
@@ -255,7 +295,10 @@ void OutputBatch::stage_named(const std::string& path, const std::function<void(
 void OutputBatch::stage_impl(const std::string& path, const std::function<void(const std::string&)>& fill, bool named) {
   Impl::Staged s;
   s.dest = path;
-  s.target = resolve_destination(path);
+  const fs::path in = fs::path(path).lexically_normal().parent_path();
+  for (size_t i = 0; i < impl_->folders_.size(); ++i)
+    if (in == impl_->folders_[i].path) s.folder = int(i);
+  s.target = s.folder >= 0 ? Resolved{path, DestKind::Regular, false, 0} : resolve_destination(path);
   const std::string id = file_identity(s.target.path);
   if (impl_->protected_.count(id))
     throw InputError(path + ": would overwrite " + impl_->protected_[id] + "; choose another output name");
@@ -271,6 +314,9 @@ void OutputBatch::stage_impl(const std::string& path, const std::function<void(c
     std::error_code ec;
     dir = fs::temp_directory_path(ec);
     if (ec) dir = "/tmp";
+  } else if (s.folder >= 0) {  // staged beside the folder, which does not exist before the commit
+    dir = parent_or_dot(impl_->folders_[size_t(s.folder)].path);
+    remove_stale_temporaries(dir, fs::path(s.target.path).filename().string());
   } else {
     dir = fs::path(s.target.path).parent_path();
     if (dir.empty()) dir = ".";
@@ -400,11 +446,20 @@ std::vector<std::string> OutputBatch::commit() {
   struct Done {
     std::string dest, backup;
     bool had_old;
+    bool in_folder = false;  ///< inside a new folder's temporary: goes with it
   };
   std::vector<Done> done;
+  auto& folders = impl_->folders_;
   auto rollback = [&]() -> std::string {
     std::string lost;
+    for (Impl::Folder& f : folders) {  // new folders: taken back whole (the files in them with them)
+      if (f.published && ::rename(f.path.c_str(), f.tmp.c_str()) != 0) lost += (lost.empty() ? "" : ", ") + f.path.string();
+      else f.published = false;
+      std::error_code ec;
+      if (!f.published && !f.tmp.empty()) fs::remove_all(f.tmp, ec);
+    }
     for (auto it = done.rbegin(); it != done.rend(); ++it) {
+      if (it->in_folder) continue;
       if (!it->backup.empty()) {
         if (::rename(it->backup.c_str(), it->dest.c_str()) != 0) lost += (lost.empty() ? "" : ", ") + it->dest;
       } else if (!it->had_old) {
@@ -415,9 +470,24 @@ std::vector<std::string> OutputBatch::commit() {
     }
     return lost;
   };
+  // Each new folder that received a file gathers its files in a temporary sibling first.
+  for (Impl::Folder& f : folders) {
+    if (std::none_of(staged.begin(), staged.end(), [&](const Impl::Staged& s) { return s.folder == int(&f - folders.data()); }))
+      continue;
+    const std::string tmp = unique_sibling(parent_or_dot(f.path), f.path.filename().string(), ".tmp-");
+    if (::mkdir(tmp.c_str(), 0777) != 0) {
+      const int e = errno;
+      const std::string lost = rollback();
+      throw IoError(f.path.string() + ": cannot create the folder's temporary " + tmp + ": " + system_error_text(e) +
+                    (lost.empty() ? "; every other output was left as it was" : "; could not restore the previous " + lost));
+    }
+    f.tmp = tmp;
+  }
   for (Impl::Staged& s : staged) {
     if (s.target.kind != DestKind::Regular) continue;
-    const std::string& dest = s.target.path;
+    const std::string dest =
+        s.folder >= 0 ? (fs::path(folders[size_t(s.folder)].tmp) / fs::path(s.target.path).filename()).string()
+                      : s.target.path;
     const fs::path dir = fs::path(dest).parent_path().empty() ? fs::path(".") : fs::path(dest).parent_path();
     const std::string name = fs::path(dest).filename().string();
     std::string linked = s.named_tmp;
@@ -437,7 +507,7 @@ std::vector<std::string> OutputBatch::commit() {
         fail("cannot give the finished file a name", e);
       }
     }
-    Done d{dest, "", false};
+    Done d{dest, "", false, s.folder >= 0};
     struct stat st;
     if (::lstat(dest.c_str(), &st) == 0 && S_ISREG(st.st_mode)) {
       d.had_old = true;
@@ -453,14 +523,36 @@ std::vector<std::string> OutputBatch::commit() {
     done.push_back(d);
     written.push_back(s.dest);
   }
-  for (const Done& d : done) {
-    if (!d.backup.empty()) ::unlink(d.backup.c_str());
-    const fs::path dir = fs::path(d.dest).parent_path().empty() ? fs::path(".") : fs::path(d.dest).parent_path();
+  // 3. The new folders, whole, each by one rename that never replaces what may have appeared
+  //    under the name since the claim.
+  auto fsync_dir = [](const fs::path& dir) {
     const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
     if (dfd >= 0) {
       (void)::fsync(dfd);  // the renames survive a power cut; best effort
       ::close(dfd);
     }
+  };
+  for (Impl::Folder& f : folders) {
+    if (f.tmp.empty()) continue;
+    fsync_dir(f.tmp);
+    int rc = ::renameat2(AT_FDCWD, f.tmp.c_str(), AT_FDCWD, f.path.c_str(), RENAME_NOREPLACE);
+    if (rc != 0 && (errno == EINVAL || errno == ENOSYS)) {  // a filesystem without it: check, then rename
+      struct stat st;
+      if (::lstat(f.path.c_str(), &st) == 0) errno = EEXIST;
+      else rc = ::rename(f.tmp.c_str(), f.path.c_str());
+    }
+    if (rc != 0) {
+      const int e = errno;
+      const std::string lost = rollback();
+      throw IoError(f.path.string() + ": cannot move the finished folder into place: " + system_error_text(e) +
+                    (lost.empty() ? "; no output was written or replaced" : "; could not restore the previous " + lost));
+    }
+    f.published = true;
+    fsync_dir(parent_or_dot(f.path));
+  }
+  for (const Done& d : done) {
+    if (!d.backup.empty()) ::unlink(d.backup.c_str());
+    if (!d.in_folder) fsync_dir(parent_or_dot(fs::path(d.dest)));
   }
   impl_->discard();
   return written;

@@ -210,7 +210,7 @@ std::vector<std::string> texture_pack_files(const std::string& dir) {
   return f;
 }
 
-bool prepare_texture_pack_dir(const std::string& dir) {
+bool prepare_texture_pack_dir(const std::string& dir, OutputBatch& batch) {
   const std::string where = "--texture-pack " + printable(dir);
   if (dir.empty()) throw InputError("--texture-pack: give a folder");
   struct stat st;
@@ -219,7 +219,11 @@ bool prepare_texture_pack_dir(const std::string& dir) {
     return false;
   }
   if (errno != ENOENT) throw InputError(where + ": " + system_error_text(errno));
-  if (::mkdir(dir.c_str(), 0777) != 0) throw InputError(where + ": cannot create the folder: " + system_error_text(errno));
+  try {
+    batch.new_folder(dir, "the texture pack");
+  } catch (const InputError& e) {
+    throw InputError("--texture-pack " + std::string(e.what()));
+  }
   return true;
 }
 

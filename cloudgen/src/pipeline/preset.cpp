@@ -26,6 +26,7 @@
 #include "cloudgen/input_scope.h"
 #include "cloudgen/printable.h"
 #include "cloudgen/weather_map.h"
+#include "cloudviewer/render_check.h"
 
 namespace cloudgen {
 namespace {
@@ -378,7 +379,8 @@ std::vector<Spec> build_table() {
   in(ParamGroup::Output, true);
   add("/view/render", "object", "{}", 0, 0,
       "cloudviewer render settings for this preset, {\"KEY\": value} as in `cloudviewer --help-params` "
-      "(e.g. {\"sigma_t\": 0.02, \"g\": 0.5}); the viewer checks keys and values, command-line flags override.",
+      "(e.g. {\"sigma_t\": 0.02, \"g\": 0.5}); keys and values are checked against the viewer's table when the "
+      "preset is read, command-line flags override.",
       [](Preset& p, const json& j, const Index&) {
         p.view.render.clear();
         for (auto& [k, val] : j.items()) p.view.render.push_back({k, val.is_string() ? val.get<std::string>() : val.dump()});
@@ -664,6 +666,11 @@ Preset parse_preset(const std::string& text, const std::string& source, const st
   Preset p;  // the table's defaults
   p.source_path = source;
   r.walk(p, doc);
+  // view.render is the viewer's to apply, so it is checked with the viewer's own table (one table,
+  // cloudviewer_params): a value the viewer would refuse is refused here, before any file is written.
+  for (const auto& [key, value] : p.view.render)
+    if (const std::string why = cloudviewer::view_render_problem(key, value); !why.empty())
+      r.problem("/view/render/" + key, value + " is refused by cloudviewer's table: " + why);
   if (r.problems().empty() && p.motion_flow_map != "procedural") {
     // A file named in the preset is found next to it; one given with --set, from where the user is.
     const bool from_set = std::any_of(overrides.begin(), overrides.end(), [](const std::string& ov) {

@@ -7,9 +7,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <filesystem>
 
 #include "cloudgen/generate.h"
+#include "cloudgen/input_scope.h"
 #include "cloudgen/output.h"
 #include "cloudgen/png_read.h"
 
@@ -88,11 +88,9 @@ std::shared_ptr<const WeatherMap> read_weather_map_png(const uint8_t* data, size
 
 std::shared_ptr<const WeatherMap> load_weather_map(const std::string& path) {
   const std::string what = "coverage.file " + path;
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw InputError(what + ": no such file");
-  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(what + ": not a regular file");
+  // The one input layer (cloudgen/input_scope.h) says what the file may be and how much is read.
   // 4096^2 RGBA at 16 bits, uncompressed, is 128 MiB; a PNG bigger than that is not a weather map.
-  const std::vector<uint8_t> bytes = read_file_bytes(path, size_t(1) << 28);
+  const std::vector<uint8_t> bytes = read_input_bytes(path, "the weather map " + path, what, size_t(1) << 28);
   if (bytes.empty()) throw InputError(what + ": the file is empty (0 bytes); " + kAllowed);
   return read_weather_map_png(bytes.data(), bytes.size(), path);
 }

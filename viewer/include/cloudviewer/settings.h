@@ -96,6 +96,10 @@ struct RenderSettings {
   int ms_volume_scale = 4;         ///< its cells: the volume's voxels divided by this per axis
   double sun_intensity = 30;       ///< sun radiance scale
   double ambient = 0.8;            ///< ambient sky radiance scale
+  // the sun along a day (solar_sun in camera.h; the window's time-of-day slider)
+  double time_of_day = -1;         ///< local solar time, hours [0, 24]; < 0 = auto (the sun of --sun, the view, the window)
+  double latitude = 45;            ///< degrees, north > 0
+  int day_of_year = 172;           ///< 1 = 1 January; 172 = the June solstice
   // background
   SkyMode sky = SkyMode::Precomputed;  ///< Bruneton's atmosphere, or the analytic gradient (the thesis)
   bool sky_lut = false;            ///< render.sky=precomputed: the sky from the 4D scattering LUT, not marched

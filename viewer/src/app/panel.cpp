@@ -101,7 +101,8 @@ void render_widget(RenderSettings& s, const PanelWidget& w) {
     case PanelWidget::Kind::SliderFloatOrAuto: {
       bool automatic = value == "auto";
       std::string auto_label = "auto##" + w.key;
-      if (ImGui::Checkbox(auto_label.c_str(), &automatic)) set(s, w.key, automatic ? "auto" : "0");
+      // Off auto: the middle of the range (ground_height 0, time_of_day noon).
+      if (ImGui::Checkbox(auto_label.c_str(), &automatic)) set(s, w.key, automatic ? "auto" : text(0.5 * (w.lo + w.hi)));
       tooltip(w);
       ImGui::SameLine();
       float v = automatic ? 0.f : std::stof(value);
@@ -295,9 +296,31 @@ void file_actions(PanelFile& f) {
   if (!f.status.empty()) ImGui::TextWrapped("%s", f.status.c_str());
 }
 
+// Reset view and the bookmark buttons, on one line: a stored bookmark recalls, an empty one stores
+// the current camera, Ctrl+click stores over a stored one.
+void camera_buttons(PanelCamera& c) {
+  if (ImGui::SmallButton("Reset view")) c.reset = true;
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Home: the camera back to the preset's view (the start view)");
+  for (int i = 0; i < int(c.stored.size()); ++i) {
+    ImGui::SameLine(0, i == 0 ? -1.f : 2.f);
+    const std::string label = std::to_string(i + 1) + (c.stored[size_t(i)] ? "*" : "") + "###b";
+    ImGui::PushID(i);
+    if (ImGui::SmallButton(label.c_str())) {
+      if (c.stored[size_t(i)] && !ImGui::GetIO().KeyCtrl) c.recall = i;
+      else c.store = i;
+    }
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip("bookmark %d (%s): a click recalls a stored camera (*) or stores the current one; Ctrl+click or "
+                        "Ctrl+%d stores, Shift+%d recalls. Kept for this session only",
+                        i + 1, c.stored[size_t(i)] ? "stored" : "empty", i + 1, i + 1);
+    ImGui::PopID();
+  }
+}
+
 }  // namespace
 
-void Panel::draw(RenderSettings& s, const GpuTimings& t, const std::string& hint, PanelFile* file) {
+void Panel::draw(RenderSettings& s, const GpuTimings& t, const std::string& hint, PanelFile* file,
+                 PanelCamera* camera) {
   if (!visible) return;
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
@@ -306,6 +329,7 @@ void Panel::draw(RenderSettings& s, const GpuTimings& t, const std::string& hint
   ImGui::SetNextWindowSize(ImVec2(360, 0), ImGuiCond_FirstUseEver);
   ImGui::Begin("cloudviewer");
   ImGui::TextUnformatted(hint.c_str());
+  if (camera) camera_buttons(*camera);
   if (ImGui::CollapsingHeader("GPU time per pass")) {
     for (const auto& p : t.passes) ImGui::Text("%-14s %8.2f ms", p.first.c_str(), p.second);
     ImGui::Text("%-14s %8.2f ms", "total", t.total_ms);

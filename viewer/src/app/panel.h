@@ -1,6 +1,7 @@
 // The window's on-screen panel (Dear ImGui): one control per render.* key, built from the
 // parameter table by panel_widgets() (settings.h), plus the GPU time of every pass. Internal.
 #pragma once
+#include <array>
 #include <map>
 #include <memory>
 #include <string>
@@ -30,6 +31,14 @@ struct PanelFile {
   std::string edit_status;         ///< the last refused edit's reason
 };
 
+/// The window's camera handles on the panel: Reset view (the preset's `view`) and the session's
+/// bookmarks 1-9. The panel and the keys (Home, Ctrl+N, Shift+N) ask; window.cpp moves the camera.
+struct PanelCamera {
+  bool reset = false;            ///< asked for this frame
+  int store = -1, recall = -1;   ///< a bookmark (0..8) asked for this frame
+  std::array<bool, 9> stored{};  ///< which bookmarks hold a camera
+};
+
 class Panel {
  public:
   /// Installs ImGui's GLFW callbacks, chaining to the ones already set on the window.
@@ -39,8 +48,10 @@ class Panel {
   Panel& operator=(const Panel&) = delete;
   /// Builds and draws the panel into the current framebuffer (after the frame's present()).
   /// Changes `s` where the user moved a control; `hint` is a line shown under the title.
-  /// `file`: the file actions of a preset INPUT (null: none).
-  void draw(RenderSettings& s, const GpuTimings& t, const std::string& hint, PanelFile* file = nullptr);
+  /// `file`: the file actions of a preset INPUT (null: none); `camera`: Reset view and the
+  /// bookmarks (null: not shown).
+  void draw(RenderSettings& s, const GpuTimings& t, const std::string& hint, PanelFile* file = nullptr,
+            PanelCamera* camera = nullptr);
   /// True while ImGui uses the keyboard or mouse (the window's own bindings then stay quiet).
   static bool wants_keyboard();
   static bool wants_mouse();

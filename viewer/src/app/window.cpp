@@ -1,18 +1,24 @@
 // Window mode: GLFW, OpenGL 4.5 core through libepoxy, orbit/fly camera, an on-screen Dear ImGui
-// panel built from the parameter table (every render.* key, per-pass GPU times), keys for the sun
+// panel built from the parameter table (every render.* key, per-pass GPU times), keys and Shift + drag
+// for the sun, Reset view and camera bookmarks,
 // and the table's key bindings, GPU frame time in the title bar, F12 saves PNG + EXR, the input
 // preset regenerates when its file changes, shaders hot-reload from --shader-dir.
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cctype>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <future>
 #include <map>
+#include <optional>
 #include <ostream>
 #include <sstream>
+#include <tuple>
+#include <vector>
 
 #include <epoxy/gl.h>
 #include <GLFW/glfw3.h>
@@ -48,16 +54,26 @@ std::map<std::string, fs::file_time_type> dir_times(const std::string& dir) {
   return m;
 }
 
-struct ViewState {
-  // Orbit camera around `pivot` (yaw/pitch in degrees, distance in metres) or a fly camera.
+// Where the camera is: the orbit camera around `pivot` (yaw/pitch in degrees, distance in metres)
+// or the fly camera. What a bookmark and Reset view restore.
+struct CameraPose {
   bool fly = false;
   glm::dvec3 pivot{0.0};
   double yaw = 0, pitch = 8, distance = 1000;
   glm::dvec3 fly_eye{0.0};
   double fly_yaw = 0, fly_pitch = 0;
+};
+
+struct ViewState : CameraPose {
   double move_speed = 100;
+  double fov = 60;
   double last_x = 0, last_y = 0;
   bool dragging = false;
+  bool sun_drag = false;   // Shift + drag: the sun follows the cursor
+  bool sun_moved = false;  // a handle moved the sun since the last time it was kept as a preset edit
+  CameraPose home;         // the start view: the preset's `view` (Reset view, Home)
+  std::array<std::optional<CameraPose>, 9> bookmarks;  // Ctrl+1..9 / Shift+1..9, for this session
+  PanelCamera* camera = nullptr;  // the camera requests of the keys and the panel
   bool save_requested = false;
   bool reload_requested = false;
   // The clouds' clock (motion.*): plays at time_scale x real time from --time.
@@ -97,7 +113,10 @@ const char* kWindowKeys =
     "| key | action |\n|---|---|\n"
     "| mouse drag, wheel | orbit (fly: look); zoom (fly: speed) |\n"
     "| `F` | orbit / fly; fly: W A S D, Q E down/up, Shift fast |\n"
-    "| arrows | sun azimuth / elevation |\n"
+    "| arrows | sun azimuth / elevation (a preset edit: Save as keeps it) |\n"
+    "| `Shift` + drag | the sun to the sky under the cursor (azimuth, elevation -10..90; a preset edit: Save as keeps it) |\n"
+    "| `Home` | reset view: the camera back to the preset's `view` (the start view) |\n"
+    "| `Ctrl+1`..`9`, `Shift+1`..`9` | store, recall a camera bookmark (kept for this session only) |\n"
     "| `F1` | on-screen panel on / off |\n"
     "| `Space` | play / pause the clouds' motion (`motion.*`; starts at `--time`) |\n"
     "| `,` / `.` | motion time runs half / twice as fast (1/64x .. 1024x real time) |\n"
@@ -115,10 +134,59 @@ std::string format_scale(double v) {
   return os.str();
 }
 
+// A handle (arrows, Shift + drag) moved the sun: it leaves the time of day's path (render.time_of_day
+// back to auto) and is kept as a preset edit once the mouse lets go (the frame loop).
+void sun_by_hand(ViewState& v) {
+  v.sun_moved = true;
+  v.settings->time_of_day = -1;
+}
+
+// The sun under the window point (x, y) of a width x height window: the direction through it from
+// the camera the frame is drawn with, the elevation kept to the handles' range.
+void sun_to(ViewState& v, double x, double y, int width, int height) {
+  if (width < 1 || height < 1) return;
+  *v.sun = sun_toward(view_direction(camera_of(v, v.fov), width, height, x, y), kSunHandleMinElevation,
+                      kSunHandleMaxElevation);
+  sun_by_hand(v);
+}
+
+// A mouse button pressed or let go at (x, y): with Shift the sun drag, else orbit / look. What the
+// GLFW callback and the window test's automation (CLOUDVIEWER_WINDOW_ACTIONS) both call.
+void mouse_button(ViewState& v, bool pressed, int mods, double x, double y, int width, int height) {
+  v.last_x = x, v.last_y = y;
+  v.sun_drag = pressed && (mods & GLFW_MOD_SHIFT);
+  v.dragging = pressed && !v.sun_drag;
+  if (v.sun_drag) sun_to(v, x, y, width, height);
+}
+
+// The cursor moved to (x, y) with a button held: the sun follows it, or the camera turns.
+void mouse_move(ViewState& v, double x, double y, int width, int height) {
+  if (v.sun_drag) return sun_to(v, x, y, width, height);
+  if (!v.dragging) return;
+  double dx = x - v.last_x, dy = y - v.last_y;
+  v.last_x = x, v.last_y = y;
+  if (v.fly) {
+    v.fly_yaw -= dx * 0.2;
+    v.fly_pitch = std::clamp(v.fly_pitch - dy * 0.2, -89.0, 89.0);
+  } else {
+    v.yaw -= dx * 0.3;
+    v.pitch = std::clamp(v.pitch + dy * 0.3, -89.0, 89.0);
+  }
+}
+
 void on_key(GLFWwindow* w, int key, int, int action, int mods) {
   if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
   auto* v = static_cast<ViewState*>(glfwGetWindowUserPointer(w));
   if (v->panel && v->panel->visible && Panel::wants_keyboard()) return;  // typing into the panel
+  // Camera bookmarks (Ctrl stores, Shift recalls) and Reset view, done in the frame loop.
+  if (key >= GLFW_KEY_1 && key <= GLFW_KEY_9 && (mods & (GLFW_MOD_CONTROL | GLFW_MOD_SHIFT))) {
+    ((mods & GLFW_MOD_CONTROL) ? v->camera->store : v->camera->recall) = key - GLFW_KEY_1;
+    return;
+  }
+  if (key == GLFW_KEY_HOME) {
+    v->camera->reset = true;
+    return;
+  }
   if ((mods & GLFW_MOD_CONTROL) && v->file && v->file->preset) {  // the preset's file actions
     if (key == GLFW_KEY_S) v->file->save = true;
     if (key == GLFW_KEY_E) v->file->export_vdb = true;
@@ -136,10 +204,15 @@ void on_key(GLFWwindow* w, int key, int, int action, int mods) {
     }
   switch (key) {
     case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(w, 1); break;
-    case GLFW_KEY_LEFT: sun.azimuth_deg -= 5; break;
-    case GLFW_KEY_RIGHT: sun.azimuth_deg += 5; break;
-    case GLFW_KEY_UP: sun.elevation_deg = std::min(90.0, sun.elevation_deg + 2.5); break;
-    case GLFW_KEY_DOWN: sun.elevation_deg = std::max(-10.0, sun.elevation_deg - 2.5); break;
+    // The azimuth kept in [-180, 180] (the preset's view.sun.azimuth takes [-360, 360]).
+    case GLFW_KEY_LEFT: sun.azimuth_deg = std::remainder(sun.azimuth_deg - 5, 360.0), sun_by_hand(*v); break;
+    case GLFW_KEY_RIGHT: sun.azimuth_deg = std::remainder(sun.azimuth_deg + 5, 360.0), sun_by_hand(*v); break;
+    case GLFW_KEY_UP:
+      sun.elevation_deg = std::min(kSunHandleMaxElevation, sun.elevation_deg + 2.5), sun_by_hand(*v);
+      break;
+    case GLFW_KEY_DOWN:
+      sun.elevation_deg = std::max(kSunHandleMinElevation, sun.elevation_deg - 2.5), sun_by_hand(*v);
+      break;
     case GLFW_KEY_F: v->fly = !v->fly; break;
     case GLFW_KEY_R: v->reload_requested = true; break;
     case GLFW_KEY_F1:
@@ -155,27 +228,23 @@ void on_key(GLFWwindow* w, int key, int, int action, int mods) {
   }
 }
 
-void on_button(GLFWwindow* w, int button, int action, int) {
+void on_button(GLFWwindow* w, int button, int action, int mods) {
   auto* v = static_cast<ViewState*>(glfwGetWindowUserPointer(w));
   if (action == GLFW_PRESS && v->panel && v->panel->visible && Panel::wants_mouse()) return;
   if (button == GLFW_MOUSE_BUTTON_LEFT || button == GLFW_MOUSE_BUTTON_RIGHT) {
-    v->dragging = action == GLFW_PRESS;
-    glfwGetCursorPos(w, &v->last_x, &v->last_y);
+    double x = 0, y = 0;
+    int width = 0, height = 0;
+    glfwGetCursorPos(w, &x, &y);
+    glfwGetWindowSize(w, &width, &height);
+    mouse_button(*v, action == GLFW_PRESS, mods, x, y, width, height);
   }
 }
 
 void on_cursor(GLFWwindow* w, double x, double y) {
   auto* v = static_cast<ViewState*>(glfwGetWindowUserPointer(w));
-  if (!v->dragging) return;
-  double dx = x - v->last_x, dy = y - v->last_y;
-  v->last_x = x, v->last_y = y;
-  if (v->fly) {
-    v->fly_yaw -= dx * 0.2;
-    v->fly_pitch = std::clamp(v->fly_pitch - dy * 0.2, -89.0, 89.0);
-  } else {
-    v->yaw -= dx * 0.3;
-    v->pitch = std::clamp(v->pitch + dy * 0.3, -89.0, 89.0);
-  }
+  int width = 0, height = 0;
+  glfwGetWindowSize(w, &width, &height);
+  mouse_move(*v, x, y, width, height);
 }
 
 void on_scroll(GLFWwindow* w, double, double dy) {
@@ -413,7 +482,7 @@ std::string panel_hint(const ViewState& view, const RenderSettings& settings, co
   hint.precision(3);
   hint << "sun " << sun.azimuth_deg << ", " << sun.elevation_deg << (view.fly ? " | fly" : " | orbit") << " | t "
        << settings.time << " s" << (view.playing ? " x" + format_scale(view.time_scale) : " paused")
-       << " | H keys, F1 hide";
+       << " | H keys, F1 hide\nShift+drag: sun | Home: reset view";
   return hint.str();
 }
 
@@ -447,6 +516,92 @@ void save_frame(const Options& o, GLFWwindow* window, GlRenderer& renderer, bool
   }
 }
 
+// A double as text that reads back as the same double.
+std::string exact(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+// The camera requests of the keys and the panel: Reset view, store and recall a bookmark.
+void camera_requests(ViewState& v, std::ostream& out) {
+  PanelCamera& c = *v.camera;
+  CameraPose& pose = v;
+  if (c.reset) {
+    pose = v.home;
+    out << "view reset to the preset's view\n";
+  }
+  if (c.store >= 0 && c.store < int(v.bookmarks.size())) {
+    v.bookmarks[size_t(c.store)] = pose;
+    out << "camera stored in bookmark " << c.store + 1 << "\n";
+  }
+  if (c.recall >= 0 && c.recall < int(v.bookmarks.size()) && v.bookmarks[size_t(c.recall)]) {
+    pose = *v.bookmarks[size_t(c.recall)];
+    out << "camera from bookmark " << c.recall + 1 << "\n";
+  }
+  c.reset = false;
+  c.store = c.recall = -1;
+  for (size_t i = 0; i < v.bookmarks.size(); ++i) c.stored[i] = v.bookmarks[i].has_value();
+}
+
+// The preset's view.sun as the panel shows it (`seen`, "AZ,EL" as JSON text): an edit of it on the
+// panel moves the window's sun. The first values are the start's, which --sun or
+// render.time_of_day may have overridden.
+void follow_view_sun(const PanelFile& f, Sun& sun, std::string& seen) {
+  const auto az = f.values.find("view.sun.azimuth"), el = f.values.find("view.sun.elevation");
+  if (az == f.values.end() || el == f.values.end()) return;
+  const std::string now = az->second + "," + el->second;
+  if (seen.empty() || now == seen) {
+    seen = now;
+    return;
+  }
+  seen = now;
+  auto number = [](const std::string& text, double& out) {
+    char* end = nullptr;
+    const double d = std::strtod(text.c_str(), &end);
+    if (end != text.c_str() && *end == '\0' && std::isfinite(d)) out = d;
+  };
+  number(az->second, sun.azimuth_deg);
+  number(el->second, sun.elevation_deg);
+}
+
+// One step of CLOUDVIEWER_WINDOW_ACTIONS (tests/window_handles.sh) on the window's own input paths:
+// "sundrag:X0,Y0,X1,Y1" a Shift + drag from one window point to another (fractions of the window's
+// size), "orbit:DX,DY" a plain drag by DX, DY pixels from the centre, "reset", "store:N",
+// "recall:N", "set:KEY=VALUE" a render.* key as the panel sets it. False: not one of these.
+bool handle_action(const std::string& a, ViewState& v, GLFWwindow* window, RenderSettings& s) {
+  int w = 0, h = 0;
+  glfwGetWindowSize(window, &w, &h);
+  const size_t colon = a.find(':');
+  const std::string verb = a.substr(0, colon), arg = colon == std::string::npos ? "" : a.substr(colon + 1);
+  std::vector<double> n;
+  for (std::istringstream in(arg); in.good();) {
+    double d = 0;
+    char comma = 0;
+    if (in >> d) n.push_back(d);
+    in >> comma;
+  }
+  if (verb == "sundrag" && n.size() == 4) {
+    mouse_button(v, true, GLFW_MOD_SHIFT, n[0] * w, n[1] * h, w, h);
+    for (int i = 1; i <= 4; ++i)
+      mouse_move(v, (n[0] + (n[2] - n[0]) * i / 4) * w, (n[1] + (n[3] - n[1]) * i / 4) * h, w, h);
+    mouse_button(v, false, GLFW_MOD_SHIFT, n[2] * w, n[3] * h, w, h);
+  } else if (verb == "orbit" && n.size() == 2) {
+    mouse_button(v, true, 0, w / 2.0, h / 2.0, w, h);
+    mouse_move(v, w / 2.0 + n[0], h / 2.0 + n[1], w, h);
+    mouse_button(v, false, 0, w / 2.0 + n[0], h / 2.0 + n[1], w, h);
+  } else if (verb == "reset") {
+    v.camera->reset = true;
+  } else if ((verb == "store" || verb == "recall") && n.size() == 1) {
+    (verb == "store" ? v.camera->store : v.camera->recall) = int(n[0]) - 1;
+  } else if (verb == "set" && !arg.empty()) {
+    apply_setting(s, arg);
+  } else {
+    return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
@@ -475,7 +630,11 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
   view.sun = &sun;
   view.start_time = settings.time;
   view.out = &out;
+  view.fov = o.fov;
   start_view(view, start, session.volume());
+  view.home = view;  // the pose alone: Reset view's
+  PanelCamera camera_panel;
+  view.camera = &camera_panel;
   glfwSetWindowUserPointer(window, &view);
   glfwSetKeyCallback(window, on_key);
   glfwSetMouseButtonCallback(window, on_button);
@@ -511,6 +670,11 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
   }
   auto automating = [&] { return edits_waiting || !todo.empty() || automating_action(file); };
   bool was_automating = false;
+  // render.time_of_day, render.latitude and render.day_of_year as the last frame had them: a change
+  // (the panel's sliders) puts the sun on the day's path.
+  auto sun_clock = [&] { return std::make_tuple(settings.time_of_day, settings.latitude, settings.day_of_year); };
+  auto last_clock = sun_clock();
+  std::string seen_view_sun;  // follow_view_sun's
   while (!glfwWindowShouldClose(window)) {
     glfwPollEvents();
     auto now = std::chrono::steady_clock::now();
@@ -529,13 +693,41 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
       file.edits = o.edits;
       edits_sent = edits_waiting = true;
     }
+    if (!edits_waiting && frame >= 1 && !todo.empty() && !automating_action(file)) {
+      const std::string a = todo.front();
+      todo.erase(todo.begin());
+      if (a == "save" || a == "export" || a == "blender") {
+        (a == "save" ? file.save : a == "export" ? file.export_vdb : file.blender) = true;
+      } else {
+        try {
+          if (!handle_action(a, view, window, settings)) err << "CLOUDVIEWER_WINDOW_ACTIONS: unknown action " << a << "\n";
+        } catch (const InputError& e) {
+          err << "CLOUDVIEWER_WINDOW_ACTIONS: " << e.what() << "\n";
+        }
+      }
+    }
+    camera_requests(view, out);
+    if (sun_clock() != last_clock) {
+      last_clock = sun_clock();
+      if (settings.time_of_day >= 0) {
+        sun = solar_sun(settings.latitude, settings.day_of_year, settings.time_of_day);
+        view.sun_moved = true;
+      }
+    }
+    // A sun the handles moved is kept as the preset's view.sun (Save as writes it) once the mouse
+    // lets go: one edit per drag, not one per frame.
+    if (view.sun_moved && !view.sun_drag && glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) != GLFW_PRESS) {
+      view.sun_moved = false;
+      out << "sun " << exact(sun.azimuth_deg) << "," << exact(sun.elevation_deg) << " (azimuth, elevation)\n";
+      if (file.preset) {
+        file.edits.push_back("view.sun.azimuth=" + exact(sun.azimuth_deg));
+        file.edits.push_back("view.sun.elevation=" + exact(sun.elevation_deg));
+      }
+    }
     if (actions.edit(session)) watcher.request(session, settings);
+    if (file.preset) follow_view_sun(file, sun, seen_view_sun);
     watcher.collect(session, out, err);
     if (edits_waiting && watcher.idle()) edits_waiting = false;
-    if (!edits_waiting && frame >= 1 && !todo.empty() && !automating_action(file)) {
-      (todo.front() == "save" ? file.save : todo.front() == "export" ? file.export_vdb : file.blender) = true;
-      todo.erase(todo.begin());
-    }
     if (was_automating && !automating()) frame = 0;  // the saved frame is then a fresh run's frame
     was_automating = automating();
     int fw = 0, fh = 0;
@@ -553,7 +745,7 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
     GpuTimings t;
     renderer.render(fs, &t);
     renderer.present(fw, fh);
-    panel.draw(settings, t, panel_hint(view, settings, sun), &file);
+    panel.draw(settings, t, panel_hint(view, settings, sun), &file, &camera_panel);
     actions.run(session, out);
     if (auto_frames > 0 && !was_automating && !automating() && frame + 1 == auto_frames) {  // what the window shows, read from its back buffer before the swap
       std::string shot = fs::path(o.out).replace_extension("").string() + ".window.png";

@@ -2,6 +2,7 @@
 // PreparedVolume that holds NanoVDB grids instead of the dense RGBA copy.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <string>
 
@@ -204,6 +205,29 @@ PreparedVolume prepare_nano(std::shared_ptr<const cloudgen::NanoVolume> n, int o
   for (int i = 0; i < 3; ++i)
     if (!std::isfinite(n->origin[size_t(i)]) || std::abs(n->origin[size_t(i)]) > 1e8)
       throw InputError("volume origin " + std::to_string(n->origin[size_t(i)]) + " m: must be finite, |x| <= 1e8 m");
+  // The memory estimate counts the voxels of active tiles: each is sampled and lit like a leaf's
+  // voxel (the atlas stores it as one), but holds no bytes in the file or the grids. A 17 KB .vdb
+  // of one active 65536^3 region, estimated by its few thousand tiles, kept the CPU viewer busy
+  // for minutes (issue 47); such a file is refused here, before any occupancy or light cache is
+  // built. The leaves' voxels are already in memory (the grids' buffer), so only the tiles' count:
+  // every grid's active voxels beyond what its leaves can hold, 4 bytes each.
+  uint64_t tile_voxels = 0;
+  for (const cloudgen::NanoVolume::Grid& g : n->grids) {
+    const uint64_t in_leaves = uint64_t(g.leaves) * 512;
+    const uint64_t beyond = g.active_voxels > in_leaves ? g.active_voxels - in_leaves : 0;
+    tile_voxels = tile_voxels > UINT64_MAX - beyond ? UINT64_MAX : tile_voxels + beyond;
+  }
+  const uint64_t tile_bytes = tile_voxels > UINT64_MAX / 4 ? UINT64_MAX : tile_voxels * 4;
+  if (tile_bytes > available_memory_bytes()) {
+    char text[200];
+    std::snprintf(text, sizeof text,
+                  "its active tiles cover %llu voxels, which need about %.1f GiB of memory to render as "
+                  "voxels; %.1f GiB is available",
+                  static_cast<unsigned long long>(tile_voxels), double(tile_bytes) / double(1u << 30),
+                  double(available_memory_bytes()) / double(1u << 30));
+    throw InputError(std::string("volume (NanoVDB grids): ") + text +
+                     " (a damaged file, or one region marked active as a whole: store the clouds' voxels instead)");
+  }
   p.voxel_size = n->voxel_size;
   p.origin = glm::dvec3(n->origin[0], n->origin[1], n->origin[2]);
   // The height range the clouds' height fraction spans (ambient light, motion), as prepare_volume:

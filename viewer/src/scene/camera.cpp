@@ -15,6 +15,41 @@ glm::dvec3 Sun::direction() const {
   return glm::dvec3(std::cos(el) * std::sin(az), std::sin(el), -std::cos(el) * std::cos(az));
 }
 
+Sun sun_toward(const glm::dvec3& dir, double min_elevation, double max_elevation) {
+  Sun s;
+  const double horizontal = std::hypot(dir.x, dir.z);
+  s.azimuth_deg = horizontal > 0 ? glm::degrees(std::atan2(dir.x, -dir.z)) : 0.0;
+  s.elevation_deg = std::clamp(glm::degrees(std::atan2(dir.y, horizontal)), min_elevation, max_elevation);
+  return s;
+}
+
+glm::dvec3 view_direction(const Camera& cam, int width, int height, double x, double y) {
+  // Window point -> normalised device coordinates (y up) -> a point on the far plane, seen from
+  // the eye at the origin of the camera-relative view.
+  const glm::dvec4 ndc(2.0 * x / width - 1.0, 1.0 - 2.0 * y / height, 1.0, 1.0);
+  const glm::dvec4 p = glm::inverse(view_projection(cam, width, height)) * ndc;
+  return glm::normalize(glm::dvec3(p) / p.w);
+}
+
+double solar_declination_deg(double day_of_year) {
+  return 23.45 * std::sin(glm::radians(360.0 * (284.0 + day_of_year) / 365.0));
+}
+
+Sun solar_sun(double latitude_deg, double day_of_year, double hours) {
+  const double lat = glm::radians(latitude_deg), dec = glm::radians(solar_declination_deg(day_of_year));
+  const double h = glm::radians(15.0 * (hours - 12.0));  // hour angle: negative in the morning
+  const double up = std::sin(lat) * std::sin(dec) + std::cos(lat) * std::cos(dec) * std::cos(h);
+  // The sun's direction in local east / north components (times cos elevation).
+  const double east = -std::cos(dec) * std::sin(h);
+  const double north = std::sin(dec) * std::cos(lat) - std::cos(dec) * std::sin(lat) * std::cos(h);
+  Sun s;
+  s.elevation_deg = glm::degrees(std::asin(std::clamp(up, -1.0, 1.0)));
+  s.azimuth_deg = (east == 0 && north == 0) ? 0.0 : glm::degrees(std::atan2(east, north));
+  if (s.azimuth_deg < 0) s.azimuth_deg += 360;
+  if (s.azimuth_deg >= 360) s.azimuth_deg -= 360;
+  return s;
+}
+
 Camera default_camera(const PreparedVolume& vol, double fov_y_deg, double aspect) {
   glm::dvec3 s = vol.size(), c = vol.center();
   double tv = std::tan(glm::radians(fov_y_deg) * 0.5);

@@ -109,6 +109,8 @@ Camera default_view_camera(const PreparedVolume& vol, const RenderSettings& s, d
 
 Sun default_view_sun(const Options& o, const Camera& cam) {
   if (o.sun) return *o.sun;
+  const RenderSettings& r = o.settings;
+  if (r.time_of_day >= 0) return solar_sun(r.latitude, r.day_of_year, r.time_of_day);
   Sun s = default_sun(cam);
   if (o.view.sun_azimuth) s.azimuth_deg = *o.view.sun_azimuth;
   if (o.view.sun_elevation) s.elevation_deg = *o.view.sun_elevation;

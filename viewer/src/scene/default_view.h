@@ -18,7 +18,8 @@ void apply_input_view(Options& o, bool fov_given);
 /// keeps default_camera.
 Camera default_view_camera(const PreparedVolume& vol, const RenderSettings& s, double fov_y_deg, double aspect);
 
-/// The sun for `cam`: --sun, else the view's azimuth/elevation, each missing one from default_sun.
+/// The sun for `cam`: --sun, else render.time_of_day's (solar_sun), else the view's azimuth/elevation,
+/// each missing one from default_sun.
 Sun default_view_sun(const Options& o, const Camera& cam);
 
 }  // namespace cloudviewer

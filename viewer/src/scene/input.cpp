@@ -139,7 +139,11 @@ PreparedVolume open_input(const std::string& input, const RenderSettings& s, uin
   if (file && (ext == ".nvdb" || ext == ".vdb")) refuse_preset_sets(input, preset);
   auto sparse = [&](cloudgen::NanoVolume n) {
     const int cell = occupancy_cell_for(s.occupancy_cell, n.dims[0], n.dims[1], n.dims[2]);
-    return prepare_nano(std::make_shared<const cloudgen::NanoVolume>(std::move(n)), cell, s.occupancy_padding);
+    try {
+      return prepare_nano(std::make_shared<const cloudgen::NanoVolume>(std::move(n)), cell, s.occupancy_padding);
+    } catch (const InputError& e) {
+      throw InputError("input '" + input + "': " + e.what());  // the file, as the dense path names it
+    }
   };
   if (file && ext == ".nvdb") {
     cloudgen::NanoVolume n = cloudgen::read_nvdb(input);  // sparse either way; densified only for dense

@@ -1,4 +1,5 @@
 #include "cloudviewer/controls.h"
+#include "cloudviewer/render_check.h"
 #include "cloudviewer/settings.h"
 
 #include <algorithm>
@@ -105,6 +106,18 @@ std::vector<ParamDef> build() {
   t.push_back(integer("ms_volume_scale", &RenderSettings::ms_volume_scale, 1, 64, "diffusion cells: the volume's voxels divided by this on each axis (doubled until at most 64^3 cells)").in(cloudgen::ParamGroup::Quality, true));
   t.push_back(real("sun_intensity", &RenderSettings::sun_intensity, 0, 1e6, "sun radiance scale").in(cloudgen::ParamGroup::LightAndSky));
   t.push_back(real("ambient", &RenderSettings::ambient, 0, 1e6, "ambient sky radiance scale").in(cloudgen::ParamGroup::LightAndSky));
+  t.push_back(ParamDef{"time_of_day", "float", "[0, 24] or auto",
+               "local solar time, hours (12 = noon): the sun moves along the day at render.latitude on render.day_of_year "
+               "(declination from the day, hour angle 15 degrees an hour; azimuth 0 = north = -z, 90 = east = +x) and "
+               "replaces the view's sun (--sun still wins). auto = the sun of --sun, the preset's view.sun, the arrows or "
+               "Shift + drag in the window",
+               [](RenderSettings& s, const std::string& v) {
+                 s.time_of_day = v == "auto" ? -1.0 : parse_double("time_of_day", v, 0, 24);
+               },
+               [](const RenderSettings& s) { return s.time_of_day < 0 ? std::string("auto") : fmt(s.time_of_day); },
+               ParamKind::FloatOrAuto, 0, 24, {}}.in(cloudgen::ParamGroup::LightAndSky));
+  t.push_back(real("latitude", &RenderSettings::latitude, -90, 90, "render.time_of_day: the latitude, degrees (north > 0)").in(cloudgen::ParamGroup::LightAndSky));
+  t.push_back(integer("day_of_year", &RenderSettings::day_of_year, 1, 366, "render.time_of_day: the day, 1 = 1 January (81: March equinox, 172: June solstice, 355: December solstice)").in(cloudgen::ParamGroup::LightAndSky));
   t.push_back(enumeration("sky", &RenderSettings::sky, {"analytic", "precomputed"}, "sky and sky light: analytic gradient and constant ambient (the thesis), or the precomputed atmosphere after Bruneton (atmosphere.* keys; transmittance LUT, marched single scattering, Hillaire's multiple-scattering LUT; docs/sky.md)").in(cloudgen::ParamGroup::LightAndSky));
   t.push_back(boolean("sky_lut", &RenderSettings::sky_lut, "render.sky=precomputed: read the sky and the aerial perspective from Bruneton's 4D scattering LUT (512x128x32 texels x 3 parts, 96 MiB, computed when an atmosphere.* key changes) instead of marching 32 samples per pixel; docs/sky.md has its cost and error").in(cloudgen::ParamGroup::Quality));
   t.push_back(boolean("air_lut", &RenderSettings::air_lut, "render.sky=precomputed: read the sky and the aerial perspective from a small 3D LUT of the air seen from the camera's altitude (16 azimuths x 64 elevations x 64 distances x 2 parts, 2 MiB, after Hillaire 2020's sky-view and aerial-perspective LUTs; rebuilt when the sun, the camera's altitude or an atmosphere.* key changes), each texel marched as the per-pixel sky is (or read from the 4D LUT with render.sky_lut); from above the air the sky is marched; docs/sky.md has its cost and error").in(cloudgen::ParamGroup::Quality));
@@ -163,6 +176,23 @@ void apply_setting(RenderSettings& s, const std::string& assignment) {
     known += (known.empty() ? "" : ", ") + p.key;
   }
   throw InputError("--set " + assignment + ": unknown key render." + key + " (known: " + known + ")");
+}
+
+std::string view_render_problem(const std::string& key, const std::string& value) {
+  RenderSettings s;
+  const std::string assignment = key + "=" + value;
+  try {
+    apply_setting(s, assignment);
+    return "";
+  } catch (const InputError& e) {
+    // The table's words are a --set's ("--set render.KEY=VALUE: invalid value, allowed: ..."):
+    // what follows the echoed assignment is the reason, which the caller puts after its own name
+    // of the field.
+    std::string m = e.what();
+    const std::string echoed = "=" + value + ": ";
+    const size_t at = m.rfind("--set ", 0) == 0 ? m.find(echoed) : std::string::npos;
+    return at == std::string::npos ? m : m.substr(at + echoed.size());
+  }
 }
 
 const ParamDef& render_param(const std::string& key) {
