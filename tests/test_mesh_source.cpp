@@ -268,6 +268,11 @@ TEST(MeshSource, BadInputNamesTheFieldAndWhatIsAllowed) {
   testutil::write_text(dir / "flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
   testutil::write_text(dir / "junk.obj", "this is not a mesh\n\x01\x02\x03");
   testutil::write_text(dir / "cube.obj", box_obj(0, 0, 0, 1, 1, 1));
+  // A PLY header that never ends: Assimp 5.2 loops on it forever (found by fuzz_mesh); the reader's
+  // child process is stopped after 2 s of CPU time.
+  testutil::write_text(dir / "hang.ply", "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                                         "property float z\nelement face 4\nproperty list uchar int vertex_indices\n"
+                                         "end_hsolideader\n0 0 0\n1 0\n");
   struct Case {
     std::string shape, expect;
   };
@@ -278,6 +283,7 @@ TEST(MeshSource, BadInputNamesTheFieldAndWhatIsAllowed) {
       {mesh_source(dir / "far.obj"), "has the coordinate 1e+30; allowed: finite, within +-1e+07"},
       {mesh_source(dir / "flat.obj"), "zero area"},
       {mesh_source(dir / "junk.obj"), "not a mesh Assimp can read"},
+      {mesh_source(dir / "hang.ply"), "was still reading after 2 s of CPU time and was stopped"},
       {mesh_source(""), "/shape/sources/0/file: empty"},
       {R"({"sources": [{"kind": "mesh"}]})", "a mesh needs \"file\""},
       {R"({"sources": [{"kind": "mesh", "file": ")" + (dir / "cube.obj") + R"(", "radius": 3}]})", "/shape/sources/0/radius: is not a key of a mesh"},

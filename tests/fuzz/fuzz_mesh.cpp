@@ -1,23 +1,53 @@
-// libFuzzer target for the mesh reader of mesh shape sources (mesh_source.h, Assimp): the first byte
-// picks the format (OBJ, PLY, STL, GLB, OFF), the rest is the file. It is read or refused with
-// InputError; a mesh that is read is checked (indices in range, finite points inside its box) and,
-// when small, its distance lattice is built and probed: every distance finite and within the
-// band, and the box bound never above a distance inside the box.
+// libFuzzer target for mesh shape sources (mesh_source.h). The first byte picks the path:
+//  - 0-4: a file in OBJ, PLY, STL, GLB or OFF (the rest of the input) through read_mesh_bytes:
+//    Assimp runs in a child process with a CPU-time limit, so a file that makes it loop or crash
+//    must come back as an InputError, never hang or crash this process (Assimp's own code is
+//    fuzzed upstream; its coverage in the child is not seen here);
+//  - 5: arrays (u16 points, u16 triangles, then floats and u32 indices) straight into
+//    mesh_from_arrays, our checks, coverage-guided.
+// A mesh that is accepted is checked (indices in range, finite points inside its box) and, when
+// small, its distance lattice is built and probed: every distance finite and within the band, and
+// the box bound never above a distance inside the box.
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "cloudgen/mesh_source.h"
 #include "fuzz_common.h"
 
+namespace {
+
+cloudgen::TriangleMesh from_arrays(const uint8_t* data, size_t size) {
+  uint16_t np = 0, nt = 0;
+  if (size >= 4) std::memcpy(&np, data, 2), std::memcpy(&nt, data + 2, 2);
+  size_t at = 4;
+  std::vector<std::array<float, 3>> points;
+  std::vector<std::array<uint32_t, 3>> tris;
+  for (uint16_t i = 0; i < np && at + 12 <= size; ++i, at += 12) {
+    std::array<float, 3> p;
+    std::memcpy(p.data(), data + at, 12);
+    points.push_back(p);
+  }
+  for (uint16_t i = 0; i < nt && at + 12 <= size; ++i, at += 12) {
+    std::array<uint32_t, 3> t;
+    std::memcpy(t.data(), data + at, 12);
+    tris.push_back(t);
+  }
+  return cloudgen::mesh_from_arrays(std::move(points), std::move(tris), "fuzz arrays");
+}
+
+}  // namespace
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 1) return 0;
   static const char* kExt[] = {"obj", "ply", "stl", "glb", "off"};
-  const char* ext = kExt[data[0] % 5];
-  const std::vector<uint8_t> bytes(data + 1, data + size);
+  const int mode = data[0] % 6;
   return fuzz::guarded([&] {
-    const cloudgen::TriangleMesh m = cloudgen::read_mesh_bytes(bytes, ext, "fuzz mesh");
-    if (m.triangles.empty()) __builtin_trap();
+    const cloudgen::TriangleMesh m = mode == 5 ? from_arrays(data + 1, size - 1)
+                                               : cloudgen::read_mesh_bytes(std::vector<uint8_t>(data + 1, data + size),
+                                                                           kExt[mode], "fuzz mesh");
+    if (m.triangles.empty() || !(m.area > 0)) __builtin_trap();
     for (const auto& t : m.triangles)
       for (uint32_t v : t) {
         if (v >= m.points.size()) __builtin_trap();

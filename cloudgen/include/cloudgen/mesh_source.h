@@ -34,12 +34,20 @@ inline constexpr double kMaxMeshCoordinate = 1e7;
 
 /// Reads `path` (format from its extension: .obj .ply .stl .gltf .glb .fbx .dae .off ...) through
 /// the one input layer (input_scope.h: protected as an input, no pipes, at most kMeshFileCap; the
-/// files it names, such as a glTF's buffers or an OBJ's materials, too). `what` names it in errors
-/// ("/shape/sources/0/file x.obj"). Throws InputError: missing or unreadable as a mesh, no
-/// triangles, a coordinate that is NaN, infinite or beyond the limit, too many triangles.
+/// files it names, such as a glTF's buffers or an OBJ's materials, too). Assimp runs in a child
+/// process with a CPU-time limit (2 s + 1 s per MiB) and an 8 GiB address-space limit, since it
+/// loops forever or crashes on some damaged files (fuzz_mesh found a PLY header that never ends):
+/// either becomes an InputError here. `what` names the file in errors. Throws InputError: missing
+/// or unreadable as a mesh, no triangles, a coordinate that is NaN, infinite or beyond the limit,
+/// too many triangles.
 TriangleMesh read_mesh(const std::string& path, const std::string& what);
-/// The same from bytes in memory; `extension` ("obj", "stl", ...) picks the reader (fuzz target).
+/// The same from bytes in memory; `extension` ("obj", "stl", ...) picks the reader.
 TriangleMesh read_mesh_bytes(const std::vector<uint8_t>& bytes, const std::string& extension, const std::string& what);
+/// The checks of a mesh (triangle count, finite coordinates within the limit, indices in range, at
+/// least one triangle of non-zero area), its box, open edges, area and hash; InputError naming
+/// `what` otherwise. What the readers above end with (and what fuzz_mesh drives directly).
+TriangleMesh mesh_from_arrays(std::vector<std::array<float, 3>> points, std::vector<std::array<uint32_t, 3>> triangles,
+                              const std::string& what);
 
 /// The signed distance to a placed mesh (negative inside; for an open mesh, the unsigned distance
 /// to its surface, a sheet), sampled on a dense lattice of spacing h over the mesh's box grown by
