@@ -49,6 +49,26 @@ TriangleMesh read_mesh_bytes(const std::vector<uint8_t>& bytes, const std::strin
 TriangleMesh mesh_from_arrays(std::vector<std::array<float, 3>> points, std::vector<std::array<uint32_t, 3>> triangles,
                               const std::string& what);
 
+/// A float grid of a VDB file as a shape source (`{"kind": "vdb", "file": ..., "grid": ...}`): a
+/// level set (Houdini's, OpenVDB's, Blender's Mesh to SDF) or a fog volume (a cloud, Blender's Mesh
+/// to Volume) whose surface is where its density is `iso`. Read by the checked VDB reader (the
+/// seal, or the read in a child process: docs/robustness.md).
+struct VdbShape {
+  std::string file, grid;
+  bool level_set = false;
+  double iso = 0.5;
+  char up = 'y';                        ///< the file's up axis ('z': Blender's frame, or cloudgen's z-up files)
+  std::array<double, 3> lo{}, hi{};     ///< the y-up world box of the grid's active voxels
+  uint64_t fnv1a = 0;                   ///< of the file's seal, the grid's name, iso and up (the preset hash's part)
+  std::shared_ptr<const void> grid_ptr;  ///< the openvdb::FloatGrid (mesh_distance.cpp only)
+};
+
+/// Reads grid `grid` of `path` ("": "density" if the file has it, else its first float grid).
+/// `up`: the file's up axis, 0 for the file's own (cloudgen's z-up files say so; others are y-up).
+/// Throws InputError: no such grid, not a float grid, no active voxels, a fog volume that never
+/// reaches `iso`.
+VdbShape read_vdb_shape(const std::string& path, const std::string& grid, double iso, char up, const std::string& what);
+
 /// The signed distance to a placed mesh (negative inside; for an open mesh, the unsigned distance
 /// to its surface, a sheet), sampled on a dense lattice of spacing h over the mesh's box grown by
 /// `band` + 2 h, trilinear between samples, clamped to [-band', band'] (band' >= band, the
@@ -58,6 +78,9 @@ class MeshDistance {
   /// `world(q)` of each mesh point is `to_world` applied to it; h > 0 the lattice spacing; band >= 0.
   /// Throws InputError when the lattice would exceed kMaxMeshSamples.
   MeshDistance(const TriangleMesh& m, const std::array<double, 12>& to_world, double h, double band);
+  /// The same for a VDB grid: its level set (a fog volume's at `iso`) rebuilt with a band of at
+  /// least `band`, then sampled at the lattice's points placed back in the file's frame.
+  MeshDistance(const VdbShape& g, const std::array<double, 12>& to_world, double h, double band);
   double distance(const std::array<double, 3>& p) const;
   /// A lower bound of distance() over the box [lo, hi] (world): the least sample that any point of
   /// the box interpolates from (a trilinear value is a convex combination of its 8 samples). Exact.
@@ -71,6 +94,10 @@ class MeshDistance {
 
  private:
   double sample(int64_t i, int64_t j, int64_t k) const;
+  /// Sets the lattice over [mesh_lo_, mesh_hi_] grown by the band; returns the half width in samples.
+  int setup(double band, const std::string& what);
+  /// The per-block minima, once v_ is filled.
+  void finish();
   std::array<double, 3> lo_{}, mesh_lo_{}, mesh_hi_{};
   double h_ = 1, band_ = 0;
   std::array<int64_t, 3> n_{};

@@ -23,11 +23,12 @@
 namespace cloudgen {
 
 struct TriangleMesh;
+struct VdbShape;
 class MeshDistance;
 
 using ShapeVec = std::array<double, 3>;
 
-enum class ShapeKind { Ellipsoid, Sphere, Capsule, Mesh };
+enum class ShapeKind { Ellipsoid, Sphere, Capsule, Mesh, Vdb };
 const char* shape_kind_name(ShapeKind k);
 
 /// One source as the preset writes it. Placement: scale (in the source's own axes) and rotate
@@ -38,10 +39,13 @@ struct ShapeSource {
   std::optional<ShapeKind> kind;
   std::optional<ShapeVec> center, radii, a, b;  ///< ellipsoid: center, radii; sphere: center; capsule: a, b
   std::optional<double> radius;                  ///< sphere, capsule
-  std::optional<std::string> file;               ///< mesh: the file as written in the preset
-  bool fit = false;                              ///< mesh: fit into the volume (fit_sources)
+  std::optional<std::string> file;               ///< mesh, vdb: the file as written in the preset
+  bool fit = false;                              ///< mesh, vdb: fit into the volume (fit_sources)
+  std::optional<std::string> grid, up;           ///< vdb: the grid's name; the file's up axis ("y", "z")
+  std::optional<double> iso;                     ///< vdb: a fog volume's density at the surface
   ShapeVec translate{{0, 0, 0}}, rotate{{0, 0, 0}}, scale{{1, 1, 1}};
   std::shared_ptr<const TriangleMesh> mesh;  ///< mesh: read by the preset's reader (mesh_source.h)
+  std::shared_ptr<const VdbShape> vdb;       ///< vdb: read by the preset's reader (mesh_source.h)
   double fit_scale = 1;                      ///< set by fit_sources: an even scale before `scale`
   ShapeVec fit_offset{{0, 0, 0}};            ///< set by fit_sources: a move before `translate`
 };
@@ -59,7 +63,7 @@ struct ShapeParams {
 
 /// At most this many sources (each costs every voxel near the shape an evaluation).
 inline constexpr size_t kMaxShapeSources = 64;
-/// At most this many of them meshes (each holds a distance lattice, mesh_source.h).
+/// At most this many of them meshes or VDB grids (each holds a distance lattice, mesh_source.h).
 inline constexpr size_t kMaxMeshSources = 8;
 
 /// The problems of a shape section ("<pointer>", "<what>"), empty when it can be placed: at most

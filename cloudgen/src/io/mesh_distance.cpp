@@ -3,6 +3,9 @@
 // self-intersections), copied to a dense lattice so a sample is one read and a box's least sample
 // one pass over 8^3-sample blocks. An open mesh has no inside: its unsigned distance is used.
 #include <openvdb/openvdb.h>
+#include <openvdb/tools/Count.h>
+#include <openvdb/tools/Interpolation.h>
+#include <openvdb/tools/LevelSetRebuild.h>
 #include <openvdb/tools/MeshToVolume.h>
 
 #include <algorithm>
@@ -11,8 +14,39 @@
 
 #include "cloudgen/errors.h"
 #include "cloudgen/mesh_source.h"
+#include "cloudgen/schema.h"
+#include "vdb_internal.h"
 
 namespace cloudgen {
+
+int MeshDistance::setup(double band, const std::string& what) {
+  // The narrow band's half width in samples: at least `band`, plus one sample.
+  const int half = int(std::ceil(band / h_)) + 1;
+  band_ = half * h_;
+  const double margin = band_ + 2 * h_;  // the lattice's edge samples lie outside the band
+  size_t count = 1;
+  for (int a = 0; a < 3; ++a) {
+    lo_[a] = mesh_lo_[a] - margin;
+    n_[a] = int64_t(std::ceil((mesh_hi_[a] - mesh_lo_[a] + 2 * margin) / h_)) + 1;
+    count *= size_t(n_[a]);
+    if (count > kMaxMeshSamples)
+      throw InputError(what + ": the source's distance lattice would need over " + std::to_string(kMaxMeshSamples) +
+                       " samples at " + std::to_string(h_) + " m; make it smaller or the voxels larger");
+  }
+  v_.assign(count, 0.0f);
+  return half;
+}
+
+void MeshDistance::finish() {
+  for (int a = 0; a < 3; ++a) nb_[a] = (n_[a] + 7) / 8;
+  bmin_.assign(size_t(nb_[0] * nb_[1] * nb_[2]), 1e30f);
+  for (int64_t k = 0; k < n_[2]; ++k)
+    for (int64_t j = 0; j < n_[1]; ++j)
+      for (int64_t i = 0; i < n_[0]; ++i) {
+        float& b = bmin_[size_t(((k / 8) * nb_[1] + j / 8) * nb_[0] + i / 8)];
+        b = std::min(b, v_[size_t((k * n_[1] + j) * n_[0] + i)]);
+      }
+}
 
 MeshDistance::MeshDistance(const TriangleMesh& m, const std::array<double, 12>& T, double h, double band) : h_(h) {
   openvdb::initialize();
@@ -28,19 +62,7 @@ MeshDistance::MeshDistance(const TriangleMesh& m, const std::array<double, 12>& 
     if (used[v])
       for (int a = 0; a < 3; ++a) mesh_lo_[a] = std::min(mesh_lo_[a], w[v][a]), mesh_hi_[a] = std::max(mesh_hi_[a], w[v][a]);
   }
-  // The narrow band's half width in samples: at least `band`, plus one sample.
-  const int half = int(std::ceil(band / h)) + 1;
-  band_ = half * h;
-  const double margin = band_ + 2 * h;  // the lattice's edge samples lie outside the band: +band_
-  size_t count = 1;
-  for (int a = 0; a < 3; ++a) {
-    lo_[a] = mesh_lo_[a] - margin;
-    n_[a] = int64_t(std::ceil((mesh_hi_[a] - mesh_lo_[a] + 2 * margin) / h)) + 1;
-    count *= size_t(n_[a]);
-    if (count > kMaxMeshSamples)
-      throw InputError(m.file + ": the mesh's distance lattice would need over " + std::to_string(kMaxMeshSamples) +
-                       " samples at " + std::to_string(h) + " m; make the mesh smaller or the voxels larger");
-  }
+  const int half = setup(band, m.file);
   std::vector<openvdb::Vec3s> pts(w.size());
   for (size_t v = 0; v < w.size(); ++v)
     pts[v] = openvdb::Vec3s(float((w[v][0] - lo_[0]) / h), float((w[v][1] - lo_[1]) / h), float((w[v][2] - lo_[2]) / h));
@@ -56,7 +78,6 @@ MeshDistance::MeshDistance(const TriangleMesh& m, const std::array<double, 12>& 
     const std::vector<openvdb::Vec4I> quads;
     g = openvdb::tools::meshToUnsignedDistanceField<openvdb::FloatGrid>(*xform, pts, tris, quads, float(half));
   }
-  v_.assign(count, 0.0f);
   const float lim = float(half);
   tbb::parallel_for(int64_t(0), n_[2], [&](int64_t k) {
     auto acc = g->getConstAccessor();
@@ -67,14 +88,55 @@ MeshDistance::MeshDistance(const TriangleMesh& m, const std::array<double, 12>& 
         v_[size_t((k * n_[1] + j) * n_[0] + i)] = float(std::clamp(d, signed_ ? -lim : 0.0f, lim) * h);
       }
   });
-  for (int a = 0; a < 3; ++a) nb_[a] = (n_[a] + 7) / 8;
-  bmin_.assign(size_t(nb_[0] * nb_[1] * nb_[2]), 1e30f);
-  for (int64_t k = 0; k < n_[2]; ++k)
+  finish();
+}
+
+MeshDistance::MeshDistance(const VdbShape& s, const std::array<double, 12>& T, double h, double band) : h_(h) {
+  openvdb::initialize();
+  const auto src = std::static_pointer_cast<const openvdb::FloatGrid>(s.grid_ptr);
+  // The placed box: T applied to the corners of the grid's y-up box.
+  mesh_lo_ = {1e300, 1e300, 1e300}, mesh_hi_ = {-1e300, -1e300, -1e300};
+  for (int c = 0; c < 8; ++c) {
+    const double q[3] = {c & 1 ? s.hi[0] : s.lo[0], c & 2 ? s.hi[1] : s.lo[1], c & 4 ? s.hi[2] : s.lo[2]};
+    for (int a = 0; a < 3; ++a) {
+      const double w = T[4 * a] * q[0] + T[4 * a + 1] * q[1] + T[4 * a + 2] * q[2] + T[4 * a + 3];
+      mesh_lo_[a] = std::min(mesh_lo_[a], w), mesh_hi_[a] = std::max(mesh_hi_[a], w);
+    }
+  }
+  setup(band, s.file);
+  // T's linear part L and its inverse: a lattice point w goes back to q = L^-1 (w - t) in the y-up
+  // frame of the file; distances there scale by k = |det L|^(1/3) (exact for an even scale).
+  const openvdb::Mat3d L(T[0], T[1], T[2], T[4], T[5], T[6], T[8], T[9], T[10]);
+  const openvdb::Mat3d Li = L.inverse();
+  const double k = std::cbrt(std::abs(L.det()));
+  // The level set, with a band covering `band` (in the file's voxels) on both sides; a fog volume
+  // negated first, so inside (density above iso) is below the isovalue as for a level set.
+  const double vs = src->voxelSize()[0];
+  const float width = float(band / k / vs + 3);
+  openvdb::FloatGrid::Ptr ls;
+  if (s.level_set) {
+    ls = openvdb::tools::levelSetRebuild(*src, 0.0f, width, width);
+  } else {
+    openvdb::FloatGrid::Ptr neg = src->deepCopy();
+    for (auto it = neg->beginValueAll(); it; ++it) it.setValue(-*it);
+    ls = openvdb::tools::levelSetRebuild(*neg, float(-s.iso), width, width);
+  }
+  const float lim = float(band_);
+  tbb::parallel_for(int64_t(0), n_[2], [&](int64_t kk) {
+    auto acc = ls->getConstAccessor();
+    openvdb::tools::GridSampler<openvdb::FloatGrid::ConstAccessor, openvdb::tools::BoxSampler> sampler(acc, ls->transform());
     for (int64_t j = 0; j < n_[1]; ++j)
       for (int64_t i = 0; i < n_[0]; ++i) {
-        float& b = bmin_[size_t(((k / 8) * nb_[1] + j / 8) * nb_[0] + i / 8)];
-        b = std::min(b, v_[size_t((k * n_[1] + j) * n_[0] + i)]);
+        const openvdb::Vec3d w(lo_[0] + i * h, lo_[1] + j * h, lo_[2] + kk * h);
+        const openvdb::Vec3d q = Li * (w - openvdb::Vec3d(T[3], T[7], T[11]));
+        // y-up back to the file's frame: (x, y, z) -> (x, -z, y) for a z-up file.
+        const openvdb::Vec3d f = s.up == 'z' ? openvdb::Vec3d(q.x(), -q.z(), q.y()) : q;
+        float d = float(sampler.wsSample(f) * k);
+        if (!std::isfinite(d)) d = lim;
+        v_[size_t((kk * n_[1] + j) * n_[0] + i)] = std::clamp(d, -lim, lim);
       }
+  });
+  finish();
 }
 
 double MeshDistance::sample(int64_t i, int64_t j, int64_t k) const {
@@ -114,6 +176,66 @@ double MeshDistance::lower_bound(const std::array<double, 3>& lo, const std::arr
     for (int64_t j = b0[1]; j <= b1[1]; ++j)
       for (int64_t i = b0[0]; i <= b1[0]; ++i) m = std::min(m, bmin_[size_t((k * nb_[1] + j) * nb_[0] + i)]);
   return m;
+}
+
+}  // namespace cloudgen
+
+namespace cloudgen {
+
+VdbShape read_vdb_shape(const std::string& path, const std::string& grid, double iso, char up, const std::string& what) {
+  vdb::init();
+  const openvdb::GridPtrVec grids = vdb::read_grids(path);  // the checked reader: the seal, or a child's read
+  openvdb::FloatGrid::Ptr g;
+  std::string names;
+  for (const auto& b : grids) {
+    names += (names.empty() ? "" : ", ") + b->getName();
+    const bool wanted = grid.empty() ? (b->getName() == "density" || !g) : b->getName() == grid;
+    if (!wanted) continue;
+    if (auto f = openvdb::gridPtrCast<openvdb::FloatGrid>(b)) {
+      if (grid.empty() && g && g->getName() == "density") continue;  // "density" wins over a first float grid
+      g = f;
+    } else if (!grid.empty()) {
+      throw InputError(what + ": grid \"" + grid + "\" holds " + b->valueType() +
+                       " values; a shape source needs a float grid (a level set or a fog volume)");
+    }
+  }
+  if (!g)
+    throw InputError(what + ": " + (grid.empty() ? std::string("no float grid") : "no grid \"" + grid + "\"") +
+                     " (the file's grids: " + names + ")");
+  if (g->activeVoxelCount() == 0) throw InputError(what + ": grid \"" + g->getName() + "\" has no active voxels");
+  VdbShape s;
+  s.file = path, s.grid = g->getName(), s.iso = iso;
+  s.level_set = g->getGridClass() == openvdb::GRID_LEVEL_SET;
+  if (up) {
+    s.up = up;
+  } else {
+    try {
+      s.up = vdb::up_axis_of(g->transform(), path);
+    } catch (const InputError&) {
+      s.up = 'y';
+    }
+  }
+  if (!s.level_set) {
+    const float hi = openvdb::tools::minMax(g->tree()).max();
+    if (!(hi > iso))
+      throw InputError(what + ": grid \"" + s.grid + "\" (a fog volume) never exceeds iso " + shortest_text(iso) +
+                       " (its largest value is " + shortest_text(hi) + "): set shape.sources.N.iso lower");
+  }
+  // The y-up box of the active voxels' corners.
+  const openvdb::CoordBBox b = g->evalActiveVoxelBoundingBox();
+  s.lo = {1e300, 1e300, 1e300}, s.hi = {-1e300, -1e300, -1e300};
+  for (int c = 0; c < 8; ++c) {
+    const openvdb::Vec3d idx(c & 1 ? b.max().x() + 0.5 : b.min().x() - 0.5, c & 2 ? b.max().y() + 0.5 : b.min().y() - 0.5,
+                             c & 4 ? b.max().z() + 0.5 : b.min().z() - 0.5);
+    const openvdb::Vec3d w = vdb::to_y_up(g->transform().indexToWorld(idx), s.up);
+    for (int a = 0; a < 3; ++a) s.lo[a] = std::min(s.lo[a], w[a]), s.hi[a] = std::max(s.hi[a], w[a]);
+  }
+  const std::string key = vdb::file_seal(path) + "|" + s.grid + "|" + shortest_text(iso) + "|" + s.up;
+  uint64_t h = 0xcbf29ce484222325ull;
+  for (unsigned char ch : key) h = (h ^ ch) * 0x100000001b3ull;
+  s.fnv1a = h;
+  s.grid_ptr = g;
+  return s;
 }
 
 }  // namespace cloudgen

@@ -37,6 +37,7 @@ std::vector<Format> claim_outputs(const Preset& p, const std::string& path, cons
   if (p.weather_map) batch.protect(p.weather_map->path, "the preset's weather map " + p.weather_map->path);
   for (const ShapeSource& s : p.shape.sources)
     if (s.mesh) batch.protect(s.mesh->file, "the preset's mesh " + s.mesh->file);
+    else if (s.vdb) batch.protect(s.vdb->file, "the preset's vdb source " + s.vdb->file);
   std::vector<Format> formats;
   for (const auto& o : outputs) {
     formats.push_back(format.empty() ? format_from_path(o) : parse_format(format));

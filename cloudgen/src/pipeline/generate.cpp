@@ -830,6 +830,8 @@ void hash_shape(std::ostream& o, const ShapeParams& s) {
     vec(src.translate), vec(src.rotate), vec(src.scale);
     if (src.mesh)  // the mesh's content, not its name; a fitted one's placement follows from the volume
       o << "mesh:" << src.mesh->fnv1a << ',' << src.mesh->triangles.size() << ',' << src.fit << ',';
+    if (src.vdb)  // the file's seal, grid, iso and up axis, not its name
+      o << "vdb:" << src.vdb->fnv1a << ',' << src.fit << ',';
     o << ';';
   }
 }

@@ -96,23 +96,46 @@ void add_shape_keys(Add& add, double big) {
       "density = clamp(density_scale * (R * s - t) / (1 - t), 0, 1).",
       [](Preset& p, const json& j, const Index&) { p.shape.sources.resize(j.size()); });
   add("/shape/sources/*/kind", "string", "null", 0, 0,
-      "Required. ellipsoid (center, radii), sphere (center, radius), capsule (a, b, radius) or mesh (file).",
+      "Required. ellipsoid (center, radii), sphere (center, radius), capsule (a, b, radius), mesh (file) or vdb "
+      "(file, grid).",
       [=](Preset& p, const json& j, const Index& i) {
         src(p, i).kind.reset();
-        for (ShapeKind k : {ShapeKind::Ellipsoid, ShapeKind::Sphere, ShapeKind::Capsule, ShapeKind::Mesh})
+        for (ShapeKind k : {ShapeKind::Ellipsoid, ShapeKind::Sphere, ShapeKind::Capsule, ShapeKind::Mesh, ShapeKind::Vdb})
           if (j.is_string() && j.get<std::string>() == shape_kind_name(k)) src(p, i).kind = k;
       },
-      {"ellipsoid", "sphere", "capsule", "mesh"});
+      {"ellipsoid", "sphere", "capsule", "mesh", "vdb"});
   add("/shape/sources/*/file", "string", "null", 0, 0,
-      "Mesh: an OBJ, PLY, STL, glTF/GLB (or another format Assimp reads) file, relative to the preset's folder "
-      "(to the current folder with --set); closed meshes give a solid, open ones a sheet (with a warning); at most " +
+      "Mesh: an OBJ, PLY, STL, glTF/GLB (or another format Assimp reads) file; vdb: a .vdb file. Relative to the "
+      "preset's folder (to the current folder with --set). Closed meshes give a solid, open ones a sheet (with a "
+      "warning); at most " +
           std::to_string(kMaxMeshTriangles) + " triangles and " + std::to_string(kMeshFileCap >> 20) + " MiB.",
       [=](Preset& p, const json& j, const Index& i) {
         if (j.is_null()) src(p, i).file.reset();
         else src(p, i).file = j.get<std::string>();
       });
+  add("/shape/sources/*/grid", "string", "null", 0, 0,
+      "Vdb: the float grid to read (a level set, or a fog volume cut at iso); unset: \"density\" if the file "
+      "has it, else its first float grid.",
+      [=](Preset& p, const json& j, const Index& i) {
+        if (j.is_null()) src(p, i).grid.reset();
+        else src(p, i).grid = j.get<std::string>();
+      });
+  add("/shape/sources/*/iso", "number", "null", 1e-9, 1e9,
+      "Vdb: a fog volume's density at the surface (unset: 0.5); a level set's surface is its zero.",
+      [=](Preset& p, const json& j, const Index& i) {
+        if (j.is_null()) src(p, i).iso.reset();
+        else src(p, i).iso = j.get<double>();
+      });
+  add("/shape/sources/*/up", "string", "null", 0, 0,
+      "Vdb: the file's up axis: z for Blender's files, y for Houdini's; unset: the file's own (cloudgen writes "
+      "it in the transform), else y.",
+      [=](Preset& p, const json& j, const Index& i) {
+        if (j.is_null()) src(p, i).up.reset();
+        else src(p, i).up = j.get<std::string>();
+      },
+      {"y", "z"});
   add("/shape/sources/*/fit", "bool", "false", 0, 0,
-      "Mesh: scale it evenly and centre it so it fills the volume (less falloff / 2 + one voxel a side), after "
+      "Mesh or vdb: scale it evenly and centre it so it fills the volume (less falloff / 2 + one voxel a side), after "
       "scale and rotate; translate then moves it from there.",
       [=](Preset& p, const json& j, const Index& i) { src(p, i).fit = j.get<bool>(); });
   add("/shape/sources/*/center", "vec3", "null", -big, big, "(metres) Ellipsoid or sphere centre." + where,
@@ -549,7 +572,7 @@ void cross_checks(const Preset& p, Reader& r) {
 void load_meshes(Preset& p, const std::string& source, const std::vector<std::string>& overrides, Reader& r) {
   for (size_t i = 0; i < p.shape.sources.size(); ++i) {
     ShapeSource& s = p.shape.sources[i];
-    if (s.kind != ShapeKind::Mesh || !s.file) continue;
+    if ((s.kind != ShapeKind::Mesh && s.kind != ShapeKind::Vdb) || !s.file) continue;
     const std::string ptr = "/shape/sources/" + std::to_string(i) + "/file";
     const std::string key = "shape.sources." + std::to_string(i);
     const bool from_set = std::any_of(overrides.begin(), overrides.end(), [&](const std::string& ov) {
@@ -559,11 +582,17 @@ void load_meshes(Preset& p, const std::string& source, const std::vector<std::st
     });
     std::filesystem::path file = *s.file;
     if (file.empty()) {
-      r.problem(ptr, "empty; give a mesh file (OBJ, PLY, STL, glTF/GLB)");
+      r.problem(ptr, s.kind == ShapeKind::Vdb ? "empty; give a .vdb file" : "empty; give a mesh file (OBJ, PLY, STL, glTF/GLB)");
       continue;
     }
     if (!from_set && file.is_relative()) file = (std::filesystem::path(source).parent_path() / file).lexically_normal();
     try {
+      if (s.kind == ShapeKind::Vdb) {
+        const char up = s.up ? (*s.up)[0] : 0;
+        s.vdb = std::make_shared<const VdbShape>(
+            read_vdb_shape(file.string(), s.grid.value_or(""), s.iso.value_or(0.5), up, printable(file.string())));
+        continue;
+      }
       s.mesh = std::make_shared<const TriangleMesh>(read_mesh(file.string(), printable(file.string())));
       if (s.mesh->open_edges > 0)
         std::fprintf(stderr, "warning: %s: %s is not closed (%zu edges with one triangle): it has no inside, so it "

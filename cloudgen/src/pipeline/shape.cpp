@@ -71,16 +71,25 @@ ShapeField::Prim ellipsoid(const V& c, const V& radii, const double R[3][3]) {
   return p;
 }
 
-/// A mesh's own centre: the middle of its box.
-V mesh_centre(const TriangleMesh& m) { return {(m.lo[0] + m.hi[0]) / 2, (m.lo[1] + m.hi[1]) / 2, (m.lo[2] + m.hi[2]) / 2}; }
+/// A mesh's or a VDB grid's own box (its file's frame, y up).
+std::array<V, 2> own_box(const ShapeSource& s) {
+  if (s.vdb) return {s.vdb->lo, s.vdb->hi};
+  return {s.mesh->lo, s.mesh->hi};
+}
+/// Its centre: the middle of that box.
+V mesh_centre(const ShapeSource& s) {
+  const auto b = own_box(s);
+  return {(b[0][0] + b[1][0]) / 2, (b[0][1] + b[1][1]) / 2, (b[0][2] + b[1][2]) / 2};
+}
 
-/// The box of R (k * (corner - m)) over the mesh box's corners, k = scale * fit_scale per axis.
-std::array<V, 2> turned_box(const TriangleMesh& m, const ShapeSource& s, const double R[3][3], double fit_scale) {
-  const V c = mesh_centre(m);
+/// The box of R (k * (corner - m)) over the own box's corners, k = scale * fit_scale per axis.
+std::array<V, 2> turned_box(const ShapeSource& s, const double R[3][3], double fit_scale) {
+  const auto m = own_box(s);
+  const V c = mesh_centre(s);
   std::array<V, 2> b{{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}}};
   for (int corner = 0; corner < 8; ++corner) {
     V l;
-    for (int i = 0; i < 3; ++i) l[i] = s.scale[i] * fit_scale * (((corner >> i) & 1 ? m.hi[i] : m.lo[i]) - c[i]);
+    for (int i = 0; i < 3; ++i) l[i] = s.scale[i] * fit_scale * (((corner >> i) & 1 ? m[1][i] : m[0][i]) - c[i]);
     for (int i = 0; i < 3; ++i) {
       const double w = R[i][0] * l[0] + R[i][1] * l[1] + R[i][2] * l[2];
       b[0][i] = std::min(b[0][i], w), b[1][i] = std::max(b[1][i], w);
@@ -92,11 +101,10 @@ std::array<V, 2> turned_box(const TriangleMesh& m, const ShapeSource& s, const d
 ShapeField::Prim resolve(const ShapeSource& s, double voxel_size, double band) {
   double R[3][3];
   rotation(s.rotate, R);
-  if (*s.kind == ShapeKind::Mesh) {
-    if (!s.mesh) throw std::logic_error("ShapeField: a mesh source whose file was not read");
-    if (!(voxel_size > 0)) throw std::logic_error("ShapeField: a mesh source needs the voxel size");
-    const TriangleMesh& m = *s.mesh;
-    const V c = mesh_centre(m);
+  if (*s.kind == ShapeKind::Mesh || *s.kind == ShapeKind::Vdb) {
+    if (!s.mesh && !s.vdb) throw std::logic_error("ShapeField: a mesh or vdb source whose file was not read");
+    if (!(voxel_size > 0)) throw std::logic_error("ShapeField: a mesh or vdb source needs the voxel size");
+    const V c = mesh_centre(s);
     // world = c + fit_offset + translate + R (k (q - c)): T = [R k | t] as 3 rows of 4.
     std::array<double, 12> T{};
     for (int i = 0; i < 3; ++i) {
@@ -110,7 +118,7 @@ ShapeField::Prim resolve(const ShapeSource& s, double voxel_size, double band) {
     }
     // The lattice's spacing: the voxel size, or coarser so the mesh's box (grown by the band) keeps
     // within kMaxMeshSamples.
-    const std::array<V, 2> b = turned_box(m, s, R, s.fit_scale);
+    const std::array<V, 2> b = turned_box(s, R, s.fit_scale);
     double h = voxel_size;
     for (int it = 0; it < 64; ++it) {
       double count = 1;
@@ -119,7 +127,8 @@ ShapeField::Prim resolve(const ShapeSource& s, double voxel_size, double band) {
       h *= 1.1;
     }
     ShapeField::Prim p{};
-    p.mesh = std::make_shared<const MeshDistance>(m, T, h, band);
+    p.mesh = s.vdb ? std::make_shared<const MeshDistance>(*s.vdb, T, h, band)
+                   : std::make_shared<const MeshDistance>(*s.mesh, T, h, band);
     return p;
   }
   if (*s.kind == ShapeKind::Capsule) {
@@ -169,6 +178,7 @@ const char* shape_kind_name(ShapeKind k) {
     case ShapeKind::Sphere: return "sphere";
     case ShapeKind::Capsule: return "capsule";
     case ShapeKind::Mesh: return "mesh";
+    case ShapeKind::Vdb: return "vdb";
   }
   return "?";
 }
@@ -189,9 +199,9 @@ std::vector<std::pair<std::string, std::string>> shape_problems(const ShapeParam
   if (sp.sources.size() > kMaxShapeSources)
     return {{"/shape/sources", std::to_string(sp.sources.size()) + " sources; at most " + std::to_string(kMaxShapeSources)}};
   const size_t meshes = size_t(std::count_if(sp.sources.begin(), sp.sources.end(),
-                                              [](const ShapeSource& s) { return s.kind == ShapeKind::Mesh; }));
+                                              [](const ShapeSource& s) { return s.kind == ShapeKind::Mesh || s.kind == ShapeKind::Vdb; }));
   if (meshes > kMaxMeshSources)
-    out.push_back({"/shape/sources", std::to_string(meshes) + " mesh sources; at most " + std::to_string(kMaxMeshSources) +
+    out.push_back({"/shape/sources", std::to_string(meshes) + " mesh and vdb sources; at most " + std::to_string(kMaxMeshSources) +
                                          " (each holds a distance lattice of up to 128 MiB)"});
   if (sp.floor && sp.ceiling && !(*sp.ceiling > *sp.floor))
     out.push_back({"/shape/ceiling", shortest(*sp.ceiling) + " must be above /shape/floor (" + shortest(*sp.floor) + ")"});
@@ -199,7 +209,7 @@ std::vector<std::pair<std::string, std::string>> shape_problems(const ShapeParam
     const ShapeSource& s = sp.sources[i];
     const std::string ptr = "/shape/sources/" + std::to_string(i);
     if (!s.kind) {
-      out.push_back({ptr + "/kind", "missing; expected one of: ellipsoid | sphere | capsule | mesh"});
+      out.push_back({ptr + "/kind", "missing; expected one of: ellipsoid | sphere | capsule | mesh | vdb"});
       continue;
     }
     const ShapeKind k = *s.kind;
@@ -208,12 +218,14 @@ std::vector<std::pair<std::string, std::string>> shape_problems(const ShapeParam
       if (has && !wanted) out.push_back({ptr + "/" + key, "is not a key of a " + kn});
       if (!has && wanted) out.push_back({ptr, "a " + kn + " needs \"" + key + "\""});
     };
-    const bool mesh = k == ShapeKind::Mesh;
+    const bool mesh = k == ShapeKind::Mesh || k == ShapeKind::Vdb, vdb = k == ShapeKind::Vdb;
     need(bool(s.center), k != ShapeKind::Capsule && !mesh, "center");
     need(bool(s.radii), k == ShapeKind::Ellipsoid, "radii");
     need(bool(s.radius), k == ShapeKind::Sphere || k == ShapeKind::Capsule, "radius");
     need(bool(s.file), mesh, "file");
-    if (s.fit && !mesh) out.push_back({ptr + "/fit", "is not a key of a " + kn + " (only a mesh is fitted)"});
+    if (s.fit && !mesh) out.push_back({ptr + "/fit", "is not a key of a " + kn + " (only a mesh or a vdb is fitted)"});
+    for (const auto& [has, key] : {std::pair<bool, const char*>{bool(s.grid), "grid"}, {bool(s.iso), "iso"}, {bool(s.up), "up"}})
+      if (has && !vdb) out.push_back({ptr + "/" + key, "is not a key of a " + kn + " (only of a vdb source)"});
     need(bool(s.a), k == ShapeKind::Capsule, "a");
     need(bool(s.b), k == ShapeKind::Capsule, "b");
     if (k == ShapeKind::Capsule && !uniform(s.scale))
@@ -233,10 +245,10 @@ ShapeField::ShapeField(const ShapeParams& s, double voxel_size)
 
 void fit_sources(ShapeParams& sp, const ShapeVec& origin, const std::array<uint32_t, 3>& n, double vs) {
   for (ShapeSource& s : sp.sources) {
-    if (!s.fit || !s.mesh) continue;
+    if (!s.fit || (!s.mesh && !s.vdb)) continue;
     double R[3][3];
     rotation(s.rotate, R);
-    const std::array<V, 2> b = turned_box(*s.mesh, s, R, 1.0);
+    const std::array<V, 2> b = turned_box(s, R, 1.0);
     const double margin = sp.falloff / 2 + vs;
     double f = 1e300;
     for (int i = 0; i < 3; ++i) {
@@ -244,7 +256,7 @@ void fit_sources(ShapeParams& sp, const ShapeVec& origin, const std::array<uint3
       if (b[1][i] - b[0][i] > 0) f = std::min(f, room / (b[1][i] - b[0][i]));
     }
     if (!(f < 1e300)) f = 1;
-    const V c = mesh_centre(*s.mesh);
+    const V c = mesh_centre(s);
     s.fit_scale = f;
     for (int i = 0; i < 3; ++i) s.fit_offset[i] = origin[i] + n[i] * vs / 2 - c[i] - f * (b[0][i] + b[1][i]) / 2;
   }
