@@ -283,7 +283,7 @@ TEST(MeshSource, BadInputNamesTheFieldAndWhatIsAllowed) {
       {mesh_source(dir / "far.obj"), "has the coordinate 1e+30; allowed: finite, within +-1e+07"},
       {mesh_source(dir / "flat.obj"), "zero area"},
       {mesh_source(dir / "junk.obj"), "not a mesh Assimp can read"},
-      {mesh_source(dir / "hang.ply"), "was still reading after 2 s of CPU time and was stopped"},
+      {mesh_source(dir / "hang.ply"), "was still reading after 2 s of CPU time"},
       {mesh_source(""), "/shape/sources/0/file: empty"},
       {R"({"sources": [{"kind": "mesh"}]})", "a mesh needs \"file\""},
       {R"({"sources": [{"kind": "mesh", "file": ")" + (dir / "cube.obj") + R"(", "radius": 3}]})", "/shape/sources/0/radius: is not a key of a mesh"},

@@ -1,6 +1,7 @@
 // A mesh file to a checked TriangleMesh through Assimp (mesh_source.h). Every file Assimp opens
 // (the mesh, and the buffers or materials it names) goes through the one input layer: protected as
 // an input, no pipes or devices, at most kMeshFileCap bytes.
+#include <poll.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
@@ -16,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cerrno>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -159,9 +161,22 @@ bool write_all(int fd, const void* data, size_t n) {
   return true;
 }
 
-bool read_all(int fd, void* data, size_t n) {
+/// Reads n bytes, or false at the end of the pipe or past `deadline` (then `late` is set).
+bool read_all(int fd, void* data, size_t n, std::chrono::steady_clock::time_point deadline, bool& late) {
   char* p = static_cast<char*>(data);
   while (n > 0) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) {
+      late = true;
+      return false;
+    }
+    struct pollfd pf{fd, POLLIN, 0};
+    const int ready = ::poll(&pf, 1, int(std::min<int64_t>(left.count(), 1000)));
+    if (ready < 0 && errno == EINTR) {
+      throw_if_interrupted();
+      continue;
+    }
+    if (ready == 0) continue;
     const ssize_t r = ::read(fd, p, n);
     if (r < 0 && errno == EINTR) {
       throw_if_interrupted();
@@ -251,6 +266,10 @@ TriangleMesh import_in_child(const std::string& what, size_t bytes,
       wait();
     }
   } child{pid, fds[0]};
+  // Wall clock too, twice the CPU time plus a second: a starved or sleeping reader is stopped as well.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(2 * cpu + 1);
+  bool late = false;
+  auto read_all = [&](int fd, void* data, size_t n) { return ::cloudgen::read_all(fd, data, n, deadline, late); };
   uint8_t status = 2;
   std::vector<std::array<float, 3>> points;
   std::vector<std::array<uint32_t, 3>> tris;
@@ -278,13 +297,14 @@ TriangleMesh import_in_child(const std::string& what, size_t bytes,
       complete = read_all(child.fd, reason.data(), n);
     }
   }
+  if (late) ::kill(pid, SIGKILL);
   const int st = child.wait();
   throw_if_interrupted();
   if (WIFSIGNALED(st)) {
     const int sig = WTERMSIG(st);
-    if (sig == SIGXCPU || sig == SIGKILL)
+    if (late || sig == SIGXCPU || sig == SIGKILL)
       throw InputError(what + ": the mesh reader (Assimp) was still reading after " + std::to_string(cpu) +
-                       " s of CPU time and was stopped: a damaged file (a header that never ends, a count that "
+                       " s of CPU time (or twice that on the clock) and was stopped: a damaged file (a header that never ends, a count that "
                        "does not match the data)?");
     throw InputError(what + ": the mesh reader (Assimp) crashed on this file (signal " + std::to_string(sig) + ", " +
                      strsignal(sig) + "): a damaged file?");
