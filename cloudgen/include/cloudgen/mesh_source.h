@@ -35,9 +35,9 @@ inline constexpr double kMaxMeshCoordinate = 1e7;
 /// Reads `path` (format from its extension: .obj .ply .stl .gltf .glb .fbx .dae .off ...) through
 /// the one input layer (input_scope.h: protected as an input, no pipes, at most kMeshFileCap; the
 /// files it names, such as a glTF's buffers or an OBJ's materials, too). Assimp runs in a child
-/// process with a CPU-time limit (2 s + 1 s per MiB) and an 8 GiB address-space limit, since it
-/// loops forever or crashes on some damaged files (fuzz_mesh found a PLY header that never ends):
-/// either becomes an InputError here. `what` names the file in errors. Throws InputError: missing
+/// process with a CPU-time limit (2 s + 1 s per MiB; twice that + 1 s on the clock) and an 8 GiB
+/// address-space limit, since it loops forever or crashes on some damaged files (fuzz_mesh found a
+/// PLY header that never ends): either becomes an InputError here. `what` names the file in errors. Throws InputError: missing
 /// or unreadable as a mesh, no triangles, a coordinate that is NaN, infinite or beyond the limit,
 /// too many triangles.
 TriangleMesh read_mesh(const std::string& path, const std::string& what);
