@@ -123,15 +123,14 @@ std::string import_error(const std::string& what, const std::string& reason) {
   return what + ": not a mesh Assimp can read (" + printable(reason) + ")";
 }
 
-/// The scene's triangles as raw arrays (checked later by mesh_from_arrays, in the parent).
-void extract(const aiScene* sc, std::vector<std::array<float, 3>>& points, std::vector<std::array<uint32_t, 3>>& tris) {
+/// The scene's triangles as raw arrays (checked later by mesh_from_arrays, in the parent); returns
+/// the scene's face count, and extracts nothing when it is over kMaxMeshTriangles (the parent
+/// refuses the mesh by that count alone).
+size_t extract(const aiScene* sc, std::vector<std::array<float, 3>>& points, std::vector<std::array<uint32_t, 3>>& tris) {
   size_t n = 0;
   for (unsigned i = 0; i < sc->mNumMeshes; ++i)
     if (sc->mMeshes[i]) n += sc->mMeshes[i]->mNumFaces;
-  if (n > kMaxMeshTriangles) {  // the parent refuses it by the count; nothing more to send
-    tris.resize(n);
-    return;
-  }
+  if (n > kMaxMeshTriangles) return n;
   for (unsigned i = 0; i < sc->mNumMeshes; ++i) {
     const aiMesh* a = sc->mMeshes[i];
     if (!a || !(a->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
@@ -146,6 +145,7 @@ void extract(const aiScene* sc, std::vector<std::array<float, 3>>& points, std::
       tris.push_back(t);
     }
   }
+  return tris.size();
 }
 
 // The child's answer on the pipe: a status byte, then for 0 (a scene) the counts (u64) and the
@@ -217,6 +217,7 @@ TriangleMesh import_in_child(const std::string& what, size_t bytes,
     std::string reason;
     std::vector<std::array<float, 3>> points;
     std::vector<std::array<uint32_t, 3>> tris;
+    size_t faces = 0;
     try {
       Assimp::Importer im;
       im.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
@@ -226,7 +227,7 @@ TriangleMesh import_in_child(const std::string& what, size_t bytes,
       if (!sc) {
         reason = import_error(what, im.GetErrorString());
       } else {
-        extract(sc, points, tris);
+        faces = extract(sc, points, tris);
         status = 0;
       }
     } catch (const std::exception& e) {
@@ -236,9 +237,9 @@ TriangleMesh import_in_child(const std::string& what, size_t bytes,
     }
     bool ok = write_all(fds[1], &status, 1);
     if (status == 0) {
-      const uint64_t n[2] = {points.size(), tris.size()};
+      const uint64_t n[2] = {points.size(), faces};
       ok = ok && write_all(fds[1], n, sizeof n);
-      if (tris.size() <= kMaxMeshTriangles)
+      if (faces <= kMaxMeshTriangles)
         ok = ok && write_all(fds[1], points.data(), points.size() * sizeof points[0]) &&
              write_all(fds[1], tris.data(), tris.size() * sizeof tris[0]);
     } else {

@@ -13,10 +13,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <stdexcept>
 
 #include "cloudgen/mesh_source.h"
+#include "cloudgen/schema.h"
 
 namespace cloudgen {
 namespace {
@@ -49,12 +49,6 @@ V place(const V& q, const V& m, const ShapeSource& s, const double R[3][3]) {
 }
 
 bool uniform(const V& s) { return s[0] == s[1] && s[1] == s[2]; }
-
-std::string shortest(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%g", v);
-  return b;
-}
 
 ShapeField::Prim capsule(const V& a, const V& b, double r) {
   ShapeField::Prim p{};
@@ -204,7 +198,7 @@ std::vector<std::pair<std::string, std::string>> shape_problems(const ShapeParam
     out.push_back({"/shape/sources", std::to_string(meshes) + " mesh and vdb sources; at most " + std::to_string(kMaxMeshSources) +
                                          " (each holds a distance lattice of up to 128 MiB)"});
   if (sp.floor && sp.ceiling && !(*sp.ceiling > *sp.floor))
-    out.push_back({"/shape/ceiling", shortest(*sp.ceiling) + " must be above /shape/floor (" + shortest(*sp.floor) + ")"});
+    out.push_back({"/shape/ceiling", shortest_text(*sp.ceiling) + " must be above /shape/floor (" + shortest_text(*sp.floor) + ")"});
   for (size_t i = 0; i < sp.sources.size(); ++i) {
     const ShapeSource& s = sp.sources[i];
     const std::string ptr = "/shape/sources/" + std::to_string(i);
