@@ -31,9 +31,30 @@ struct ShapeArgs {
   bool quiet = false;
 };
 
+/// The shape modifiers of a style (shape.h ShapeModifier), scaled to the cloud's longest side:
+/// billowy lifts cauliflower domes, more toward the top, with a few wisps at the base; wispy erodes
+/// curl-advected fibres, more downwind. `base` and `top` are the world heights of the mesh's box.
+json style_modifiers(const std::string& style, double size, double base, double top) {
+  const double h = top - base;
+  json out = json::object();
+  if (style == "billowy") {
+    json& b = out["billowy"];
+    b["amplitude"] = 0.06 * size, b["period"] = 0.2 * size, b["octaves"] = 4, b["gain"] = 0.65;
+    b["heights"] = json::array({base + 0.1 * h, top});
+    json& w = out["wispy"];
+    w["amplitude"] = 0.03 * size, w["period"] = 0.1 * size, w["heights"] = json::array({base + 0.35 * h, base});
+  } else if (style == "wispy") {
+    json& w = out["wispy"];
+    w["amplitude"] = 0.06 * size, w["period"] = 0.15 * size, w["octaves"] = 4, w["warp"] = 1.0, w["downwind"] = 0.5;
+  }
+  return out;
+}
+
+/// Margin the style's modifiers need around the mesh: billowy lifts the surface by its amplitude.
+double style_lift(const std::string& style, double size) { return style == "billowy" ? 0.06 * size : 0.0; }
+
 /// The noise of a style: how much the Perlin-Worley base erodes the fitted shape (threshold,
-/// remap) and at which scale (period: cells across the volume). Noise only: the billowy and wispy
-/// modifiers of issue 43 (displacement along the surface normal) are not built yet.
+/// remap) and at which scale (period: cells across the volume).
 json style_noise(const std::string& style, json& preset) {
   if (style == "smooth") {
     preset["threshold"] = 0.08;
@@ -73,7 +94,7 @@ void run_shape(const ShapeArgs& a) {
                          "sheet along its surface\n", printable(a.mesh).c_str(), m.open_edges);
   // The volume: the mesh's proportions, its longest side `size`, plus the falloff's margin.
   const double longest = std::max({m.hi[0] - m.lo[0], m.hi[1] - m.lo[1], m.hi[2] - m.lo[2]});
-  const double falloff = a.size / 10, margin = falloff / 2 + 2 * vs;
+  const double falloff = a.size / 10, margin = falloff / 2 + style_lift(a.style, a.size) + 2 * vs;
   std::array<uint32_t, 3> res;
   std::array<double, 3> extent;
   for (int i = 0; i < 3; ++i) {
@@ -99,6 +120,9 @@ void run_shape(const ShapeArgs& a) {
   p["shape"] = {{"falloff", falloff},
                 {"sources", {{{"kind", "mesh"}, {"file", a.save_preset.empty() || rel.empty() ? mesh_path : rel.generic_string()},
                               {"fit", true}}}}};
+  // The fitted mesh fills the volume less the margin (fit_sources): its box in world heights.
+  const json mods = style_modifiers(a.style, a.size, 1000.0 + margin, 1000.0 + extent[1] - margin);
+  for (const auto& [k, v] : mods.items()) p["shape"][k] = v;
   p["occupancy"] = {{"cell", 4}, {"padding", 2}};
   // Seen from the front (-z), a little from the side and below the top, the sun from the left.
   const std::array<double, 3> c{0.0, 1000.0 + extent[1] / 2, 0.0};
@@ -149,7 +173,7 @@ void add_shape_command(CLI::App& app, std::function<void()>& run) {
   c->add_option("--format", a->format, "vdb | nvdb | raw | ktx2 | atlas-png | atlas-exr (default: from each extension)");
   c->add_option("--size", a->size, "The cloud's longest side in metres (default 2000); the mesh's own units are ignored");
   c->add_option("--voxel-size", a->voxel_size, "Voxel edge in metres (default: size / 128)");
-  c->add_option("--style", a->style, "Noise: smooth | billowy (default) | wispy");
+  c->add_option("--style", a->style, "smooth | billowy (default: cauliflower domes, more toward the top) | wispy (fibres)");
   c->add_option("--seed", a->seed, "Seed of the noise, an integer in [0, 2^53] (default 42)");
   c->add_option("--up", a->up, "VDB up axis: z (Blender, default) or y (Houdini, Maya)");
   c->add_option("--save-preset", a->save_preset, "Also write the preset used (edit it, then cloudgen generate it)");

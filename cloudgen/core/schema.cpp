@@ -78,6 +78,8 @@ std::string FieldSpec::range() const {
 
 bool check_value(const FieldSpec& f, const json& v, const std::string& ptr, const ProblemSink& problem) {
   const std::string& t = f.type;
+  // A key that may be unset takes null to unset it again (`--set shape.floor=null`).
+  if (v.is_null() && f.nullable) return true;
   bool ok = true;
   if (t == "number" || t == "integer") {
     ok = number_ok(f, v, t == "integer", ptr, problem);

@@ -28,6 +28,7 @@ struct FieldSpec {
   double lo = -1e300, hi = 1e300;    ///< numbers, and each element of vec2 / vec3 / ivec3 / period
   std::vector<std::string> choices;  ///< a string's allowed values (empty: any text)
   std::string allowed;               ///< the allowed values in words, when the type's own would say less
+  bool nullable = false;             ///< null is a valid value: it unsets the field (its reader handles null)
 
   /// The allowed values in words: `allowed`, else from the type: "integer in [1, 16]",
   /// "volume | world", "true | false", "list", "list of strings"...

@@ -50,6 +50,29 @@ struct ShapeSource {
   ShapeVec fit_offset{{0, 0, 0}};            ///< set by fit_sources: a move before `translate`
 };
 
+/// A noise modifier of the signed distance (docs/shaping.md, "Billowy and wispy"): off while its
+/// amplitude is 0. The noise is in world metres (first octave `period` metres, each next one half
+/// the size and `gain` times the weight), seeded from the preset's seed. Its weight w in [0, 1] is
+/// the product of a height ramp, a depth mask and (wispy) a downwind mask:
+///   billowy (cauliflower): d' = d - amplitude * w * B(p), B in [0, 1] an fBm of Worley domes
+///     cells: the surface moves out along the distance's gradient by up to `amplitude`;
+///   wispy (erosion): d' = d + amplitude * w * E(p), E in [0, 1] an fBm of Perlin noise whose
+///     lookup is advected along curl noise (`warp` periods): the surface is eaten into fibres.
+struct ShapeModifier {
+  double amplitude = 0;  ///< metres; 0 = off
+  double period = 400;   ///< metres: the first octave's cell or wavelength
+  int octaves = 3;       ///< 1 .. 8, each twice as fine
+  double gain = 0.6;     ///< weight of each octave against the previous one
+  /// World heights (metres, y) of the ramp: w_h = 0 at heights[0], 1 at heights[1], smooth in
+  /// between and constant beyond (heights[0] > heights[1]: stronger low down). Unset: 1.
+  std::optional<std::array<double, 2>> heights;
+  double depth = 300;    ///< metres below the surface (d < 0) over which w falls from 1 to 0
+  double warp = 0.5;     ///< wispy: curl advection of the noise lookup, in periods
+  ShapeVec wind{{1, 0, 0}};  ///< wispy: the direction it blows to (need not be unit)
+  double downwind = 0.5;     ///< wispy: 0 = all round, 1 = only on the downwind side
+  bool on() const { return amplitude > 0; }
+};
+
 /// The preset's `shape` section. No sources: the height profile, towers and coverage place the
 /// cloud as before (and the bytes are those of a preset without the section).
 struct ShapeParams {
@@ -59,6 +82,7 @@ struct ShapeParams {
   /// cumulus base at the condensation level, an anvil under the tropopause.
   std::optional<double> floor, ceiling;
   std::vector<ShapeSource> sources;
+  ShapeModifier billowy, wispy;
 };
 
 /// At most this many sources (each costs every voxel near the shape an evaluation).
@@ -72,22 +96,27 @@ inline constexpr size_t kMaxMeshSources = 8;
 std::vector<std::pair<std::string, std::string>> shape_problems(const ShapeParams& s);
 
 /// Sets fit_scale and fit_offset of every source with `fit`: the placed mesh's box (after scale and
-/// rotate) scaled evenly and centred so it fills the volume less falloff / 2 + one voxel on each
-/// side; `translate` then moves it from there.
+/// rotate) scaled evenly and centred so it fills the volume less falloff / 2 + billowy.amplitude +
+/// one voxel on each side; `translate` then moves it from there.
 void fit_sources(ShapeParams& s, const ShapeVec& origin, const std::array<uint32_t, 3>& n, double voxel_size);
 
 /// The sources placed in the world, ready to evaluate. Thread-safe to read.
 class ShapeField {
  public:
   /// s must have no shape_problems and its meshes read; a mesh's distance is sampled every
-  /// `voxel_size` metres (coarser when the mesh's box would need more than kMaxMeshSamples).
-  explicit ShapeField(const ShapeParams& s, double voxel_size = 0);
+  /// `voxel_size` metres (coarser when the mesh's box would need more than kMaxMeshSamples). `seed`
+  /// seeds the billowy and wispy noise (the preset's seed).
+  explicit ShapeField(const ShapeParams& s, double voxel_size = 0, uint64_t seed = 0);
   bool empty() const { return prims_.empty(); }
 
   /// The signed distance d at p: the smooth union of the sources in their order, cut by the
-  /// floor and the ceiling.
+  /// floor and the ceiling (no modifiers).
   double distance(const ShapeVec& p) const;
-  /// The base density s(d) at p, in [0, 1].
+  /// The union's distance with the billowy and wispy modifiers, then the cuts (which stay flat): in
+  /// [d - billowy.amplitude, d + wispy.amplitude].
+  double modified_distance(const ShapeVec& p) const;
+  /// The base density s(d') at p, in [0, 1]; the modifiers' noise is evaluated only where s can
+  /// differ from 0 and 1 (the bounds above decide, in the same floating-point expressions).
   double density(const ShapeVec& p) const;
   /// Whether s is 0 at every point within `radius` of `c` (a conservative proof: a lower bound of d
   /// over the ball, with a margin for rounding, reaches falloff / 2).
@@ -112,6 +141,12 @@ class ShapeField {
  private:
   double blend_, falloff_;
   std::optional<double> floor_, ceiling_;
+  ShapeModifier billowy_, wispy_;
+  uint64_t seed_;
+  double step_;  ///< the gradient's central-difference step (wispy's downwind mask)
+  double union_distance(const ShapeVec& p) const;       ///< the smooth union, no cuts
+  double cut(const ShapeVec& p, double d) const;        ///< d cut by the floor and the ceiling
+  double modify(const ShapeVec& p, double d) const;     ///< the modifiers applied to the union's d
   std::vector<Prim> prims_;
 };
 

@@ -116,7 +116,7 @@ struct Shape {
   const ShapeField field;                 // empty: no shape sources
   std::array<std::vector<double>, 3> pos;  // shape sources: world metres of the voxel centres per axis
 
-  Shape(const Preset& pr, int threads) : p(pr), N(pr.resolution), field(pr.shape, pr.voxel_size) {
+  Shape(const Preset& pr, int threads) : p(pr), N(pr.resolution), field(pr.shape, pr.voxel_size, pr.seed) {
     profile.resize(N[1]);
     for (uint32_t y = 0; y < N[1]; ++y) profile[y] = float(height_profile(p, (y + 0.5) / N[1]));
     t = float(p.threshold), inv = float(1.0 / (1.0 - p.threshold)), scale = float(p.density_scale);
@@ -832,6 +832,14 @@ void hash_shape(std::ostream& o, const ShapeParams& s) {
       o << "mesh:" << src.mesh->fnv1a << ',' << src.mesh->triangles.size() << ',' << src.fit << ',';
     if (src.vdb)  // the file's seal, grid, iso and up axis, not its name
       o << "vdb:" << src.vdb->fnv1a << ',' << src.fit << ',';
+    o << ';';
+  }
+  for (const ShapeModifier* m : {&s.billowy, &s.wispy}) {  // presets without modifiers keep their hash
+    if (!m->on()) continue;
+    o << (m == &s.billowy ? "billowy:" : "wispy:") << m->amplitude << ',' << m->period << ',' << m->octaves << ','
+      << m->gain << ',' << m->depth << ',';
+    if (m->heights) o << (*m->heights)[0] << ',' << (*m->heights)[1] << ',';
+    if (m == &s.wispy) o << m->warp << ',' << m->wind[0] << ',' << m->wind[1] << ',' << m->wind[2] << ',' << m->downwind << ',';
     o << ';';
   }
 }

@@ -135,7 +135,7 @@ void add_shape_keys(Add& add, double big) {
       },
       {"y", "z"});
   add("/shape/sources/*/fit", "bool", "false", 0, 0,
-      "Mesh or vdb: scale it evenly and centre it so it fills the volume (less falloff / 2 + one voxel a side), after "
+      "Mesh or vdb: scale it evenly and centre it so it fills the volume (less falloff / 2, the billows' amplitude and one voxel a side), after "
       "scale and rotate; translate then moves it from there.",
       [=](Preset& p, const json& j, const Index& i) { src(p, i).fit = j.get<bool>(); });
   add("/shape/sources/*/center", "vec3", "null", -big, big, "(metres) Ellipsoid or sphere centre." + where,
@@ -162,6 +162,49 @@ void add_shape_keys(Add& add, double big) {
       [=](Preset& p, const json& j, const Index& i) { src(p, i).translate = v3(j); });
 }
 
+/// The billowy and wispy modifiers of the shape (shape.h ShapeModifier).
+template <class Add>
+void add_modifier_keys(Add& add, double big) {
+  for (const bool billowy : {true, false}) {
+    const std::string base = billowy ? "/shape/billowy" : "/shape/wispy";
+    auto m = [billowy](Preset& p) -> ShapeModifier& { return billowy ? p.shape.billowy : p.shape.wispy; };
+    add(base + "/amplitude", "number", "0", 0, big,
+        billowy ? "(metres) Cauliflower billows: the surface moves out along the distance's gradient by up to this "
+                  "much, d' = d - amplitude * w * B, B an fBm of Worley domes sqrt(1 - F1^2) in [0, 1]. 0 = off."
+                : "(metres) Wisps: the surface is eroded in by up to this much, d' = d + amplitude * w * E, E an fBm of "
+                  "Perlin noise advected along curl noise, in [0, 1]. 0 = off.",
+        [m](Preset& p, const json& j, const Index&) { m(p).amplitude = j.get<double>(); });
+    add(base + "/period", "number", "400", 1e-3, big,
+        "(metres) Size of the first octave's cells; each next octave is half as big.",
+        [m](Preset& p, const json& j, const Index&) { m(p).period = j.get<double>(); });
+    add(base + "/octaves", "integer", "3", 1, 8, "Octaves of the noise.",
+        [m](Preset& p, const json& j, const Index&) { m(p).octaves = j.get<int>(); });
+    add(base + "/gain", "number", "0.6", 0, 1, "Weight of each octave against the one before (0.6: a rough, fractal edge).",
+        [m](Preset& p, const json& j, const Index&) { m(p).gain = j.get<double>(); });
+    add(base + "/heights", "vec2", "null", -big, big,
+        billowy ? "(metres, world y) Height ramp [from, to]: no billows at `from`, full at `to` (a cumulus's "
+                  "billows grow toward its top). Unset: everywhere."
+                : "(metres, world y) Height ramp [from, to]: no wisps at `from`, full at `to`; from > to makes them "
+                  "strongest low down (a ragged base). Unset: everywhere.",
+        [m](Preset& p, const json& j, const Index&) {
+          if (j.is_null()) m(p).heights.reset();
+          else m(p).heights = std::array<double, 2>{j[0].get<double>(), j[1].get<double>()};
+        });
+    add(base + "/depth", "number", "300", 1e-3, big,
+        "(metres) Depth below the surface over which the modifier fades out (keeps the interior whole).",
+        [m](Preset& p, const json& j, const Index&) { m(p).depth = j.get<double>(); });
+    if (billowy) continue;
+    add(base + "/warp", "number", "0.5", 0, 8, "Curl advection of the noise lookup, in periods: 0 = plain Perlin, more = stretched fibres.",
+        [m](Preset& p, const json& j, const Index&) { m(p).warp = j.get<double>(); });
+    add(base + "/wind", "vec3", "[1, 0, 0]", -big, big, "Direction the wind blows to (world axes, y up; need not be unit length).",
+        [m](Preset& p, const json& j, const Index&) {
+          m(p).wind = ShapeVec{j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
+        });
+    add(base + "/downwind", "number", "0.5", 0, 1, "0 = wisps all round; 1 = only where the surface faces downwind.",
+        [m](Preset& p, const json& j, const Index&) { m(p).downwind = j.get<double>(); });
+  }
+}
+
 std::vector<Spec> build_table() {
   std::vector<Spec> t;
   // The group of the rows added next (param_group.h): set before each run of rows.
@@ -176,6 +219,7 @@ std::vector<Spec> build_table() {
     s.field.doc = std::move(doc);
     s.field.lo = lo, s.field.hi = hi;
     s.field.choices = std::move(choices);
+    s.field.nullable = s.field.default_value == "null";  // every such setter reads null as unset
     s.set = std::move(set);
     s.place = place;
     t.push_back(std::move(s));
@@ -310,6 +354,8 @@ std::vector<Spec> build_table() {
       [](Preset& p, const json& j, const Index&) { p.coverage_high = j.get<double>(); });
 
   add_shape_keys(add, big);
+  in(ParamGroup::Detail);
+  add_modifier_keys(add, big);
 
   in(ParamGroup::Shape);
   add("/threshold", "number", "0.3", 0, 0.999, "Cut-off remap clamp((d - t) / (1 - t), 0, 1).",
@@ -527,7 +573,7 @@ void shape_checks(const Preset& p, Reader& r) {
   const auto problems = shape_problems(p.shape);
   for (const auto& [ptr, what] : problems) r.problem(ptr, what);
   if (!problems.empty() || p.shape.sources.empty() || !p.tiling) return;
-  if (const auto q = ShapeField(p.shape, p.voxel_size).nonzero_at_side_faces(p.origin, p.resolution, p.voxel_size))
+  if (const auto q = ShapeField(p.shape, p.voxel_size, p.seed).nonzero_at_side_faces(p.origin, p.resolution, p.voxel_size))
     r.problem("/shape/sources", "with /tiling true the shape must be 0 on the voxels of the x and z faces (the volume wraps "
                                 "there, shapes do not), but the voxel at (" + fmt((*q)[0]) + ", " + fmt((*q)[1]) + ", " +
                                     fmt((*q)[2]) + ") m has s > 0: move the sources inward or set \"tiling\": false");

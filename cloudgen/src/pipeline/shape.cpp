@@ -17,6 +17,7 @@
 
 #include "cloudgen/mesh_source.h"
 #include "cloudgen/schema.h"
+#include "noise3d/noise3d.h"
 
 namespace cloudgen {
 namespace {
@@ -197,6 +198,10 @@ std::vector<std::pair<std::string, std::string>> shape_problems(const ShapeParam
   if (meshes > kMaxMeshSources)
     out.push_back({"/shape/sources", std::to_string(meshes) + " mesh and vdb sources; at most " + std::to_string(kMaxMeshSources) +
                                          " (each holds a distance lattice of up to 128 MiB)"});
+  for (const auto& [m, ptr] : {std::pair<const ShapeModifier*, const char*>{&sp.billowy, "/shape/billowy/amplitude"},
+                                {&sp.wispy, "/shape/wispy/amplitude"}})
+    if (m->on() && sp.sources.empty())
+      out.push_back({ptr, shortest_text(m->amplitude) + " needs shape sources (/shape/sources): the modifiers move their surface"});
   if (sp.floor && sp.ceiling && !(*sp.ceiling > *sp.floor))
     out.push_back({"/shape/ceiling", shortest_text(*sp.ceiling) + " must be above /shape/floor (" + shortest_text(*sp.floor) + ")"});
   for (size_t i = 0; i < sp.sources.size(); ++i) {
@@ -228,12 +233,15 @@ std::vector<std::pair<std::string, std::string>> shape_problems(const ShapeParam
   return out;
 }
 
-ShapeField::ShapeField(const ShapeParams& s, double voxel_size)
-    : blend_(s.blend), falloff_(s.falloff), floor_(s.floor), ceiling_(s.ceiling) {
+ShapeField::ShapeField(const ShapeParams& s, double voxel_size, uint64_t seed)
+    : blend_(s.blend), falloff_(s.falloff), floor_(s.floor), ceiling_(s.ceiling), billowy_(s.billowy), wispy_(s.wispy),
+      seed_(seed), step_(std::max(s.falloff / 4, 1e-3)) {
   // A mesh's lattice holds the true distance out to the band; beyond it the field is +-band. Where
   // the smooth union could still reach below falloff / 2 from there it must be exact: the fold
-  // lowers a distance by at most blend / 4 per source, and only within blend of another.
-  const double band = falloff_ / 2 + blend_ * (1 + double(s.sources.size()) / 4);
+  // lowers a distance by at most blend / 4 per source, and only within blend of another, and the
+  // billows by at most their amplitude (a band without them would leave the clamped +band value
+  // for the billows to lift into specks of cloud far from the mesh).
+  const double band = falloff_ / 2 + blend_ * (1 + double(s.sources.size()) / 4) + s.billowy.amplitude;
   for (const ShapeSource& src : s.sources) prims_.push_back(resolve(src, voxel_size, band));
 }
 
@@ -243,7 +251,7 @@ void fit_sources(ShapeParams& sp, const ShapeVec& origin, const std::array<uint3
     double R[3][3];
     rotation(s.rotate, R);
     const std::array<V, 2> b = turned_box(s, R, 1.0);
-    const double margin = sp.falloff / 2 + vs;
+    const double margin = sp.falloff / 2 + sp.billowy.amplitude + vs;  // room for the edge and the billows
     double f = 1e300;
     for (int i = 0; i < 3; ++i) {
       const double room = std::max(n[i] * vs - 2 * margin, 0.5 * n[i] * vs);
@@ -256,20 +264,113 @@ void fit_sources(ShapeParams& sp, const ShapeVec& origin, const std::array<uint3
   }
 }
 
-double ShapeField::distance(const ShapeVec& p) const {
+double ShapeField::union_distance(const ShapeVec& p) const {
   double d = prim_distance(prims_[0], p);
   for (size_t i = 1; i < prims_.size(); ++i) d = smooth_min(d, prim_distance(prims_[i], p), blend_);
+  return d;
+}
+
+double ShapeField::cut(const ShapeVec& p, double d) const {
   // The cuts: intersections with the half-spaces above the floor and below the ceiling.
   if (floor_) d = std::max(d, *floor_ - p[1]);
   if (ceiling_) d = std::max(d, p[1] - *ceiling_);
   return d;
 }
 
-double ShapeField::density(const ShapeVec& p) const { return shape_falloff(distance(p), falloff_); }
+double ShapeField::distance(const ShapeVec& p) const { return cut(p, union_distance(p)); }
+
+namespace {
+
+/// Weight of a modifier from height and depth: the smooth height ramp times the depth mask.
+double modifier_weight(const ShapeModifier& m, double y, double d) {
+  double w = 1;
+  if (m.heights) {
+    const double a = (*m.heights)[0], b = (*m.heights)[1];
+    const double u = a == b ? (y >= a ? 1.0 : 0.0) : std::clamp((y - a) / (b - a), 0.0, 1.0);
+    w = u * u * (3 - 2 * u);
+  }
+  if (d < 0) {
+    const double u = std::clamp(-d / m.depth, 0.0, 1.0);
+    w *= 1 - u * u * (3 - 2 * u);
+  }
+  return w;
+}
+
+// The noise has no period to keep (shapes do not tile): the largest lattice period, so it never
+// repeats inside a volume.
+const noise3d::Period kNoTile = noise3d::Period::cube(noise3d::kMaxPeriod);
+
+/// fBm of `m` at p (metres) in [0, 1]: octave k at p * 2^k / period, weight gain^k, the sum divided
+/// by the weights' sum. Billowy: Worley domes; wispy: Perlin advected along curl noise.
+double modifier_noise(const ShapeModifier& m, const ShapeVec& p, uint64_t seed, bool billowy) {
+  const double f = 1 / m.period;
+  ShapeVec q{p[0] * f, p[1] * f, p[2] * f};
+  if (!billowy && m.warp > 0) {  // advect the lookup along a divergence-free flow: fibres, not blobs
+    const std::array<double, 3> c = noise3d::curl(q[0] * 0.5, q[1] * 0.5, q[2] * 0.5, kNoTile, seed ^ 0xC0A1ull);
+    for (int i = 0; i < 3; ++i) q[i] += m.warp * c[i];
+  }
+  double sum = 0, wsum = 0, w = 1, scale = 1;
+  for (int k = 0; k < m.octaves; ++k, w *= m.gain, scale *= 2) {
+    const uint64_t sk = seed + uint64_t(k) * 0x9E3779B97F4A7C15ull;
+    const double x = q[0] * scale, y = q[1] * scale, z = q[2] * scale;
+    double v;
+    if (billowy) {  // a dome over each cell's feature point: sqrt(1 - F1^2), round lobes, creased between
+      const double f1 = std::min(noise3d::worley(x, y, z, kNoTile, sk).f1, 1.0);
+      v = std::sqrt(1 - f1 * f1);
+    } else {
+      v = 0.5 + 0.5 * noise3d::perlin_d(x, y, z, kNoTile, sk) / noise3d::kPerlinBound;
+    }
+    sum += w * v, wsum += w;
+  }
+  return wsum > 0 ? std::clamp(sum / wsum, 0.0, 1.0) : 0.0;
+}
+
+}  // namespace
+
+double ShapeField::modify(const ShapeVec& p, double d) const {
+  double out = d;
+  if (billowy_.on()) {
+    const double w = modifier_weight(billowy_, p[1], d);
+    if (w > 0) out -= billowy_.amplitude * (w * modifier_noise(billowy_, p, seed_ ^ 0xB111011ull, true));
+  }
+  if (wispy_.on()) {
+    double w = modifier_weight(wispy_, p[1], d);
+    if (w > 0 && wispy_.downwind > 0) {  // the outward normal against the wind: stronger downwind
+      const double wl = len(wispy_.wind);
+      double g[3], gl2 = 0;
+      for (int a = 0; a < 3; ++a) {
+        ShapeVec lo = p, hi = p;
+        lo[a] -= step_, hi[a] += step_;
+        g[a] = union_distance(hi) - union_distance(lo);
+        gl2 += g[a] * g[a];
+      }
+      const double c = wl > 0 && gl2 > 0 ? (g[0] * wispy_.wind[0] + g[1] * wispy_.wind[1] + g[2] * wispy_.wind[2]) / (wl * std::sqrt(gl2)) : 0.0;
+      w *= 1 - wispy_.downwind * (1 - std::clamp(0.5 + 0.5 * c, 0.0, 1.0));
+    }
+    if (w > 0) out += wispy_.amplitude * (w * modifier_noise(wispy_, p, seed_ ^ 0x5715917ull, false));
+  }
+  return out;
+}
+
+double ShapeField::modified_distance(const ShapeVec& p) const { return cut(p, modify(p, union_distance(p))); }
+
+double ShapeField::density(const ShapeVec& p) const {
+  const double u = union_distance(p), d = cut(p, u);
+  if (!billowy_.on() && !wispy_.on()) return shape_falloff(d, falloff_);
+  // The modified union lies in [u - billowy, u + wispy] (each term is amplitude times a product of
+  // factors in [0, 1], and rounding is monotone), so after the cuts d' lies in [d - billowy,
+  // d + wispy]: where either end already saturates s, s is that value.
+  if (d - billowy_.amplitude >= falloff_ / 2) return 0;
+  if (d + wispy_.amplitude <= -falloff_ / 2) return 1;
+  return shape_falloff(cut(p, modify(p, u)), falloff_);
+}
 
 bool ShapeField::zero_in_ball(const ShapeVec& c, double radius) const {
   double lb = prim_ball_bound(prims_[0], c, radius);
   for (size_t i = 1; i < prims_.size(); ++i) lb = smooth_min(lb, prim_ball_bound(prims_[i], c, radius), blend_);
+  // Billowy moves the union's surface out by at most its amplitude (wispy only moves it in); the
+  // cuts come after the modifiers.
+  lb -= billowy_.amplitude;
   // max(a, b) is bounded below by max of the bounds; the half-spaces' distances are exact.
   if (floor_) lb = std::max(lb, *floor_ - (c[1] + radius));
   if (ceiling_) lb = std::max(lb, (c[1] - radius) - *ceiling_);
@@ -282,7 +383,7 @@ std::array<ShapeVec, 2> ShapeField::support_box() const {
   // s > 0 needs d < falloff / 2, and the fold lowers min_i d_i by at most (n - 1) blend / 4, so
   // some source has d_i < g: within r + g of a capsule's segment, or, for an ellipsoid, L < g, that
   // is k0 < 1 + g / rmin: inside the ellipsoid with its radii grown by that factor.
-  const double g = falloff_ / 2 + double(prims_.size() - 1) * blend_ / 4;
+  const double g = falloff_ / 2 + double(prims_.size() - 1) * blend_ / 4 + billowy_.amplitude;
   std::array<ShapeVec, 2> box{{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}}};
   for (const Prim& e : prims_) {
     for (int a = 0; a < 3; ++a) {
@@ -299,7 +400,7 @@ std::array<ShapeVec, 2> ShapeField::support_box() const {
       box[0][a] = std::min(box[0][a], lo), box[1][a] = std::max(box[1][a], hi);
     }
   }
-  // s > 0 needs floor - y < falloff / 2 and y - ceiling < falloff / 2.
+  // s > 0 needs floor - y < falloff / 2 and y - ceiling < falloff / 2 (the cuts follow the modifiers).
   if (floor_) box[0][1] = std::max(box[0][1], *floor_ - falloff_ / 2);
   if (ceiling_) box[1][1] = std::min(box[1][1], *ceiling_ + falloff_ / 2);
   return box;
