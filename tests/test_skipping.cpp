@@ -92,6 +92,39 @@ std::vector<int> brute_distance(const std::vector<uint8_t>& occ, const std::arra
 
 }  // namespace
 
+// The separable transform on grids larger than the strided passes' 16-line tiles (widths that are
+// no multiple of 16, lines of odd and even lengths, wrapped over half a line each side), with few
+// set cells so distances run long, and one empty grid: against the distance to each set cell.
+TEST(Skipping, DistanceFieldIsExactOnLargeSparseGrids) {
+  uint32_t h = 77;
+  for (int trial = 0; trial < 6; ++trial) {
+    const std::array<int, 3> n{{int(17 + lcg(h) % 40), int(5 + lcg(h) % 30), int(17 + lcg(h) % 40)}};
+    std::vector<uint8_t> occ(static_cast<size_t>(n[0]) * n[1] * n[2], 0);
+    std::vector<std::array<int, 3>> set;
+    const int points = trial == 0 ? 0 : 1 + int(lcg(h) % 6);
+    for (int i = 0; i < points; ++i) {
+      const std::array<int, 3> q{{int(lcg(h) % n[0]), int(lcg(h) % n[1]), int(lcg(h) % n[2])}};
+      occ[(size_t(q[2]) * n[1] + q[1]) * n[0] + q[0]] = 1;
+      set.push_back(q);
+    }
+    const std::array<int, 3> dims{{n[0] * 2, n[1] * 2, n[2] * 2}};
+    for (bool tiles : {false, true}) {
+      const std::vector<uint8_t> field = occupancy_distance(occ, n, tiles, dims, 2);
+      for (int z = 0; z < n[2]; ++z)
+        for (int y = 0; y < n[1]; ++y)
+          for (int x = 0; x < n[0]; ++x) {
+            int best = 255;
+            for (const auto& q : set) {
+              auto ax = [&](int a, int b, int len, bool w) { const int d = std::abs(a - b); return w ? std::min(d, len - d) : d; };
+              best = std::min(best, std::max({ax(x, q[0], n[0], tiles), ax(y, q[1], n[1], false), ax(z, q[2], n[2], tiles)}));
+            }
+            ASSERT_EQ(int(field[(size_t(z) * n[1] + y) * n[0] + x]), best)
+                << "trial " << trial << " tiles " << tiles << " cell " << x << "," << y << "," << z;
+          }
+    }
+  }
+}
+
 // The field is the exact L-infinity distance (so no cell within distance d of a set cell is ever
 // reported farther than d), on small random grids, with and without x/z wrapping; a tiling volume
 // whose cells do not divide it is checked in voxels (its last cell is partial).

@@ -22,7 +22,9 @@ void dilate_occupancy(std::vector<uint8_t>& raw, const std::array<uint32_t, 3>& 
     const int n = int(od[a]);
     const size_t stride = a == 0 ? 1 : a == 1 ? od[0] : size_t(od[0]) * od[1];
     const size_t outer = n > 0 ? raw.size() / (size_t(n) * stride) : 0;
-    for (size_t o = 0; o < outer; ++o)
+    // Each outer index writes its own run of tmp: the runs go to all cores.
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, outer), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t o = r.begin(); o != r.end(); ++o)
       for (int c = 0; c < n; ++c) {
         uint8_t* dst = &tmp[(o * n + c) * stride];
         std::fill(dst, dst + stride, uint8_t(0));
@@ -35,29 +37,35 @@ void dilate_occupancy(std::vector<uint8_t>& raw, const std::array<uint32_t, 3>& 
             if (!dst[k]) dst[k] = src[k];
         }
       }
+    });
     raw.swap(tmp);
   }
 }
 
-void build_occupancy(Volume& v) {
-  const uint32_t c = std::max<uint32_t>(1, v.occupancy_cell);
-  std::array<uint32_t, 3> od{};
-  for (int a = 0; a < 3; ++a) od[a] = (v.dims[a] + c - 1) / c;
+std::vector<uint8_t> occupancy_cells(const float* density, const std::array<uint32_t, 3>& dims, uint32_t cell,
+                                     uint32_t padding, bool tiles_xz, std::array<uint32_t, 3>& od) {
+  const uint32_t c = std::max<uint32_t>(1, cell);
+  for (int a = 0; a < 3; ++a) od[a] = (dims[a] + c - 1) / c;
   const size_t ncells = size_t{od[0]} * od[1] * od[2];
   std::vector<uint8_t> raw(ncells, 0);
   // One slab of cells (c voxel planes in z) per task: no two tasks write the same cell.
   tbb::parallel_for(tbb::blocked_range<uint32_t>(0, od[2]), [&](const tbb::blocked_range<uint32_t>& slabs) {
-    for (uint32_t z = slabs.begin() * c; z < std::min(v.dims[2], slabs.end() * c); ++z)
-      for (uint32_t y = 0; y < v.dims[1]; ++y) {
-        const float* row = &v.density[v.index(0, y, z)];
+    for (uint32_t z = slabs.begin() * c; z < std::min(dims[2], slabs.end() * c); ++z)
+      for (uint32_t y = 0; y < dims[1]; ++y) {
+        const float* row = density + (size_t(z) * dims[1] + y) * dims[0];
         uint8_t* orow = &raw[(size_t(z / c) * od[1] + y / c) * od[0]];
-        for (uint32_t x = 0; x < v.dims[0]; ++x)
+        for (uint32_t x = 0; x < dims[0]; ++x)
           if (row[x] > 0) orow[x / c] = 1;
       }
   });
-  dilate_occupancy(raw, od, v.occupancy_padding, v.tiles_xz);
+  dilate_occupancy(raw, od, padding, tiles_xz);
+  return raw;
+}
+
+void build_occupancy(Volume& v) {
+  std::array<uint32_t, 3> od{};
+  v.occupancy = occupancy_cells(v.density.data(), v.dims, v.occupancy_cell, v.occupancy_padding, v.tiles_xz, od);
   v.occupancy_dims = od;
-  v.occupancy = std::move(raw);
 }
 
 }  // namespace cloudgen

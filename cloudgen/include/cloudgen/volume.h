@@ -52,6 +52,10 @@ struct Volume {
 /// Builds the occupancy grid of `v.density` with v.occupancy_cell / v.occupancy_padding.
 /// Wraps the dilation around x and z when v.tiles_xz.
 void build_occupancy(Volume& v);
+/// build_occupancy of a dense density array (x fastest, `dims`): the grid's cells, their counts in
+/// `od`. The viewer builds its grid straight from a volume it does not own with it.
+std::vector<uint8_t> occupancy_cells(const float* density, const std::array<uint32_t, 3>& dims, uint32_t cell,
+                                     uint32_t padding, bool tiles_xz, std::array<uint32_t, 3>& od);
 /// build_occupancy's dilation: cells (od, x fastest) dilated by `padding` cells per axis (the
 /// union over the (2p+1)^3 box), wrapped in x and z when `tiles_xz`.
 void dilate_occupancy(std::vector<uint8_t>& cells, const std::array<uint32_t, 3>& od, uint32_t padding, bool tiles_xz);
