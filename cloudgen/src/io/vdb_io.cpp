@@ -382,6 +382,13 @@ void read_in_child(const std::string& path, uint64_t file_size) {
     throw InputError(printable(path) + ": reading it takes more than " + std::to_string(budget >> 20) +
                      " MiB of memory (1 GiB + 32 x its " + std::to_string(file_size) +
                      " bytes): damaged, or too large for this reader");
+  // The child answers 0 (read, or refused with a message the parent's own read gives) or 10; any
+  // other end (a library that calls exit, a sanitizer's report, which exits 1) is no answer, and
+  // the parent must not read the file itself after it.
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw InputError(printable(path) + ": damaged: OpenVDB's reader stopped on it without an answer (exit status " +
+                     std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) +
+                     ", in a separate process: nothing here was harmed)");
 }
 
 /// What every reader of a .vdb does before OpenVDB reads grids: the layout walk
