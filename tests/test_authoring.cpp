@@ -7,12 +7,14 @@
 
 #include <filesystem>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
 #include "../viewer/src/app/authoring.h"
 #include "../viewer/src/app/session.h"
 #include "cloudgen/errors.h"
+#include "cloudgen/preset.h"
 #include "cloudgen/preset_fields.h"
 #include "cloudgen/preset_save.h"
 #include "cloudviewer/errors.h"
@@ -138,10 +140,41 @@ TEST(ViewerAuthoring, PanelShowsEveryPresetFieldWithItsValue) {
     ++plain;
     ASSERT_EQ(v.count(f.key), 1u) << f.key;
   }
-  EXPECT_EQ(v.size(), plain);
+  // Any other key is a list element's, its index in place of the table's "*".
+  std::set<std::string> table;
+  for (const cloudgen::PresetField& f : cloudgen::preset_fields()) table.insert(f.key);
+  for (const auto& kv : v) {
+    if (table.count(kv.first)) continue;
+    std::string pattern = kv.first;
+    const size_t dot = pattern.find_first_of("0123456789");
+    ASSERT_NE(dot, std::string::npos) << kv.first;
+    pattern.replace(dot, pattern.find('.', dot) - dot, "*");
+    EXPECT_EQ(table.count(pattern), 1u) << kv.first;
+  }
+  EXPECT_GE(v.size(), plain);
   EXPECT_EQ(v.at("threshold"), "0.45");
   EXPECT_EQ(v.at("coverage.low"), "0.2");
   EXPECT_EQ(v.at("seed"), "3");                                      // the file's
   EXPECT_EQ(v.at("density_scale"), "1.0");                            // the table's default
   EXPECT_EQ(v.at("name"), "\"tiny\"");
+}
+
+// A list's elements (shape sources, towers) are on the panel too: one key per element and field,
+// the element's value or the table's default ("null" where the key does not apply to its kind),
+// and an edit of one element's key reaches it through the same --set path.
+TEST(ViewerAuthoring, PanelShowsEachListElement) {
+  const std::string congestus = testutil::kPresets + "cumulus-congestus.json";
+  const std::map<std::string, std::string> v = cloudgen::preset_values(congestus, {"shape.sources.3.radius=400"});
+  EXPECT_EQ(v.at("shape.sources.0.kind"), "\"ellipsoid\"");
+  EXPECT_EQ(v.at("shape.sources.0.radii"), "[780,420,720]");
+  EXPECT_EQ(v.at("shape.sources.0.radius"), "null");  // not a key of an ellipsoid: the panel skips it
+  EXPECT_EQ(v.at("shape.sources.3.radius"), "400");    // the edit
+  EXPECT_EQ(v.at("shape.sources.6.radius"), "260");
+  EXPECT_EQ(v.at("shape.sources.2.rotate"), "[0,0,-8]");
+  EXPECT_EQ(v.at("shape.sources.1.scale"), "[1, 1, 1]");  // the table's default
+  EXPECT_EQ(v.count("shape.sources.7.kind"), 0u);          // seven sources, no eighth
+  EXPECT_EQ(v.count("shape.sources.*.kind"), 0u);
+  const cloudgen::Preset p = cloudgen::load_preset(congestus, {"shape.sources.3.radius=400"});
+  ASSERT_EQ(p.shape.sources.size(), 7u);
+  EXPECT_EQ(*p.shape.sources[3].radius, 400);
 }

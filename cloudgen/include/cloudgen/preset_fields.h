@@ -24,8 +24,9 @@ struct PresetField {
 /// Every row of the preset table, in table order.
 const std::vector<PresetField>& preset_fields();
 
-/// The value of every key without a list index ("*") of the preset `path` with `sets` applied, as
-/// JSON text keyed by PresetField::key (the table's default where the file does not set it).
+/// The value of every key of the preset `path` with `sets` applied, as JSON text keyed by
+/// PresetField::key (the table's default where the file does not set it); a key of a list element
+/// once per element the preset has, with its index for the "*" ("shape.sources.1.radius").
 /// InputError as load_preset when the result is not a valid preset.
 std::map<std::string, std::string> preset_values(const std::string& path, const std::vector<std::string>& sets);
 

@@ -839,9 +839,23 @@ std::map<std::string, std::string> preset_values(const std::string& path, const 
   const json doc = json::parse(edited_preset_text(path, sets, path));
   std::map<std::string, std::string> out;
   for (const PresetField& f : preset_fields()) {
-    if (f.pointer.find('*') != std::string::npos) continue;
-    const json::json_pointer at(f.pointer);
-    out[f.key] = doc.contains(at) ? doc[at].dump() : f.default_value;
+    const size_t star = f.pointer.find("/*/");
+    if (star == std::string::npos) {
+      if (f.pointer.find('*') != std::string::npos) continue;  // (no other list form in the table)
+      const json::json_pointer at(f.pointer);
+      out[f.key] = doc.contains(at) ? doc[at].dump() : f.default_value;
+      continue;
+    }
+    // A list element's key, once per element the preset has: "shape.sources.1.radius".
+    const json::json_pointer list(f.pointer.substr(0, star));
+    const std::string rest = f.pointer.substr(star + 2);  // "/radius"
+    if (rest.find('*') != std::string::npos || !doc.contains(list) || !doc[list].is_array()) continue;
+    const size_t key_star = f.key.find(".*.");
+    for (size_t i = 0; i < doc[list].size(); ++i) {
+      const json::json_pointer at(list.to_string() + "/" + std::to_string(i) + rest);
+      out[f.key.substr(0, key_star) + "." + std::to_string(i) + f.key.substr(key_star + 2)] =
+          doc.contains(at) ? doc[at].dump() : f.default_value;
+    }
   }
   return out;
 }

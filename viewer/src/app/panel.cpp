@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -156,7 +157,10 @@ void atmosphere_widget(RenderSettings& s, const std::string& key) {
 // its range; a change asks for the edit KEY=VALUE. Lists, objects, free text and unset values are
 // shown, not edited.
 void preset_widget(const cloudgen::PresetField& f, PanelFile& pf) {
+  // In a list element, a key that does not apply to it (a sphere's radii) is unset: not drawn.
+  const bool element = f.key.find('*') == std::string::npos && f.pointer.find('*') != std::string::npos;
   const auto it = pf.values.find(f.key);
+  if (element && it != pf.values.end() && it->second == "null") return;
   if (it == pf.values.end()) return;
   const nlohmann::json v = nlohmann::json::parse(it->second, nullptr, false);
   const std::string tip = f.doc + " (" + f.type + ", " + f.range + ", default " + f.default_value + ")";
@@ -222,22 +226,58 @@ void preset_widget(const cloudgen::PresetField& f, PanelFile& pf) {
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", tip.c_str());
 }
 
-// The preset's keys of group `g` (advanced or not); true when there is any.
+// A list field's key for element i: "shape.sources.*.radius" -> "shape.sources.1.radius".
+std::string element_key(const std::string& key, size_t i) {
+  const size_t star = key.find(".*.");
+  return key.substr(0, star) + "." + std::to_string(i) + key.substr(star + 2);
+}
+
+// Whether the preset has a value for `f` (for a list field: in its first element).
+bool has_value(const cloudgen::PresetField& f, const PanelFile& pf) {
+  return pf.values.count(f.key.find(".*.") == std::string::npos ? f.key : element_key(f.key, 0)) > 0;
+}
+
+// The preset's keys of group `g` (advanced or not); true when there is any. A list's elements
+// (shape sources, towers) each get a fold with their own keys, edited as "shape.sources.1.radius".
 bool preset_widgets(cloudgen::ParamGroup g, bool advanced, PanelFile* pf) {
   if (!pf || !pf->preset) return false;
   bool any = false;
-  for (const cloudgen::PresetField& f : cloudgen::preset_fields()) {
-    if (f.place.group != g || f.place.advanced != advanced || !pf->values.count(f.key)) continue;
+  std::set<std::string> lists_drawn;
+  const std::vector<cloudgen::PresetField>& fields = cloudgen::preset_fields();
+  for (const cloudgen::PresetField& f : fields) {
+    if (f.place.group != g || f.place.advanced != advanced || !has_value(f, *pf)) continue;
+    if (f.type == "array") continue;  // a list: its elements' keys below
     if (!any) ImGui::TextDisabled(advanced ? "preset (advanced)" : "preset");
     any = true;
-    preset_widget(f, *pf);
+    const size_t star = f.key.find(".*.");
+    if (star == std::string::npos) {
+      preset_widget(f, *pf);
+      continue;
+    }
+    const std::string list = f.key.substr(0, star);  // "shape.sources"
+    if (!lists_drawn.insert(list).second) continue;
+    for (size_t i = 0; pf->values.count(element_key(f.key, i)); ++i) {
+      // "shape.sources 2: ellipsoid": the element's kind where it has one.
+      std::string title = list + " " + std::to_string(i);
+      const auto kind = pf->values.find(list + "." + std::to_string(i) + ".kind");
+      if (kind != pf->values.end() && kind->second.size() > 2 && kind->second.front() == '"')
+        title += ": " + kind->second.substr(1, kind->second.size() - 2);
+      if (!ImGui::TreeNode(title.c_str())) continue;
+      for (const cloudgen::PresetField& e : fields) {
+        if (e.key.rfind(list + ".*.", 0) != 0 || e.place.group != g || e.place.advanced != advanced) continue;
+        cloudgen::PresetField one = e;
+        one.key = element_key(e.key, i);
+        preset_widget(one, *pf);
+      }
+      ImGui::TreePop();
+    }
   }
   return any;
 }
 bool has_preset_widgets(cloudgen::ParamGroup g, bool advanced, const PanelFile* pf) {
   if (!pf || !pf->preset) return false;
   for (const cloudgen::PresetField& f : cloudgen::preset_fields())
-    if (f.place.group == g && f.place.advanced == advanced && pf->values.count(f.key)) return true;
+    if (f.place.group == g && f.place.advanced == advanced && f.type != "array" && has_value(f, *pf)) return true;
   return false;
 }
 #else
