@@ -4,6 +4,7 @@
 // uniform slab's analytic transmittance as the odds), the optically thin limit (the path tracer
 // equals the marcher's single scattering), and the same image at any thread count.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <sstream>
 
@@ -119,6 +120,44 @@ TEST(PathTrace, SameImageAtAnyThreadCount) {
   o.seed = 2;
   FrameImages c = render_pathtrace(vol, f, o);
   EXPECT_GT(max_abs_diff(a.linear, c.linear), 0.0) << "the seed must change the noise";
+}
+
+// The window's progressive reference: passes over consecutive sample ranges, summed, trace the
+// paths of one call with all of them (the image equal but for the order of the sums' rounding);
+// one pass alone is that call's image bit for bit; a cancelled pass returns nothing and leaves the
+// sum as it was.
+TEST(PathTrace, PassesSumToTheImageOfOneCall) {
+  PreparedVolume vol = prepare_volume(testutil::synthetic("blob"), 8);
+  FrameSetup f = frame_for(vol, RenderSettings{}, 24, 14);
+  PathTraceOptions all;
+  all.spp = 6;
+  const FrameImages one = render_pathtrace(vol, f, all);
+  PathTraceSum sum;
+  FrameImages last;
+  for (int first = 0; first < 6; first += 2) {
+    PathTraceOptions pass;
+    pass.spp = 2, pass.first_sample = first, pass.sum = &sum;
+    last = render_pathtrace(vol, f, pass);
+    if (first == 0) {
+      PathTraceOptions alone;
+      alone.spp = 2;
+      EXPECT_EQ(max_abs_diff(last.linear, render_pathtrace(vol, f, alone).linear), 0.0);
+    }
+  }
+  EXPECT_EQ(sum.paths, 6);
+  double largest = 0;
+  for (float v : one.linear.rgba) largest = std::max(largest, double(std::abs(v)));
+  ASSERT_GT(largest, 0.0);
+  EXPECT_LE(max_abs_diff(last.linear, one.linear), 1e-6 * largest);
+  PathTraceOptions other;  // a different sample range is a different image
+  other.spp = 6, other.first_sample = 6;
+  EXPECT_GT(max_abs_diff(render_pathtrace(vol, f, other).linear, one.linear), 1e-3 * largest);
+  std::atomic<bool> stop{true};
+  PathTraceOptions cancelled;
+  cancelled.spp = 2, cancelled.first_sample = 6, cancelled.sum = &sum, cancelled.cancel = &stop;
+  const FrameImages none = render_pathtrace(vol, f, cancelled);
+  EXPECT_EQ(none.display.width, 0);
+  EXPECT_EQ(sum.paths, 6);
 }
 
 TEST(PathTrace, CommandLineWritesTheImageAndChecksSpp) {

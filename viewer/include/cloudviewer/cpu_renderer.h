@@ -1,6 +1,7 @@
 // The CPU renderers: the double-precision reference of the GL passes and the path tracer, the
 // ground truth for the lighting. src/cpu/cpu_renderer.cpp.
 #pragma once
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <vector>
@@ -16,6 +17,14 @@ FrameImages render_cpu(const PreparedVolume& vol, const FrameSetup& frame);
 /// The path tracer (`--backend pathtrace`, src/cpu/cpu_renderer.cpp): the ground truth for the
 /// lighting. Same medium, sun, ambient sky and background as render_cpu; every order of scattering
 /// by delta tracking with next-event estimation of the sun. Deterministic at any thread count.
+/// Paths summed over several calls (the window's progressive reference): per pixel the sum of the
+/// paths' scene-linear radiance (RGB, before bloom) and how many paths were summed.
+struct PathTraceSum {
+  int width = 0, height = 0;
+  std::vector<double> rgb;  ///< width * height * 3, x fastest
+  int64_t paths = 0;        ///< per pixel
+};
+
 struct PathTraceOptions {
   int spp = 64;                 ///< paths per pixel
   int max_scatterings = 4096;   ///< per path (albedo-1 clouds scatter hundreds of times)
@@ -25,6 +34,15 @@ struct PathTraceOptions {
   /// paths / sqrt(spp)) of the scene-linear radiance before bloom, so a comparison can tell the
   /// path tracer's noise from a bias. Alpha 1.
   Image* standard_error = nullptr;
+  /// Paths first_sample .. first_sample + spp - 1 of each pixel's stream: calls over consecutive
+  /// ranges trace the paths one call of all of them traces.
+  int first_sample = 0;
+  /// When set: this call's paths are added to it (started again when the size differs) and the
+  /// images are those of all the paths it holds; summed over calls with consecutive first_sample,
+  /// the image of one call with their spp but for the rounding of the sums' order.
+  PathTraceSum* sum = nullptr;
+  /// When set and true: the call stops within a row and returns empty images, `sum` untouched.
+  const std::atomic<bool>* cancel = nullptr;
 };
 FrameImages render_pathtrace(const PreparedVolume& vol, const FrameSetup& frame, const PathTraceOptions& o);
 /// The ground shadow map (render.shadow_map) as the CPU reference builds it: the clouds'

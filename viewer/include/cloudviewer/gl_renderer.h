@@ -56,6 +56,9 @@ class GlRenderer {
   Image read_target(const std::string& name, int attachment = 0);
   /// Blits the display image into the default framebuffer (window mode).
   void present(int window_width, int window_height);
+  /// Blits `display` (display values, as FrameImages::display; row 0 at the bottom, as read_back's)
+  /// into the default framebuffer in place of the frame: the window's path-traced reference.
+  void present_image(const Image& display, int window_width, int window_height);
   /// Reads the default framebuffer's back buffer (what present() drew), 8-bit display values.
   Image read_window(int window_width, int window_height);
   std::string renderer_string() const;

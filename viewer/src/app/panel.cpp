@@ -339,6 +339,14 @@ void file_actions(PanelFile& f) {
 // Reset view and the bookmark buttons, on one line: a stored bookmark recalls, an empty one stores
 // the current camera, Ctrl+click stores over a stored one.
 void camera_buttons(PanelCamera& c) {
+  ImGui::Checkbox("Reference (path tracer)", &c.reference);
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("C: the path tracer's image of this view in place of the preview, refined while the view, "
+                      "the sun and the settings stay (every order of scattering: the ground truth)");
+  if (c.reference) {
+    ImGui::SameLine();
+    ImGui::TextDisabled("%lld paths per pixel", c.reference_paths);
+  }
   if (ImGui::SmallButton("Reset view")) c.reset = true;
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Home: the camera back to the preset's view (the start view)");
   for (int i = 0; i < int(c.stored.size()); ++i) {

@@ -37,6 +37,10 @@ struct PanelCamera {
   bool reset = false;            ///< asked for this frame
   int store = -1, recall = -1;   ///< a bookmark (0..8) asked for this frame
   std::array<bool, 9> stored{};  ///< which bookmarks hold a camera
+  /// The path tracer's progressive image in place of the frame (C, or the panel's checkbox), and
+  /// how many paths per pixel it holds so far.
+  bool reference = false;
+  long long reference_paths = 0;
 };
 
 class Panel {

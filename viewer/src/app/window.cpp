@@ -23,8 +23,11 @@
 #include <epoxy/gl.h>
 #include <GLFW/glfw3.h>
 
+#include "cloudgen/motion.h"
 #include "cloudgen/printable.h"
 #include "cloudviewer/controls.h"
+#include "cloudviewer/cpu_renderer.h"
+#include "cloudviewer/settings.h"
 #include "cloudviewer/errors.h"
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
 #include "cloudgen/noise_cache.h"
@@ -118,6 +121,7 @@ const char* kWindowKeys =
     "| `Home` | reset view: the camera back to the preset's `view` (the start view) |\n"
     "| `Ctrl+1`..`9`, `Shift+1`..`9` | store, recall a camera bookmark (kept for this session only) |\n"
     "| `F1` | on-screen panel on / off |\n"
+    "| `C` | the path tracer's reference image of this view in place of the preview (refined while nothing changes); `C` again: back |\n"
     "| `Space` | play / pause the clouds' motion (`motion.*`; starts at `--time`) |\n"
     "| `,` / `.` | motion time runs half / twice as fast (1/64x .. 1024x real time) |\n"
     "| `Backspace` | motion time back to `--time` |\n"
@@ -219,6 +223,7 @@ void on_key(GLFWwindow* w, int key, int, int action, int mods) {
       if (v->panel) v->panel->visible = !v->panel->visible;
       break;
     case GLFW_KEY_F12: v->save_requested = true; break;
+    case GLFW_KEY_C: v->camera->reference = !v->camera->reference; break;
     case GLFW_KEY_SPACE: v->playing = !v->playing; break;
     case GLFW_KEY_COMMA: v->time_scale = std::max(1.0 / 64, v->time_scale / 2); break;
     case GLFW_KEY_PERIOD: v->time_scale = std::min(1024.0, v->time_scale * 2); break;
@@ -348,6 +353,8 @@ class Watcher {
 
   /// No reload in flight or waiting.
   bool idle() const { return !pending_ && !job_.valid(); }
+  /// A finished reload waits: the next collect replaces the volume.
+  bool ready() const { return job_.valid() && job_.wait_for(std::chrono::seconds(0)) == std::future_status::ready; }
 
   /// Every frame: a finished reload replaces the volume (the upload happens here, on the GL thread).
   void collect(Session& session, std::ostream& out, std::ostream& err) {
@@ -565,10 +572,70 @@ void follow_view_sun(const PanelFile& f, Sun& sun, std::string& seen) {
   number(el->second, sun.elevation_deg);
 }
 
+// The reference in the window (issue 42 item 3): the path tracer's image of the frame the window
+// would draw, refined pass by pass (kPassPaths paths per pixel each, the next paths of every
+// pixel's stream, so n passes trace what `--backend pathtrace --spp n*kPassPaths` traces) on a
+// worker thread while the window keeps answering, and shown in place of the real-time frame. A
+// change of the view, the sun, a setting or the volume starts it again.
+class Reference {
+ public:
+  static constexpr int kPassPaths = 1;
+  ~Reference() { stop(); }
+  /// Ends the pass in flight (within a row of pixels) and forgets the image.
+  void stop() {
+    if (job_.valid()) {
+      cancel_ = true;
+      job_.wait();
+      job_ = {};
+      cancel_ = false;
+    }
+    sum_ = PathTraceSum{};
+    shown_ = Image();
+    shown_paths_ = 0;
+    key_.clear();
+  }
+  /// Each frame while on, before anything can change the volume: `key` names what the frame will
+  /// show; a new one ends the pass in flight and starts again.
+  void follow(const std::string& key) {
+    if (key != key_) {
+      stop();
+      key_ = key;
+    }
+  }
+  /// Then: collects a finished pass and starts the next (up to `max_paths` per pixel). Returns the
+  /// image to show, or null before the first pass is done.
+  const Image* update(const Session& session, const FrameSetup& frame, long long max_paths) {
+    if (job_.valid() && job_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+      FrameImages img = job_.get();
+      if (img.display.width > 0) shown_ = std::move(img.display), shown_paths_ = sum_.paths;
+    }
+    if (!job_.valid() && sum_.paths < max_paths) {
+      PathTraceOptions o;
+      o.spp = kPassPaths;
+      o.first_sample = int(sum_.paths);
+      o.sum = &sum_;
+      o.cancel = &cancel_;
+      job_ = std::async(std::launch::async, [&vol = session.volume(), frame, o] { return render_pathtrace(vol, frame, o); });
+    }
+    return shown_.width > 0 ? &shown_ : nullptr;
+  }
+  /// Paths per pixel in the image shown (0: none yet).
+  long long paths() const { return shown_paths_; }
+
+ private:
+  std::future<FrameImages> job_;
+  std::atomic<bool> cancel_{false};
+  PathTraceSum sum_;  // the worker's while a pass runs
+  Image shown_;
+  long long shown_paths_ = 0;
+  std::string key_;
+};
+
 // One step of CLOUDVIEWER_WINDOW_ACTIONS (tests/window_handles.sh) on the window's own input paths:
 // "sundrag:X0,Y0,X1,Y1" a Shift + drag from one window point to another (fractions of the window's
 // size), "orbit:DX,DY" a plain drag by DX, DY pixels from the centre, "reset", "store:N",
-// "recall:N", "set:KEY=VALUE" a render.* key as the panel sets it. False: not one of these.
+// "recall:N", "set:KEY=VALUE" a render.* key as the panel sets it, "reference" the C key, "panel"
+// the F1 key. False: not one of these.
 bool handle_action(const std::string& a, ViewState& v, GLFWwindow* window, RenderSettings& s) {
   int w = 0, h = 0;
   glfwGetWindowSize(window, &w, &h);
@@ -592,6 +659,10 @@ bool handle_action(const std::string& a, ViewState& v, GLFWwindow* window, Rende
     mouse_button(v, false, 0, w / 2.0 + n[0], h / 2.0 + n[1], w, h);
   } else if (verb == "reset") {
     v.camera->reset = true;
+  } else if (verb == "reference") {
+    v.camera->reference = !v.camera->reference;
+  } else if (verb == "panel") {
+    if (v.panel) v.panel->visible = !v.panel->visible;
   } else if ((verb == "store" || verb == "recall") && n.size() == 1) {
     (verb == "store" ? v.camera->store : v.camera->recall) = int(n[0]) - 1;
   } else if (verb == "set" && !arg.empty()) {
@@ -652,6 +723,9 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
   out << "window: " << renderer.renderer_string() << " (press H for keys, F1 for the panel)\n";
 
   Watcher watcher(o);
+  Reference reference;  // after the session: its passes read the session's volume
+  // The reference's paths per pixel: --spp (64 unless given), then it rests.
+  const long long reference_paths = std::max(1, o.spp);
   auto last_poll = std::chrono::steady_clock::now();
   auto last_frame = last_poll;
   int frame = 0, saved = 0;
@@ -668,7 +742,10 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
     std::istringstream words(a);
     for (std::string w; words >> w;) todo.push_back(w);
   }
-  auto automating = [&] { return edits_waiting || !todo.empty() || automating_action(file); };
+  auto automating = [&] {
+    return edits_waiting || !todo.empty() || automating_action(file) ||
+           (camera_panel.reference && reference.paths() < reference_paths);
+  };
   bool was_automating = false;
   // render.time_of_day, render.latitude and render.day_of_year as the last frame had them: a change
   // (the panel's sliders) puts the sun on the day's path.
@@ -726,6 +803,7 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
     }
     if (actions.edit(session)) watcher.request(session, settings);
     if (file.preset) follow_view_sun(file, sun, seen_view_sun);
+    if (watcher.ready()) reference.stop();  // the volume it reads is about to be replaced
     watcher.collect(session, out, err);
     if (edits_waiting && watcher.idle()) edits_waiting = false;
     if (was_automating && !automating()) frame = 0;  // the saved frame is then a fresh run's frame
@@ -735,6 +813,22 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
     if (fw < 1 || fh < 1) continue;
     settings.frame = frame;
     Camera cam = camera_of(view, o.fov);
+    // The reference follows what this frame shows (its pass in flight ends before fit can change the
+    // volume's field): the settings (the clock only while clouds move), the camera, the sun, the
+    // volume and the size.
+    if (camera_panel.reference) {
+      RenderSettings k = settings;
+      k.frame = 0;
+      if (session.volume().baked_motion || !cloudgen::motion_moves(k.motion)) k.time = 0;
+      std::ostringstream key;
+      key.precision(17);
+      key << describe_settings(k) << cam.eye.x << ',' << cam.eye.y << ',' << cam.eye.z << ';' << cam.target.x << ','
+          << cam.target.y << ',' << cam.target.z << ';' << cam.fov_y_deg << ';' << sun.azimuth_deg << ',' << sun.elevation_deg
+          << ';' << static_cast<const void*>(session.volume().rgba.data()) << ';' << fw << 'x' << fh;
+      reference.follow(key.str());
+    } else {
+      reference.stop();
+    }
     // The panel and the keys change the erosion and the motion: the field follows (a few ms on the
     // thesis volume; exact meanwhile, since make_frame never trusts a field that does not cover).
     session.fit(settings);
@@ -743,8 +837,14 @@ int run_window(const Options& opts, std::ostream& out, std::ostream& err) {
     FrameSetup fs = session.frame_or_keep(settings, good_settings, cam, sun, fw, fh, refused);
     if (!refused.empty()) err << refused << " (the panel's choice is undone)\n";
     GpuTimings t;
-    renderer.render(fs, &t);
-    renderer.present(fw, fh);
+    const Image* truth = camera_panel.reference ? reference.update(session, fs, reference_paths) : nullptr;
+    camera_panel.reference_paths = reference.paths();
+    if (truth) {
+      renderer.present_image(*truth, fw, fh);  // the real-time frame is not drawn meanwhile
+    } else {
+      renderer.render(fs, &t);
+      renderer.present(fw, fh);
+    }
     panel.draw(settings, t, panel_hint(view, settings, sun), &file, &camera_panel);
     actions.run(session, out);
     if (auto_frames > 0 && !was_automating && !automating() && frame + 1 == auto_frames) {  // what the window shows, read from its back buffer before the swap

@@ -770,15 +770,17 @@ FrameImages render_pathtrace(const PreparedVolume& vol, const FrameSetup& frame,
   const double majorant = majorant_of(vol, P);
   Buffer hdr(w, h);
   if (o.standard_error) *o.standard_error = Image(w, h);
+  std::vector<dvec3> sums(o.sum ? size_t(w) * h : 0);  // this call's per-pixel sums, for o.sum
   std::atomic<int> rows_done{0};
   tbb::parallel_for(0, h, [&](int y) {
+    if (o.cancel && o.cancel->load()) return;
     CpuShader sh(P, vol, look.lut, &frame);
     sh.air = &look.air;
     PathTracer pt{sh, P, phase, majorant, o.max_scatterings};
     for (int x = 0; x < w; ++x) {
       dvec3 rd = sh.pixel_ray(frame.inv_view_proj, dvec2(x + 0.5, y + 0.5), dvec2(w, h));
       dvec3 sum(0.0), sum2(0.0);
-      for (int i = 0; i < o.spp; ++i) {  // one stream per pixel and sample: any thread count, same image
+      for (int i = o.first_sample; i < o.first_sample + o.spp; ++i) {  // one stream per pixel and sample: any thread count, same image
         uint64_t key = (uint64_t(uint32_t(y * w + x)) << 32) ^ (uint64_t(o.seed) << 20) ^ uint64_t(i);
         Pcg32 rng(key);
         const dvec3 l = pt.radiance(rd, rng);
@@ -786,6 +788,7 @@ FrameImages render_pathtrace(const PreparedVolume& vol, const FrameSetup& frame,
       }
       const double n = double(std::max(o.spp, 1));
       hdr.at(x, y) = sum / n;
+      if (o.sum) sums[size_t(y) * w + x] = sum;
       if (o.standard_error) {
         const dvec3 mean = sum / n;
         const dvec3 var = n > 1 ? glm::max(sum2 / n - mean * mean, dvec3(0.0)) * (n / (n - 1)) : dvec3(0.0);
@@ -797,6 +800,20 @@ FrameImages render_pathtrace(const PreparedVolume& vol, const FrameSetup& frame,
     int done = ++rows_done;
     if (o.progress) o.progress(done, h);
   });
+  if (o.cancel && o.cancel->load()) return {};
+  if (o.sum) {
+    PathTraceSum& acc = *o.sum;
+    if (acc.width != w || acc.height != h) acc = PathTraceSum{w, h, std::vector<double>(size_t(w) * h * 3, 0.0), 0};
+    acc.paths += o.spp;
+    const double n = double(std::max<int64_t>(acc.paths, 1));
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        double* a = &acc.rgb[(size_t(y) * w + x) * 3];
+        const dvec3& add = sums[size_t(y) * w + x];
+        a[0] += add.x, a[1] += add.y, a[2] += add.z;
+        hdr.at(x, y) = dvec3(a[0], a[1], a[2]) / n;
+      }
+  }
   return finish(vol, frame, look.lut, hdr);
 }
 

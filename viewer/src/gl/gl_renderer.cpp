@@ -477,6 +477,8 @@ struct GlRenderer::Impl {
   GLuint tex_moved_occ = 0;           // FrameSetup::moved_occupancy (R8), bound for occupied() while clouds move
   glm::ivec3 moved_occ_dims{0, 0, 0};  // its allocated size
   int volume_serial = 0;              // counts set_volume calls (part of the light volume's key)
+  GLuint tex_image = 0, fbo_image = 0;  // present_image's texture and its framebuffer
+  int image_w = 0, image_h = 0;
   std::vector<double> light_key;      // what the light volume was built from; empty = not built
   int light_builds = 0;
   std::vector<double> shadow_key;     // what the ground shadow map was built from; empty = not built
@@ -1150,6 +1152,8 @@ GlRenderer::~GlRenderer() {
   GLuint texs[] = {m.tex_volume, m.tex_occ, m.tex_dist, m.tex_mie, m.tex_coverage, m.tex_motion, m.tex_curl, m.tex_detail, m.tex_ms, m.tex_moved_occ};
   for (GLuint t : texs)
     if (t) glDeleteTextures(1, &t);
+  if (m.fbo_image) glDeleteFramebuffers(1, &m.fbo_image);
+  if (m.tex_image) glDeleteTextures(1, &m.tex_image);
   if (m.tex_nano) glDeleteTextures(1, &m.tex_nano);
   if (m.buf_nano) glDeleteBuffers(1, &m.buf_nano);
   if (m.tex_pages) glDeleteTextures(1, &m.tex_pages);
@@ -1669,6 +1673,27 @@ void GlRenderer::present(int ww, int wh) {
   glReadBuffer(GL_COLOR_ATTACHMENT0);
   glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
   glBlitFramebuffer(0, 0, m.w, m.h, 0, 0, ww, wh, GL_COLOR_BUFFER_BIT, GL_LINEAR);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+void GlRenderer::present_image(const Image& img, int ww, int wh) {
+  Impl& m = *impl_;
+  if (img.width < 1 || img.height < 1) return;
+  if (img.width != m.image_w || img.height != m.image_h) {
+    if (m.fbo_image) glDeleteFramebuffers(1, &m.fbo_image);
+    if (m.tex_image) glDeleteTextures(1, &m.tex_image);
+    glCreateTextures(GL_TEXTURE_2D, 1, &m.tex_image);
+    glTextureStorage2D(m.tex_image, 1, GL_RGBA32F, img.width, img.height);
+    glCreateFramebuffers(1, &m.fbo_image);
+    glNamedFramebufferTexture(m.fbo_image, GL_COLOR_ATTACHMENT0, m.tex_image, 0);
+    m.image_w = img.width, m.image_h = img.height;
+  }
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTextureSubImage2D(m.tex_image, 0, 0, 0, img.width, img.height, GL_RGBA, GL_FLOAT, img.rgba.data());
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, m.fbo_image);
+  glReadBuffer(GL_COLOR_ATTACHMENT0);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
+  glBlitFramebuffer(0, 0, img.width, img.height, 0, 0, ww, wh, GL_COLOR_BUFFER_BIT, GL_LINEAR);
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
