@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "../viewer/src/app/authoring.h"
 #include "../viewer/src/app/session.h"
 #include "cloudgen/errors.h"
@@ -177,4 +179,18 @@ TEST(ViewerAuthoring, PanelShowsEachListElement) {
   const cloudgen::Preset p = cloudgen::load_preset(congestus, {"shape.sources.3.radius=400"});
   ASSERT_EQ(p.shape.sources.size(), 7u);
   EXPECT_EQ(*p.shape.sources[3].radius, 400);
+  // The panel's Add and Remove edit the whole list, from the list's own value (edits included):
+  // a copy of the last element appended, element 1 removed.
+  nlohmann::json list = nlohmann::json::parse(v.at("shape.sources"));
+  ASSERT_EQ(list.size(), 7u);
+  EXPECT_EQ(list[3]["radius"], 400);
+  list.push_back(list.back());
+  list.erase(list.begin() + 1);
+  const std::vector<std::string> sets = {"shape.sources.3.radius=400", "shape.sources=" + list.dump()};
+  const std::map<std::string, std::string> w = cloudgen::preset_values(congestus, sets);
+  EXPECT_EQ(w.count("shape.sources.6.kind"), 1u);
+  EXPECT_EQ(w.count("shape.sources.7.kind"), 0u);
+  EXPECT_EQ(w.at("shape.sources.2.radius"), "400");  // the edited sphere, moved up by one
+  EXPECT_EQ(w.at("shape.sources.6.radius"), w.at("shape.sources.5.radius"));
+  EXPECT_EQ(cloudgen::load_preset(congestus, sets).shape.sources.size(), 7u);
 }

@@ -226,6 +226,53 @@ void preset_widget(const cloudgen::PresetField& f, PanelFile& pf) {
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", tip.c_str());
 }
 
+// A list's line: its length and an Add button, which appends a copy of the last element (a sphere
+// at the volume's centre when shape.sources is empty, an element of the table's defaults for any
+// other empty list), as one edit of the whole list ("shape.sources=[...]").
+void list_header(const cloudgen::PresetField& f, PanelFile& pf) {
+  const auto it = pf.values.find(f.key);
+  if (it == pf.values.end()) return;
+  nlohmann::json list = nlohmann::json::parse(it->second, nullptr, false);
+  if (!list.is_array()) return;
+  ImGui::TextDisabled("%s: %zu", f.key.c_str(), list.size());
+  ImGui::SameLine();
+  ImGui::PushID(f.key.c_str());
+  if (ImGui::SmallButton("Add")) {
+    if (!list.empty()) {
+      list.push_back(list.back());
+    } else if (f.key == "shape.sources") {
+      const auto at = [&](const char* k) { return nlohmann::json::parse(pf.values.count(k) ? pf.values.at(k) : "null", nullptr, false); };
+      const nlohmann::json origin = at("origin"), res = at("resolution"), vs = at("voxel_size");
+      if (origin.is_array() && res.is_array() && vs.is_number() && origin.size() == 3 && res.size() == 3) {
+        nlohmann::json c = nlohmann::json::array();
+        double smallest = 1e300;
+        for (int a = 0; a < 3; ++a) {
+          const double extent = res[size_t(a)].get<double>() * vs.get<double>();
+          c.push_back(origin[size_t(a)].get<double>() + extent / 2);
+          smallest = std::min(smallest, extent);
+        }
+        list.push_back({{"kind", "sphere"}, {"center", c}, {"radius", smallest / 5}});
+      }
+    } else {
+      list.push_back(nlohmann::json::object());
+    }
+    if (!list.empty()) pf.edits.push_back(f.key + "=" + list.dump());
+  }
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("appends a copy of the last element (an empty shape.sources gets a sphere at the volume's centre)");
+  ImGui::PopID();
+}
+
+// Removes element i of the list `key` ("shape.sources"), as one edit of the whole list.
+void remove_element(const std::string& key, size_t i, PanelFile& pf) {
+  const auto it = pf.values.find(key);
+  if (it == pf.values.end()) return;
+  nlohmann::json list = nlohmann::json::parse(it->second, nullptr, false);
+  if (!list.is_array() || i >= list.size()) return;
+  list.erase(list.begin() + std::ptrdiff_t(i));
+  pf.edits.push_back(key + "=" + list.dump());
+}
+
 // A list field's key for element i: "shape.sources.*.radius" -> "shape.sources.1.radius".
 std::string element_key(const std::string& key, size_t i) {
   const size_t star = key.find(".*.");
@@ -246,9 +293,12 @@ bool preset_widgets(cloudgen::ParamGroup g, bool advanced, PanelFile* pf) {
   const std::vector<cloudgen::PresetField>& fields = cloudgen::preset_fields();
   for (const cloudgen::PresetField& f : fields) {
     if (f.place.group != g || f.place.advanced != advanced || !has_value(f, *pf)) continue;
-    if (f.type == "array") continue;  // a list: its elements' keys below
     if (!any) ImGui::TextDisabled(advanced ? "preset (advanced)" : "preset");
     any = true;
+    if (f.type == "array") {  // a list: its length and Add here, its elements' folds below
+      list_header(f, *pf);
+      continue;
+    }
     const size_t star = f.key.find(".*.");
     if (star == std::string::npos) {
       preset_widget(f, *pf);
@@ -263,6 +313,8 @@ bool preset_widgets(cloudgen::ParamGroup g, bool advanced, PanelFile* pf) {
       if (kind != pf->values.end() && kind->second.size() > 2 && kind->second.front() == '"')
         title += ": " + kind->second.substr(1, kind->second.size() - 2);
       if (!ImGui::TreeNode(title.c_str())) continue;
+      if (ImGui::SmallButton("Remove")) remove_element(list, i, *pf);
+      if (ImGui::IsItemHovered()) ImGui::SetTooltip("removes this element from %s (the later ones move up)", list.c_str());
       for (const cloudgen::PresetField& e : fields) {
         if (e.key.rfind(list + ".*.", 0) != 0 || e.place.group != g || e.place.advanced != advanced) continue;
         cloudgen::PresetField one = e;
@@ -277,7 +329,7 @@ bool preset_widgets(cloudgen::ParamGroup g, bool advanced, PanelFile* pf) {
 bool has_preset_widgets(cloudgen::ParamGroup g, bool advanced, const PanelFile* pf) {
   if (!pf || !pf->preset) return false;
   for (const cloudgen::PresetField& f : cloudgen::preset_fields())
-    if (f.place.group == g && f.place.advanced == advanced && f.type != "array" && has_value(f, *pf)) return true;
+    if (f.place.group == g && f.place.advanced == advanced && has_value(f, *pf)) return true;
   return false;
 }
 #else

@@ -6,6 +6,7 @@
 #include "cloudviewer/distance_field.h"
 #include "cloudviewer/errors.h"
 #include "cloudviewer/input.h"
+#include "cloudviewer/memory_budget.h"
 #ifdef CLOUDVIEWER_HAS_CLOUDGEN
 #include "cloudgen/errors.h"
 #include "cloudgen/preset.h"
@@ -16,7 +17,14 @@ namespace cloudviewer {
 
 Session::Session(const std::string& input, const RenderSettings& s, uint32_t lod_level, PresetSource preset)
     : input_(input), vol_(open_input(input, s, lod_level, preset)), lod_level_(lod_level), preset_(std::move(preset)) {
-  if (preset_.noise_cache) preset_.spare_rgba = &spare_rgba_;  // an edited preset reuses the memory
+  if (preset_.noise_cache) {
+    preset_.spare_rgba = &spare_rgba_;  // an edited preset reuses the memory
+    // The first edit's too: its interleaved copy would otherwise fault in fresh pages (256 MiB at
+    // 256^3, a third of that edit's prepare), so they are faulted in now, while the window opens,
+    // when there is room for a second copy (an edit needs it then anyway).
+    const uint64_t bytes = uint64_t(vol_.rgba.size()) * sizeof(float);
+    if (bytes > 0 && bytes * 4 < available_memory_bytes()) spare_rgba_.assign(vol_.rgba.size(), 0.f);
+  }
 }
 
 Session::~Session() { stop_renderer(); }
