@@ -48,6 +48,7 @@
 #endif
 #if defined(CLOUD_UNDER_ASAN)
 #include <sanitizer/allocator_interface.h>
+#include <sanitizer/common_interface_defs.h>
 
 #include <thread>
 #endif
@@ -344,7 +345,7 @@ void read_in_child(const std::string& path, uint64_t file_size) {
     if (std::fscanf(f, "%llu", &pages) == 1) vm_pages = pages;
     std::fclose(f);
   }
-  const uint64_t limit = vm_pages * uint64_t(::sysconf(_SC_PAGESIZE)) + budget;
+  [[maybe_unused]] const uint64_t limit = vm_pages * uint64_t(::sysconf(_SC_PAGESIZE)) + budget;  // (not under ASan)
   std::fflush(nullptr);
   const pid_t pid = ::fork();
   if (pid < 0) return;  // no child to spare: the reader runs in this process, as before
@@ -358,6 +359,9 @@ void read_in_child(const std::string& path, uint64_t file_size) {
     // The same budget on the heap ASan counts: a file that asks for gigabytes ends the child with
     // the memory answer (10), as the address-space limit does without ASan, instead of running
     // for seconds through ASan's quarantine (fuzz_vdb's timeouts).
+    // A sanitizer report in the child is the child's death, which the parent reports; the death
+    // callback a fuzzer installed (it saves the input as a crash) belongs to the parent.
+    __sanitizer_set_death_callback([] { ::_exit(11); });
     std::thread([budget] {
       for (;;) {
         if (__sanitizer_get_current_allocated_bytes() > budget) ::_exit(10);
