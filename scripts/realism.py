@@ -1,7 +1,10 @@
 #!/usr/bin/python3
 """How cloud-like a volume is, in the two measures of issue 43 (docs/shaping.md#realism).
 
-  realism.py FILE.vdb [FILE.vdb ...]     (VDBs written with --up y, so the grid's y is up)
+  realism.py [--check] FILE.vdb [FILE.vdb ...]     (VDBs written with --up y, so the grid's y is up)
+
+--check exits 1 unless each file's spectrum is a falling power law in both bands (fit R^2 >= 0.95,
+slope <= -2): issue 43's "a power law over both bands, not a flat floor".
 
 For each file, from its `density` grid:
 - the 3D power spectrum: |FFT|^2 of the density (mean removed), averaged over shells of wave number
@@ -46,8 +49,15 @@ def spectrum_slopes(d):
     kk, pk = np.array(kk), np.array(pk)
 
     def slope(lam_hi, lam_lo):
+        """The slope of log P against log k over the band, and the fit's R^2 (1: a power law)."""
         m = (kk >= 1 / lam_hi) & (kk <= 1 / lam_lo) & (pk > 0)
-        return np.polyfit(np.log(kk[m]), np.log(pk[m]), 1)[0] if m.sum() >= 3 else float("nan")
+        if m.sum() < 3:
+            return float("nan"), float("nan")
+        x, y = np.log(kk[m]), np.log(pk[m])
+        fit = np.polyfit(x, y, 1)
+        resid = y - np.polyval(fit, x)
+        r2 = 1 - (resid ** 2).sum() / max(((y - y.mean()) ** 2).sum(), 1e-300)
+        return fit[0], r2
 
     return slope(32, 8), slope(8, 3)
 
@@ -92,15 +102,26 @@ def silhouette_dimension(d):
 
 
 def main():
-    if len(sys.argv) < 2:
+    args = sys.argv[1:]
+    check = "--check" in args
+    args = [a for a in args if a != "--check"]
+    if not args:
         sys.exit(__doc__)
-    for path in sys.argv[1:]:
+    failed = False
+    for path in args:
         d = density(path)
-        s1, s2 = spectrum_slopes(d)
+        (s1, r1), (s2, r2) = spectrum_slopes(d)
         dim, n = silhouette_dimension(d)
         dtext = f"D {dim:.2f} over {n} clouds" if n >= 10 else f"D: {n} clouds (too few)"
-        print(f"{path}: {d.shape[0]}x{d.shape[1]}x{d.shape[2]}, spectrum slope {s1:.2f} (32-8 voxels), "
-              f"{s2:.2f} (8-3 voxels); {dtext}")
+        print(f"{path}: {d.shape[0]}x{d.shape[1]}x{d.shape[2]}, spectrum slope {s1:.2f} (32-8 voxels, R^2 {r1:.3f}), "
+              f"{s2:.2f} (8-3 voxels, R^2 {r2:.3f}); {dtext}")
+        # --check: each band a power law (R^2 >= 0.95) that falls (slope <= -2), not a flat floor
+        # of white noise (slope about 0) or a spectrum that bends inside a band.
+        for band, s, r in (("32-8", s1, r1), ("8-3", s2, r2)):
+            if check and not (r >= 0.95 and s <= -2):
+                print(f"  not a falling power law over {band} voxels: slope {s:.2f}, R^2 {r:.3f}")
+                failed = True
+    sys.exit(1 if failed else 0)
 
 
 if __name__ == "__main__":
