@@ -340,11 +340,7 @@ TEST(Shape, CliValidatesAndGeneratesShapedPresets) {
 // and spheres, blended; and the smooth minimum never exceeds the minimum nor falls below it by more
 // than blend / 4.
 TEST(Shape, BallBoundIsConservative) {
-  uint64_t st = 12345;
-  auto uni = [&](double a, double b) {
-    st = st * 6364136223846793005ull + 1442695040888963407ull;
-    return a + (b - a) * double(st >> 11) * (1.0 / 9007199254740992.0);
-  };
+  testutil::Lcg uni{12345};
   size_t proven = 0, in_cloud = 0;
   for (int trial = 0; trial < 40; ++trial) {
     ShapeParams sp;

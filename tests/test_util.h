@@ -11,6 +11,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -182,5 +183,15 @@ inline bool same_bytes(const std::vector<float>& a, const std::vector<float>& b)
   // memcmp on the null data() of empty vectors is undefined even for 0 bytes (UBSan)
   return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);
 }
+
+/// Deterministic uniform numbers in [a, b) (Knuth's MMIX LCG, its top 53 bits): the same points
+/// on every machine, from the same start.
+struct Lcg {
+  uint64_t state;
+  double operator()(double a, double b) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return a + (b - a) * double(state >> 11) * (1.0 / 9007199254740992.0);
+  }
+};
 
 }  // namespace testutil

@@ -34,12 +34,15 @@ struct ShapeArgs {
 /// The shape modifiers of a style (shape.h ShapeModifier), scaled to the cloud's longest side:
 /// billowy lifts cauliflower domes, more toward the top, with a few wisps at the base; wispy erodes
 /// curl-advected fibres, more downwind. `base` and `top` are the world heights of the mesh's box.
+/// Billowy's billows, a fraction of the cloud's longest side (the volume's margin holds them).
+constexpr double kBillowFraction = 0.06;
+
 json style_modifiers(const std::string& style, double size, double base, double top) {
   const double h = top - base;
   json out = json::object();
   if (style == "billowy") {
     json& b = out["billowy"];
-    b["amplitude"] = 0.06 * size, b["period"] = 0.2 * size, b["octaves"] = 4, b["gain"] = 0.65;
+    b["amplitude"] = kBillowFraction * size, b["period"] = 0.2 * size, b["octaves"] = 4, b["gain"] = 0.65;
     b["heights"] = json::array({base + 0.1 * h, top});
     json& w = out["wispy"];
     w["amplitude"] = 0.03 * size, w["period"] = 0.1 * size, w["heights"] = json::array({base + 0.35 * h, base});
@@ -51,7 +54,7 @@ json style_modifiers(const std::string& style, double size, double base, double 
 }
 
 /// Margin the style's modifiers need around the mesh: billowy lifts the surface by its amplitude.
-double style_lift(const std::string& style, double size) { return style == "billowy" ? 0.06 * size : 0.0; }
+double style_lift(const std::string& style, double size) { return style == "billowy" ? kBillowFraction * size : 0.0; }
 
 /// The noise of a style: how much the Perlin-Worley base erodes the fitted shape (threshold,
 /// remap) and at which scale (period: cells across the volume).

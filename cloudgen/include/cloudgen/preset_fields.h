@@ -21,6 +21,10 @@ struct PresetField {
   ParamPlace place;
 };
 
+/// A list field's key for element i: "shape.sources.*.radius" -> "shape.sources.1.radius" (a key
+/// without ".*." comes back unchanged).
+std::string list_element_key(const std::string& key, size_t i);
+
 /// Every row of the preset table, in table order.
 const std::vector<PresetField>& preset_fields();
 

@@ -59,14 +59,18 @@ std::vector<std::string> names_of(const E (&values)[N], const char* (*name)(E)) 
   return v;
 }
 
+/// A key that may be unset (its default is "null"): null unsets it, a value sets it. The schema
+/// lets null through for exactly these keys (FieldSpec::nullable).
+template <class T>
+void set_optional(std::optional<T>& dst, const json& j) {
+  if (j.is_null()) dst.reset();
+  else dst = j.get<T>();
+}
+
 /// The `shape` section (shape.h): its keys, in world metres, y up; voxel (i, j, k) is centred at
 /// origin + (i + 0.5, j + 0.5, k + 0.5) * voxel_size.
 template <class Add>
 void add_shape_keys(Add& add, double big) {
-  auto opt3 = [](std::optional<ShapeVec>& dst, const json& j) {
-    if (j.is_null()) dst.reset();
-    else dst = ShapeVec{j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
-  };
   auto src = [](Preset& p, const Index& i) -> ShapeSource& { return p.shape.sources[i[0]]; };
   auto v3 = [](const json& j) { return ShapeVec{j[0].get<double>(), j[1].get<double>(), j[2].get<double>()}; };
   const std::string where = " World metres, y up: voxel (i, j, k) is centred at origin + (i + 0.5, j + 0.5, k + 0.5) * voxel_size.";
@@ -80,17 +84,11 @@ void add_shape_keys(Add& add, double big) {
   add("/shape/floor", "number", "null", -big, big,
       "(metres, world y) Cuts the shape flat below this height: d = max(d, floor - y). A cumulus's flat base at "
       "the condensation level. Unset: no cut.",
-      [](Preset& p, const json& j, const Index&) {
-        if (j.is_null()) p.shape.floor.reset();
-        else p.shape.floor = j.get<double>();
-      });
+      [](Preset& p, const json& j, const Index&) { set_optional(p.shape.floor, j); });
   add("/shape/ceiling", "number", "null", -big, big,
       "(metres, world y) Cuts the shape flat above this height: d = max(d, y - ceiling). An anvil spreading "
       "under the tropopause. Unset: no cut.",
-      [](Preset& p, const json& j, const Index&) {
-        if (j.is_null()) p.shape.ceiling.reset();
-        else p.shape.ceiling = j.get<double>();
-      });
+      [](Preset& p, const json& j, const Index&) { set_optional(p.shape.ceiling, j); });
   add("/shape/sources", "array", "[]", 0, 0,
       "Shape sources (docs/shaping.md), at most " + std::to_string(kMaxShapeSources) + ". Non-empty: s replaces the height profile, towers and coverage, and "
       "density = clamp(density_scale * (R * s - t) / (1 - t), 0, 1).",
@@ -109,48 +107,33 @@ void add_shape_keys(Add& add, double big) {
       "preset's folder (to the current folder with --set). Closed meshes give a solid, open ones a sheet (with a "
       "warning); at most " +
           std::to_string(kMaxMeshTriangles) + " triangles and " + std::to_string(kMeshFileCap >> 20) + " MiB.",
-      [=](Preset& p, const json& j, const Index& i) {
-        if (j.is_null()) src(p, i).file.reset();
-        else src(p, i).file = j.get<std::string>();
-      });
+      [=](Preset& p, const json& j, const Index& i) { set_optional(src(p, i).file, j); });
   add("/shape/sources/*/grid", "string", "null", 0, 0,
       "Vdb: the float grid to read (a level set, or a fog volume cut at iso); unset: \"density\" if the file "
       "has it, else its first float grid.",
-      [=](Preset& p, const json& j, const Index& i) {
-        if (j.is_null()) src(p, i).grid.reset();
-        else src(p, i).grid = j.get<std::string>();
-      });
+      [=](Preset& p, const json& j, const Index& i) { set_optional(src(p, i).grid, j); });
   add("/shape/sources/*/iso", "number", "null", 1e-9, 1e9,
       "Vdb: a fog volume's density at the surface (unset: 0.5); a level set's surface is its zero.",
-      [=](Preset& p, const json& j, const Index& i) {
-        if (j.is_null()) src(p, i).iso.reset();
-        else src(p, i).iso = j.get<double>();
-      });
+      [=](Preset& p, const json& j, const Index& i) { set_optional(src(p, i).iso, j); });
   add("/shape/sources/*/up", "string", "null", 0, 0,
       "Vdb: the file's up axis: z for Blender's files, y for Houdini's; unset: the file's own (cloudgen writes "
       "it in the transform), else y.",
-      [=](Preset& p, const json& j, const Index& i) {
-        if (j.is_null()) src(p, i).up.reset();
-        else src(p, i).up = j.get<std::string>();
-      },
+      [=](Preset& p, const json& j, const Index& i) { set_optional(src(p, i).up, j); },
       {"y", "z"});
   add("/shape/sources/*/fit", "bool", "false", 0, 0,
       "Mesh or vdb: scale it evenly and centre it so it fills the volume (less falloff / 2, the billows' amplitude and one voxel a side), after "
       "scale and rotate; translate then moves it from there.",
       [=](Preset& p, const json& j, const Index& i) { src(p, i).fit = j.get<bool>(); });
   add("/shape/sources/*/center", "vec3", "null", -big, big, "(metres) Ellipsoid or sphere centre." + where,
-      [=](Preset& p, const json& j, const Index& i) { opt3(src(p, i).center, j); });
+      [=](Preset& p, const json& j, const Index& i) { set_optional(src(p, i).center, j); });
   add("/shape/sources/*/radii", "vec3", "null", 1e-3, big, "(metres) Ellipsoid semi-axes along x, y, z (before rotate).",
-      [=](Preset& p, const json& j, const Index& i) { opt3(src(p, i).radii, j); });
+      [=](Preset& p, const json& j, const Index& i) { set_optional(src(p, i).radii, j); });
   add("/shape/sources/*/radius", "number", "null", 1e-3, big, "(metres) Sphere or capsule radius.",
-      [=](Preset& p, const json& j, const Index& i) {
-        if (j.is_null()) src(p, i).radius.reset();
-        else src(p, i).radius = j.get<double>();
-      });
+      [=](Preset& p, const json& j, const Index& i) { set_optional(src(p, i).radius, j); });
   add("/shape/sources/*/a", "vec3", "null", -big, big, "(metres) Capsule: one end of its axis." + where,
-      [=](Preset& p, const json& j, const Index& i) { opt3(src(p, i).a, j); });
+      [=](Preset& p, const json& j, const Index& i) { set_optional(src(p, i).a, j); });
   add("/shape/sources/*/b", "vec3", "null", -big, big, "(metres) Capsule: the other end of its axis.",
-      [=](Preset& p, const json& j, const Index& i) { opt3(src(p, i).b, j); });
+      [=](Preset& p, const json& j, const Index& i) { set_optional(src(p, i).b, j); });
   add("/shape/sources/*/scale", "vec3", "[1, 1, 1]", 1e-3, 1e3,
       "Scale along the source's own axes about its centre (a capsule's: the middle of a-b; uniform for capsules), "
       "applied first.",
@@ -186,10 +169,7 @@ void add_modifier_keys(Add& add, double big) {
                   "billows grow toward its top). Unset: everywhere."
                 : "(metres, world y) Height ramp [from, to]: no wisps at `from`, full at `to`; from > to makes them "
                   "strongest low down (a ragged base). Unset: everywhere.",
-        [m](Preset& p, const json& j, const Index&) {
-          if (j.is_null()) m(p).heights.reset();
-          else m(p).heights = std::array<double, 2>{j[0].get<double>(), j[1].get<double>()};
-        });
+        [m](Preset& p, const json& j, const Index&) { set_optional(m(p).heights, j); });
     add(base + "/depth", "number", "300", 1e-3, big,
         "(metres) Depth below the surface over which the modifier fades out (keeps the interior whole).",
         [m](Preset& p, const json& j, const Index&) { m(p).depth = j.get<double>(); });
@@ -424,27 +404,19 @@ std::vector<Spec> build_table() {
       names_of(kTexels, texel_name));
 
   // The optional `view`: unset keys (null) leave the viewer's defaults.
-  auto opt_vec3 = [=](std::optional<Vec3>& dst, const json& j) {
-    if (j.is_null()) dst.reset();
-    else dst = v3(j);
-  };
   in(ParamGroup::Camera);
   add("/view/eye", "vec3", "null", -big, big, "Camera position, world metres (unset: the viewer's default framing).",
-      [=](Preset& p, const json& j, const Index&) { opt_vec3(p.view.eye, j); });
+      [=](Preset& p, const json& j, const Index&) { set_optional(p.view.eye, j); });
   add("/view/target", "vec3", "null", -big, big, "Point the camera looks at, world metres (unset: the volume's centre).",
-      [=](Preset& p, const json& j, const Index&) { opt_vec3(p.view.target, j); });
-  auto opt_num = [](std::optional<double>& dst, const json& j) {
-    if (j.is_null()) dst.reset();
-    else dst = j.get<double>();
-  };
+      [=](Preset& p, const json& j, const Index&) { set_optional(p.view.target, j); });
   add("/view/fov", "number", "null", 1, 170, "Vertical field of view, degrees (unset: 60).",
-      [=](Preset& p, const json& j, const Index&) { opt_num(p.view.fov, j); });
+      [=](Preset& p, const json& j, const Index&) { set_optional(p.view.fov, j); });
   in(ParamGroup::LightAndSky);
   add("/view/sun/azimuth", "number", "null", -360, 360,
       "Sun azimuth, degrees clockwise from -z toward +x (unset: behind the camera).",
-      [=](Preset& p, const json& j, const Index&) { opt_num(p.view.sun_azimuth, j); });
+      [=](Preset& p, const json& j, const Index&) { set_optional(p.view.sun_azimuth, j); });
   add("/view/sun/elevation", "number", "null", -90, 90, "Sun elevation, degrees (unset: 35).",
-      [=](Preset& p, const json& j, const Index&) { opt_num(p.view.sun_elevation, j); });
+      [=](Preset& p, const json& j, const Index&) { set_optional(p.view.sun_elevation, j); });
   in(ParamGroup::Output, true);
   add("/view/render", "object", "{}", 0, 0,
       "cloudviewer render settings for this preset, {\"KEY\": value} as in `cloudviewer --help-params` "
@@ -813,6 +785,12 @@ std::string edited_preset_text(const std::string& path, const std::vector<std::s
   return text;
 }
 
+std::string list_element_key(const std::string& key, size_t i) {
+  const size_t star = key.find(".*.");
+  if (star == std::string::npos) return key;
+  return key.substr(0, star) + "." + std::to_string(i) + key.substr(star + 2);
+}
+
 const std::vector<PresetField>& preset_fields() {
   static const std::vector<PresetField> fields = [] {
     std::vector<PresetField> v;
@@ -850,11 +828,9 @@ std::map<std::string, std::string> preset_values(const std::string& path, const 
     const json::json_pointer list(f.pointer.substr(0, star));
     const std::string rest = f.pointer.substr(star + 2);  // "/radius"
     if (rest.find('*') != std::string::npos || !doc.contains(list) || !doc[list].is_array()) continue;
-    const size_t key_star = f.key.find(".*.");
     for (size_t i = 0; i < doc[list].size(); ++i) {
       const json::json_pointer at(list.to_string() + "/" + std::to_string(i) + rest);
-      out[f.key.substr(0, key_star) + "." + std::to_string(i) + f.key.substr(key_star + 2)] =
-          doc.contains(at) ? doc[at].dump() : f.default_value;
+      out[list_element_key(f.key, i)] = doc.contains(at) ? doc[at].dump() : f.default_value;
     }
   }
   return out;

@@ -184,10 +184,15 @@ double smooth_min(double a, double b, double k) {
   return std::min(a, b) - h * h * k * 0.25;
 }
 
-double shape_falloff(double d, double falloff) {
-  const double u = std::clamp(0.5 - d / falloff, 0.0, 1.0);
+namespace {
+/// S(u) = u^2 (3 - 2u) of u clamped to [0, 1]: the falloff's and the modifiers' ramps.
+double smooth01(double u) {
+  u = std::clamp(u, 0.0, 1.0);
   return u * u * (3 - 2 * u);
 }
+}  // namespace
+
+double shape_falloff(double d, double falloff) { return smooth01(0.5 - d / falloff); }
 
 std::vector<std::pair<std::string, std::string>> shape_problems(const ShapeParams& sp) {
   std::vector<std::pair<std::string, std::string>> out;
@@ -286,13 +291,9 @@ double modifier_weight(const ShapeModifier& m, double y, double d) {
   double w = 1;
   if (m.heights) {
     const double a = (*m.heights)[0], b = (*m.heights)[1];
-    const double u = a == b ? (y >= a ? 1.0 : 0.0) : std::clamp((y - a) / (b - a), 0.0, 1.0);
-    w = u * u * (3 - 2 * u);
+    w = a == b ? (y >= a ? 1.0 : 0.0) : smooth01((y - a) / (b - a));
   }
-  if (d < 0) {
-    const double u = std::clamp(-d / m.depth, 0.0, 1.0);
-    w *= 1 - u * u * (3 - 2 * u);
-  }
+  if (d < 0) w *= 1 - smooth01(-d / m.depth);
   return w;
 }
 
@@ -356,7 +357,6 @@ double ShapeField::modified_distance(const ShapeVec& p) const { return cut(p, mo
 
 double ShapeField::density(const ShapeVec& p) const {
   const double u = union_distance(p), d = cut(p, u);
-  if (!billowy_.on() && !wispy_.on()) return shape_falloff(d, falloff_);
   // The modified union lies in [u - billowy, u + wispy] (each term is amplitude times a product of
   // factors in [0, 1], and rounding is monotone), so after the cuts d' lies in [d - billowy,
   // d + wispy]: where either end already saturates s, s is that value.

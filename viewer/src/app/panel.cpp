@@ -273,15 +273,9 @@ void remove_element(const std::string& key, size_t i, PanelFile& pf) {
   pf.edits.push_back(key + "=" + list.dump());
 }
 
-// A list field's key for element i: "shape.sources.*.radius" -> "shape.sources.1.radius".
-std::string element_key(const std::string& key, size_t i) {
-  const size_t star = key.find(".*.");
-  return key.substr(0, star) + "." + std::to_string(i) + key.substr(star + 2);
-}
-
 // Whether the preset has a value for `f` (for a list field: in its first element).
 bool has_value(const cloudgen::PresetField& f, const PanelFile& pf) {
-  return pf.values.count(f.key.find(".*.") == std::string::npos ? f.key : element_key(f.key, 0)) > 0;
+  return pf.values.count(cloudgen::list_element_key(f.key, 0)) > 0;
 }
 
 // The preset's keys of group `g` (advanced or not); true when there is any. A list's elements
@@ -306,7 +300,7 @@ bool preset_widgets(cloudgen::ParamGroup g, bool advanced, PanelFile* pf) {
     }
     const std::string list = f.key.substr(0, star);  // "shape.sources"
     if (!lists_drawn.insert(list).second) continue;
-    for (size_t i = 0; pf->values.count(element_key(f.key, i)); ++i) {
+    for (size_t i = 0; pf->values.count(cloudgen::list_element_key(f.key, i)); ++i) {
       // "shape.sources 2: ellipsoid": the element's kind where it has one.
       std::string title = list + " " + std::to_string(i);
       const auto kind = pf->values.find(list + "." + std::to_string(i) + ".kind");
@@ -318,7 +312,7 @@ bool preset_widgets(cloudgen::ParamGroup g, bool advanced, PanelFile* pf) {
       for (const cloudgen::PresetField& e : fields) {
         if (e.key.rfind(list + ".*.", 0) != 0 || e.place.group != g || e.place.advanced != advanced) continue;
         cloudgen::PresetField one = e;
-        one.key = element_key(e.key, i);
+        one.key = cloudgen::list_element_key(e.key, i);
         preset_widget(one, *pf);
       }
       ImGui::TreePop();

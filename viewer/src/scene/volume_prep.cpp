@@ -37,19 +37,14 @@ std::string gib(uint64_t bytes) {
   return os.str();
 }
 
-// The occupancy grid of `density` (x fastest) through cloudgen's one builder.
-void occupancy_from(PreparedVolume& p, int occ_cell, int occ_padding, std::vector<float> density) {
-  cloudgen::Volume g;
-  for (int i = 0; i < 3; ++i) g.dims[size_t(i)] = uint32_t(p.dims[size_t(i)]);
-  g.tiles_xz = p.tiles;
-  g.occupancy_cell = uint32_t(occ_cell);
-  g.occupancy_padding = uint32_t(occ_padding);
-  g.density = std::move(density);
-  cloudgen::build_occupancy(g);
+// The occupancy grid of `density` (p.dims, x fastest) through cloudgen's one builder.
+void occupancy_from(PreparedVolume& p, int occ_cell, int occ_padding, const float* density) {
+  const std::array<uint32_t, 3> dims{uint32_t(p.dims[0]), uint32_t(p.dims[1]), uint32_t(p.dims[2])};
+  std::array<uint32_t, 3> od{};
+  p.occ = cloudgen::occupancy_cells(density, dims, uint32_t(occ_cell), uint32_t(occ_padding), p.tiles, od);
   p.occ_cell = occ_cell;
   p.occ_padding = occ_padding;
-  for (int i = 0; i < 3; ++i) p.occ_dims[size_t(i)] = int(g.occupancy_dims[size_t(i)]);
-  p.occ = std::move(g.occupancy);
+  for (int i = 0; i < 3; ++i) p.occ_dims[size_t(i)] = int(od[size_t(i)]);
 }
 
 void finish_occupancy(PreparedVolume& p) {
@@ -337,11 +332,7 @@ PreparedVolume prepare_volume(const cloudgen::Volume& v, int occ_cell, int occ_p
     p.occ.assign(v.occupancy.begin(), v.occupancy.end());
     for (uint8_t& o : p.occ) o = o ? 1 : 0;
   } else {  // from the volume's own density (density > 0 is p.rgba's max(d, 0) > 0): no copy
-    std::array<uint32_t, 3> od{};
-    p.occ = cloudgen::occupancy_cells(v.density.data(), v.dims, uint32_t(occ_cell), uint32_t(occ_padding), v.tiles_xz, od);
-    p.occ_cell = occ_cell;
-    p.occ_padding = occ_padding;
-    for (int i = 0; i < 3; ++i) p.occ_dims[size_t(i)] = int(od[size_t(i)]);
+    occupancy_from(p, occ_cell, occ_padding, v.density.data());
   }
   if (fit) p.dist_rule = field_rule(p, *fit);  // one build of the field, the one the settings need
   finish_occupancy(p);
@@ -363,7 +354,7 @@ void build_occupancy(PreparedVolume& p, int occ_cell, int occ_padding) {
   const size_t n = size_t(p.dims[0]) * p.dims[1] * p.dims[2];
   std::vector<float> density(n);
   for (size_t i = 0; i < n; ++i) density[i] = p.rgba[i * 4];
-  occupancy_from(p, occ_cell, occ_padding, std::move(density));
+  occupancy_from(p, occ_cell, occ_padding, density.data());
   finish_occupancy(p);
 }
 
